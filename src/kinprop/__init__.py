@@ -1,0 +1,35 @@
+"""kinprop: kinematic design propagation in closed-loop mechanisms.
+
+Implements Zou, Abdel-Malek & Wang (1997), "Design Propagation in Mechanical Systems:
+Kinematic Analysis", ASME J. Mech. Des. 119(3).
+"""
+
+from kinprop.errors import AddressError, ConvergenceError, KinpropError, ModelError, SingularityWarning
+from kinprop.io import dump_model, load_model
+from kinprop.kinematics import Assembly
+from kinprop.model import Body, Design, Joint, Mechanism, Model
+from kinprop.propagation import Propagation, assemble, propagate
+from kinprop.solver import SolveOptions, SolveResult
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "AddressError",
+    "Assembly",
+    "Body",
+    "ConvergenceError",
+    "Design",
+    "Joint",
+    "KinpropError",
+    "Mechanism",
+    "Model",
+    "ModelError",
+    "Propagation",
+    "SingularityWarning",
+    "SolveOptions",
+    "SolveResult",
+    "assemble",
+    "dump_model",
+    "load_model",
+    "propagate",
+]

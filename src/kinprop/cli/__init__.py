@@ -1,0 +1,11 @@
+"""Command-line interface. Each command lives in its own module and registers on ``app``."""
+
+from kinprop.cli import solve  # noqa: F401  (registers commands)
+from kinprop.cli.app import app
+
+
+def main() -> None:
+    app()
+
+
+__all__ = ["app", "main"]

@@ -1,0 +1,6 @@
+"""Model files: schema, validation, loading, writing."""
+
+from kinprop.io.loader import load_model, model_from_data, parse_text
+from kinprop.io.writer import atomic_write, dump_model, model_to_data
+
+__all__ = ["atomic_write", "dump_model", "load_model", "model_from_data", "model_to_data", "parse_text"]

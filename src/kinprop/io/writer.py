@@ -1,0 +1,81 @@
+"""Write models and results; every file is written atomically (temp file + rename)."""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from kinprop.model import Model
+from kinprop.propagation.propagate import assembly_for
+
+
+def atomic_write(path: str | Path, data: str | bytes) -> None:
+    """Write ``data`` to ``path`` so that readers see the old file or the new one, never half."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    mode = "wb" if isinstance(data, bytes) else "w"
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, mode) as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _floats(a: Any) -> Any:
+    return np.asarray(a, dtype=float).tolist()
+
+
+def model_to_data(model: Model) -> dict[str, Any]:
+    """Frame-style file data at full precision (floats round-trip exactly)."""
+    mech = model.mechanism
+    asm = assembly_for(mech)
+    tree = set(asm.topology.tree_joints)
+    deg = model.units.get("angle") == "deg"
+    bodies: dict[str, Any] = {}
+    for b in mech.bodies:
+        spec: dict[str, Any] = {}
+        if b.fixed:
+            spec = {"fixed": True, "position": _floats(b.position), "orientation": _floats(b.orientation)}
+        if b.points:
+            spec["points"] = {k: _floats(v) for k, v in b.points}
+        bodies[b.name] = spec
+    joints: dict[str, Any] = {}
+    for j in mech.joints:
+        spec = {"type": j.type, "bodies": [j.body_i, j.body_j]}
+        if j.cut is not None:
+            spec["cut"] = j.cut
+        for f in ("s_i", "s_j", "C_i", "C_j", "length"):
+            if f in j.fields:
+                v = model.design[f"{j.name}.{f}"]
+                spec[f] = float(v) if f == "length" else _floats(v)
+        if j.name in model.coordinates:
+            q = np.array(model.coordinates[j.name], dtype=float)
+            if deg and j.name in tree and j.jtype.angle_indices:
+                idx = list(j.jtype.angle_indices)
+                q[idx] = np.degrees(q[idx])
+            spec["q"] = _floats(q)
+        joints[j.name] = spec
+    return {
+        "kinprop": 1,
+        "name": mech.name,
+        "units": dict(model.units),
+        "bodies": bodies,
+        "joints": joints,
+    }
+
+
+def dump_model(model: Model, path: str | Path) -> None:
+    data = model_to_data(model)
+    text = json.dumps(data, indent=2) if str(path).endswith(".json") else yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
+    atomic_write(path, text)

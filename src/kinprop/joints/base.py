@@ -1,0 +1,81 @@
+"""The joint-type contract.
+
+A joint connects joint frame i (on body i, placed by ``s_i``/``C_i``) to joint frame j
+(on body j, placed by ``s_j``/``C_j``). A joint type knows only joint-frame math:
+
+* tree form — relative coordinates q with the placement of frame j in frame i,
+  ``A''(q)`` and ``d''(q)``, and the motion columns ``dd''/dq`` and ``H''(q)``
+  (eq. 24: ``dpi'' = H'' dq``), all resolved in joint frame i;
+* cut form — a tuple of basic constraints (dot-1, dot-2, spherical, distance) between the
+  two joint-frame origins ``O''_ij``, ``O''_ji`` and joint-frame axes (section 2), plus
+  optional own coordinates that slide ``O''_ij`` (the T-D joint's q3, eq. 53).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from kinprop.constraints.basic import BasicConstraint
+from kinprop.spatial import Array
+
+
+@dataclass(frozen=True)
+class JointType:
+    """Base joint type. Subclasses override what their form needs."""
+
+    name: str = ""
+    description: str = ""
+    #: number of relative coordinates in tree form (Euler parameters count 4)
+    n_coordinates: int = 0
+    #: number of the joint's own coordinates in cut form (T-D: 1)
+    n_cut_coordinates: int = 0
+    #: index of the first of four Euler parameters among the tree coordinates (eq. 41)
+    euler_start: int | None = None
+    #: indices of tree coordinates that are angles (reported in degrees)
+    angle_indices: tuple[int, ...] = ()
+    has_length: bool = False
+    tree: bool = True
+    cut: bool = True
+
+    @property
+    def euler(self) -> slice | None:
+        """Slice of the tree coordinates holding Euler parameters (normalisation row)."""
+        return None if self.euler_start is None else slice(self.euler_start, self.euler_start + 4)
+
+    # --- tree form ---------------------------------------------------------------------------
+    def default_coordinates(self) -> Array:
+        q = np.zeros(self.n_coordinates)
+        if self.euler is not None:
+            q[self.euler.start] = 1.0
+        return q
+
+    def placement(self, q: Array) -> tuple[Array, Array]:
+        """``(A''(q), d''(q))``: orientation and origin of frame j in frame i."""
+        return np.eye(3), np.zeros(3)
+
+    def motion(self, q: Array) -> tuple[Array, Array]:
+        """``(dd''/dq, H'')``, each 3 x n, in frame i.
+
+        For Euler parameters these are the paper's tangent columns ``H'' = 2E(p)`` and
+        ``dd''/dp = -tilde(d'') H''`` (eq. 39; PAPER-NOTES, S-T joint).
+        """
+        n = self.n_coordinates
+        return np.zeros((3, n)), np.zeros((3, n))
+
+    # --- cut form ----------------------------------------------------------------------------
+    def constraints(self) -> tuple[BasicConstraint, ...]:
+        """The basic constraints that replace this joint when it is cut."""
+        raise NotImplementedError(f"joint type {self.name!r} cannot be cut")
+
+    def cut_offset(self, qc: Array) -> tuple[Array, Array]:
+        """``(u, du/dqc)``: offset of the point on body i in joint frame i (T-D slides it)."""
+        return np.zeros(3), np.zeros((3, self.n_cut_coordinates))
+
+    def default_cut_coordinates(self) -> Array:
+        return np.zeros(self.n_cut_coordinates)
+
+    @property
+    def n_constraints(self) -> int:
+        return sum(c.rows for c in self.constraints())

@@ -1,0 +1,50 @@
+"""The four basic constraints as joints of their own (cut only, section 2)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from kinprop.constraints.basic import Distance, Dot1, Dot2, Spherical
+from kinprop.joints.base import JointType
+from kinprop.spatial import EZ
+
+
+@dataclass(frozen=True)
+class Dot1Joint(JointType):
+    name: str = "dot-1"
+    description: str = "z''_i perpendicular to z''_j (eq. 1; cut only)"
+    tree: bool = False
+
+    def constraints(self):
+        return (Dot1(EZ, EZ),)
+
+
+@dataclass(frozen=True)
+class Dot2Joint(JointType):
+    name: str = "dot-2"
+    description: str = "z''_i perpendicular to d_ij (eq. 8; cut only)"
+    tree: bool = False
+
+    def constraints(self):
+        return (Dot2(EZ),)
+
+
+@dataclass(frozen=True)
+class SphericalPoint(JointType):
+    name: str = "spherical-point"
+    description: str = "the two joint origins coincide (eq. 15; cut only)"
+    tree: bool = False
+
+    def constraints(self):
+        return (Spherical(),)
+
+
+@dataclass(frozen=True)
+class DistanceJoint(JointType):
+    name: str = "distance"
+    description: str = "the joint origins are l apart: S-S link, tie rod (eq. 17; cut only)"
+    has_length: bool = True
+    tree: bool = False
+
+    def constraints(self):
+        return (Distance(),)

@@ -1,0 +1,18 @@
+"""Fixed (weld) joint: no relative motion (6 constraints when cut)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from kinprop.constraints.basic import Dot1, Spherical
+from kinprop.joints.base import JointType
+from kinprop.spatial import EX, EY, EZ
+
+
+@dataclass(frozen=True)
+class Fixed(JointType):
+    name: str = "fixed"
+    description: str = "rigid connection (0 coordinates)"
+
+    def constraints(self):
+        return (Spherical(), Dot1(EX, EZ), Dot1(EY, EZ), Dot1(EX, EY))

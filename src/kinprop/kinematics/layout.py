@@ -1,0 +1,137 @@
+"""Variable layout: the columns of the assembled Jacobian, addressed by name.
+
+Columns are ordered by group — coordinates ``q`` (tree joints' relative coordinates and cut
+joints' own coordinates), position vectors ``s``, orientations ``C`` (three virtual-rotation
+columns ``xi'`` each, body frame) and lengths ``l`` — then by joint order in the model.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from kinprop.errors import AddressError
+from kinprop.model.design import GROUPS, parse_address
+from kinprop.model.mechanism import Mechanism
+from kinprop.topology import Topology
+
+SIZES = {"s_i": 3, "s_j": 3, "C_i": 3, "C_j": 3, "length": 1}
+
+
+@dataclass(frozen=True)
+class Variable:
+    key: str  # "J12.s_j" or "J01.q"
+    joint: str
+    field: str  # s_i, s_j, C_i, C_j, length, q
+    group: str  # q, s, C, l
+    start: int
+    size: int
+
+    @property
+    def columns(self) -> slice:
+        return slice(self.start, self.start + self.size)
+
+
+@dataclass(frozen=True)
+class VariableLayout:
+    variables: tuple[Variable, ...]
+    n: int
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_by_key", {v.key: v for v in self.variables})
+
+    def __getitem__(self, key: str) -> Variable:
+        return self._by_key[key]  # type: ignore[attr-defined]
+
+    def __contains__(self, key: str) -> bool:
+        return key in self._by_key  # type: ignore[attr-defined]
+
+    def group(self, name: str) -> tuple[Variable, ...]:
+        return tuple(v for v in self.variables if v.group == name)
+
+    @property
+    def coordinate_joints(self) -> tuple[str, ...]:
+        return tuple(v.joint for v in self.variables if v.group == "q")
+
+    def columns(self, selectors: list[str] | tuple[str, ...], exclude: set[str] = frozenset()) -> np.ndarray:
+        """Column indices for groups (``q``, ``s``, ``C``, ``l``) and addresses, minus ``exclude`` keys."""
+        cols: list[int] = []
+        for sel in selectors:
+            if sel in GROUPS:
+                for v in self.group(sel):
+                    if v.key not in exclude:
+                        cols.extend(range(v.start, v.start + v.size))
+                continue
+            addr = parse_address(sel)
+            if addr.key not in self:
+                raise AddressError(f"{sel!r} is not a variable of this model; variables: {', '.join(self._by_key)}")  # type: ignore[attr-defined]
+            v = self[addr.key]
+            if v.key in exclude:
+                continue
+            if addr.index is None:
+                cols.extend(range(v.start, v.start + v.size))
+            elif addr.index < v.size:
+                cols.append(v.start + addr.index)
+            else:
+                raise AddressError(f"{sel!r}: index out of range for a variable of size {v.size}")
+        return np.array(sorted(set(cols)), dtype=int)
+
+
+def build_layout(mech: Mechanism, topo: Topology) -> VariableLayout:
+    tree = set(topo.tree_joints)
+    rows: list[tuple[str, str, str, int]] = []
+    for j in mech.joints:
+        jt = j.jtype
+        n = jt.n_coordinates if j.name in tree else jt.n_cut_coordinates
+        if n:
+            rows.append((j.name, "q", "q", n))
+    for group, fields in (("s", ("s_i", "s_j")), ("C", ("C_i", "C_j")), ("l", ("length",))):
+        for j in mech.joints:
+            for f in fields:
+                if f in j.fields:
+                    rows.append((j.name, f, group, SIZES[f]))
+    variables, start = [], 0
+    for joint, field, group, size in rows:
+        variables.append(Variable(f"{joint}.{field}", joint, field, group, start, size))
+        start += size
+    return VariableLayout(tuple(variables), start)
+
+
+def retract(layout: VariableLayout, design, coords, dx: np.ndarray):
+    """``(design, coords) (+) dx``: additive for q, s', l (Euler parameters too, never
+    renormalised); ``C <- exp(tilde(dxi')) C`` for orientations (``dC = tilde(dxi') C``)."""
+    from kinprop.model.design import Design, as_coordinates
+    from kinprop.spatial import exp_so3
+
+    new_q = dict(coords)
+    new_d: dict[str, np.ndarray] = {}
+    for v in layout.variables:
+        step = dx[v.columns]
+        if not np.any(step):
+            continue
+        if v.group == "q":
+            new_q[v.joint] = coords[v.joint] + step
+        elif v.group == "C":
+            new_d[v.key] = exp_so3(step) @ design[v.key]
+        elif v.group == "l":
+            new_d[v.key] = design[v.key] + step[0]
+        else:
+            new_d[v.key] = design[v.key] + step
+    return (design.replace(new_d) if new_d else design), as_coordinates(new_q)
+
+
+def read(layout: VariableLayout, design, coords, key: str) -> np.ndarray:
+    """Current value of a layout variable as a flat array (C as its 3x3 matrix, flattened)."""
+    v = layout[key]
+    if v.group == "q":
+        return np.asarray(coords[v.joint], dtype=float)
+    return np.atleast_1d(np.asarray(design[key], dtype=float)).ravel()
+
+
+def column_labels(layout: VariableLayout) -> list[str]:
+    """One label per column: ``J01.q``, ``J32.q[1]``, ``J12.s_j[0]``, ``J01.C_i[2]`` (xi' component)."""
+    out: list[str] = []
+    for v in layout.variables:
+        out += [v.key] if v.size == 1 else [f"{v.key}[{k}]" for k in range(v.size)]
+    return out

@@ -1,0 +1,18 @@
+"""Model layer: Mechanism (structure), Design (numbers), Model (both plus coordinates)."""
+
+from kinprop.model.design import GROUPS, Address, Design, as_coordinates, parse_address
+from kinprop.model.mechanism import DESIGN_FIELDS, Body, Joint, Mechanism
+from kinprop.model.model import Model
+
+__all__ = [
+    "Address",
+    "Body",
+    "DESIGN_FIELDS",
+    "Design",
+    "GROUPS",
+    "Joint",
+    "Mechanism",
+    "Model",
+    "as_coordinates",
+    "parse_address",
+]

@@ -1,0 +1,122 @@
+"""Spatial algebra: tilde operator (eq. 3), rotations, Euler parameters (eqs. 40-42).
+
+All functions accept an optional leading batch shape (``[..., 3]``, ``[..., 3, 3]``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+Array = NDArray[np.float64]
+
+EX = np.array([1.0, 0.0, 0.0])
+EY = np.array([0.0, 1.0, 0.0])
+EZ = np.array([0.0, 0.0, 1.0])
+
+
+def tilde(a: ArrayLike) -> Array:
+    """Skew-symmetric matrix of eq. (3): ``tilde(a) @ b == cross(a, b)``."""
+    a = np.asarray(a, dtype=float)
+    t = np.zeros(a.shape + (3,))
+    t[..., 0, 1], t[..., 0, 2] = -a[..., 2], a[..., 1]
+    t[..., 1, 0], t[..., 1, 2] = a[..., 2], -a[..., 0]
+    t[..., 2, 0], t[..., 2, 1] = -a[..., 1], a[..., 0]
+    return t
+
+
+def rot_axis(axis: int, angle: ArrayLike) -> Array:
+    """Rotation by ``angle`` (radians) about coordinate axis 0, 1 or 2."""
+    angle = np.asarray(angle, dtype=float)
+    c, s = np.cos(angle), np.sin(angle)
+    R = np.zeros(angle.shape + (3, 3))
+    i, j = [(1, 2), (2, 0), (0, 1)][axis]
+    R[..., axis, axis] = 1.0
+    R[..., i, i], R[..., i, j] = c, -s
+    R[..., j, i], R[..., j, j] = s, c
+    return R
+
+
+def rot_x(angle: ArrayLike) -> Array:
+    return rot_axis(0, angle)
+
+
+def rot_y(angle: ArrayLike) -> Array:
+    return rot_axis(1, angle)
+
+
+def rot_z(angle: ArrayLike) -> Array:
+    return rot_axis(2, angle)
+
+
+def exp_so3(w: ArrayLike) -> Array:
+    """Rotation matrix ``exp(tilde(w))`` (Rodrigues), stable for small ``|w|``."""
+    w = np.asarray(w, dtype=float)
+    th = np.linalg.norm(w, axis=-1)[..., None, None]
+    W = tilde(w)
+    small = th < 1e-8
+    ths = np.where(small, 1.0, th)
+    a = np.where(small, 1.0 - th**2 / 6.0, np.sin(ths) / ths)
+    b = np.where(small, 0.5 - th**2 / 24.0, (1.0 - np.cos(ths)) / ths**2)
+    return np.eye(3) + a * W + b * (W @ W)
+
+
+def log_so3(R: ArrayLike) -> Array:
+    """Rotation vector ``w`` with ``exp_so3(w) == R`` (angle in [0, pi])."""
+    R = np.asarray(R, dtype=float)
+    return matrix_to_rotvec(R)
+
+
+def matrix_to_rotvec(R: Array) -> Array:
+    from scipy.spatial.transform import Rotation
+
+    flat = R.reshape(-1, 3, 3)
+    out = Rotation.from_matrix(flat).as_rotvec()
+    return out.reshape(R.shape[:-2] + (3,))
+
+
+def euler_E(p: ArrayLike) -> Array:
+    """Semi-rotation matrix E(p) = [-e, tilde(e) + e0 I] of eq. (40)."""
+    p = np.asarray(p, dtype=float)
+    e0, e = p[..., 0], p[..., 1:]
+    E = np.empty(p.shape[:-1] + (3, 4))
+    E[..., :, 0] = -e
+    E[..., :, 1:] = tilde(e) + e0[..., None, None] * np.eye(3)
+    return E
+
+
+def euler_G(p: ArrayLike) -> Array:
+    """Semi-rotation matrix G(p) = [-e, -tilde(e) + e0 I] of eq. (42)."""
+    p = np.asarray(p, dtype=float)
+    e0, e = p[..., 0], p[..., 1:]
+    G = np.empty(p.shape[:-1] + (3, 4))
+    G[..., :, 0] = -e
+    G[..., :, 1:] = -tilde(e) + e0[..., None, None] * np.eye(3)
+    return G
+
+
+def euler_to_matrix(p: ArrayLike) -> Array:
+    """A(p) = E(p) G(p)^T (eq. 42 text); a rotation only when ``p . p = 1``.
+
+    The matrix is evaluated with ``p`` as given, never renormalised (PAPER-NOTES).
+    """
+    return euler_E(p) @ np.swapaxes(euler_G(p), -1, -2)
+
+
+def matrix_to_euler(R: ArrayLike) -> Array:
+    """Unit Euler parameters [e0, e1, e2, e3] of a rotation matrix, with e0 >= 0."""
+    from scipy.spatial.transform import Rotation
+
+    R = np.asarray(R, dtype=float)
+    xyzw = Rotation.from_matrix(R.reshape(-1, 3, 3)).as_quat()
+    p = np.concatenate([xyzw[:, 3:], xyzw[:, :3]], axis=1)
+    p = np.where(p[:, :1] < 0, -p, p)
+    return p.reshape(R.shape[:-2] + (4,))
+
+
+def is_rotation(C: ArrayLike, tol: float = 1e-6) -> bool:
+    """True when ``C`` is a proper rotation (orthonormal, det +1) to ``tol``."""
+    C = np.asarray(C, dtype=float)
+    if C.shape != (3, 3) or not np.all(np.isfinite(C)):
+        return False
+    return bool(np.allclose(C.T @ C, np.eye(3), atol=tol) and abs(np.linalg.det(C) - 1) < tol)
