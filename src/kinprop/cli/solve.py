@@ -10,7 +10,7 @@ from rich.table import Table
 
 from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, handles_user_errors, out, parse_assignment, parse_weight, print_json
 from kinprop.io import dump_model, load_model
-from kinprop.io.results import comparison_rows, propagation_json
+from kinprop.io.results import propagation_json, variable_rows
 from kinprop.propagation import Propagation, propagate
 
 Tol = Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL (the paper used 1e-3)")]
@@ -19,13 +19,22 @@ Output = Annotated[Path | None, typer.Option("-o", "--output", help="write the r
 Json = Annotated[bool, typer.Option("--json", help="print one JSON object instead of tables")]
 
 
+def _fmt(values: list[float]) -> str:
+    text = " ".join(f"{x:.7g}" for x in values)
+    return text if len(values) == 1 else f"[{text}]"
+
+
 def comparison_table(prop: Propagation, title: str) -> Table:
+    """Before/after of every variable, like the paper's Table 4 (set: yellow, moved: cyan)."""
     t = Table(title=title, title_justify="left")
-    for col in ("variable", "before", "after", "change"):
-        t.add_column(col, justify="left" if col == "variable" else "right")
-    for row in comparison_rows(prop):
+    t.add_column("variable")
+    t.add_column("unit")
+    t.add_column("before", justify="right")
+    t.add_column("after", justify="right")
+    t.add_column("max |change|", justify="right")
+    for row in variable_rows(prop):
         style = {"set": "bold yellow", "moved": "cyan"}.get(row["role"])
-        t.add_row(row["component"], f"{row['before']:.8g}", f"{row['after']:.8g}", f"{row['change']:+.4g}", style=style)
+        t.add_row(row["variable"], row["unit"], _fmt(row["before"]), _fmt(row["after"]), f"{row['change']:.3g}", style=style)
     return t
 
 

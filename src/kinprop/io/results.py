@@ -47,8 +47,11 @@ def propagation_json(prop: Propagation) -> dict[str, Any]:
     }
 
 
-def comparison_rows(prop: Propagation) -> list[dict[str, Any]]:
-    """One row per scalar of every variable: before, after, change (angles in degrees)."""
+def variable_rows(prop: Propagation) -> list[dict[str, Any]]:
+    """One row per variable: before and after values (angles in degrees), role, max change.
+
+    ``C`` variables report the rotation angle [deg] of after relative to before.
+    """
     asm = assembly_for(prop.before.mechanism)
     layout = asm.layout
     changed = set(prop.changed_variables())
@@ -58,19 +61,29 @@ def comparison_rows(prop: Propagation) -> list[dict[str, Any]]:
         role = "set" if v.key in set_keys else ("moved" if v.key in changed else "")
         if v.group == "C":
             Cb, Ca = prop.before.design[v.key], prop.after.design[v.key]
-            ang = float(np.degrees(np.linalg.norm(log_so3(Ca @ Cb.T))))
-            rows.append({"variable": v.key, "component": "rotation [deg]", "before": 0.0, "after": ang, "change": ang, "role": role})
+            ang = 0.0 if np.array_equal(Ca, Cb) else float(np.degrees(np.linalg.norm(log_so3(Ca @ Cb.T))))
+            rows.append({"variable": v.key, "unit": "deg", "before": [0.0], "after": [ang], "change": ang, "role": role})
             continue
-        b = read(layout, prop.before.design, prop.before.coordinates, v.key)
-        a = read(layout, prop.after.design, prop.after.coordinates, v.key)
-        angles = set()
+        b = read(layout, prop.before.design, prop.before.coordinates, v.key).copy()
+        a = read(layout, prop.after.design, prop.after.coordinates, v.key).copy()
+        unit = ""
         if v.group == "q" and v.joint in asm.topology.tree_joints:
-            angles = set(prop.before.mechanism.joint(v.joint).jtype.angle_indices)
-        for k in range(v.size):
-            unit = ""
-            bk, ak = float(b[k]), float(a[k])
-            if k in angles:
-                bk, ak, unit = np.degrees(bk), np.degrees(ak), " [deg]"
-            comp = f"{v.key}[{k}]" if v.size > 1 else v.key
-            rows.append({"variable": v.key, "component": comp + unit, "before": bk, "after": ak, "change": ak - bk, "role": role})
+            idx = list(prop.before.mechanism.joint(v.joint).jtype.angle_indices)
+            if idx:
+                b[idx], a[idx] = np.degrees(b[idx]), np.degrees(a[idx])
+                unit = "deg" if len(idx) == v.size else "deg/len"
+        change = float(np.max(np.abs(a - b))) if a.size else 0.0
+        rows.append({"variable": v.key, "unit": unit, "before": b.tolist(), "after": a.tolist(), "change": change, "role": role})
     return rows
+
+
+def comparison_rows(prop: Propagation) -> list[dict[str, Any]]:
+    """Flat rows (one per scalar) of :func:`variable_rows`, for CSV export."""
+    out = []
+    for row in variable_rows(prop):
+        n = len(row["after"])
+        for k in range(n):
+            comp = row["variable"] if n == 1 else f"{row['variable']}[{k}]"
+            b, a = row["before"][k], row["after"][k]
+            out.append({"variable": comp, "unit": row["unit"], "before": b, "after": a, "change": a - b, "role": row["role"]})
+    return out
