@@ -90,7 +90,12 @@ def main() -> None:
     # same assembly: both start from the same estimate; the hand Newton is the same min-norm method
     assert np.allclose(hand, ours, atol=1e-9), (hand, ours)
     rows.append(("baseline: numpy Newton, analytic Jacobian (q)", *timeit(lambda: newton_by_hand(q0), args.repeats)))
-    rows.append(("baseline: scipy least_squares, FD Jacobian (q)", *timeit(lambda: least_squares(phi, q0, xtol=1e-12, ftol=1e-12), args.repeats)))
+    rows.append(
+        (
+            "baseline: scipy least_squares, FD Jacobian (q)",
+            *timeit(lambda: least_squares(phi, q0, xtol=1e-12, ftol=1e-12), args.repeats),
+        )
+    )
     print(f"slider-crank propagations, tight tolerance 1e-10, {args.repeats} repeats")
     print(f"{'case':52s} {'median ms':>10s} {'min ms':>9s} {'max ms':>9s}")
     for name, med, lo, hi in rows:

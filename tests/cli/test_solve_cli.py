@@ -20,7 +20,17 @@ def run(*args: str):
 
 
 def test_propagate_json_contract(examples) -> None:
-    r = run("propagate", examples / "slider_crank.yaml", "--set", "J12.s_j=-2.8,0.2,0.1", "--free", "q", "--tol", "1e-3", "--json")
+    r = run(
+        "propagate",
+        examples / "slider_crank.yaml",
+        "--set",
+        "J12.s_j=-2.8,0.2,0.1",
+        "--free",
+        "q",
+        "--tol",
+        "1e-3",
+        "--json",
+    )
     assert r.exit_code == 0, r.output
     obj = json.loads(r.stdout)
     assert obj["status"] == "converged"
@@ -61,14 +71,26 @@ def test_output_file_chains_at_full_precision(examples, tmp_path) -> None:
 
 
 def test_human_table_marks_the_change(examples) -> None:
-    r = run("propagate", examples / "slider_crank.yaml", "--set", "J12.s_j=-2.8,0.2,0.1", "--free", "s", "--tol", "1e-3")
+    r = run(
+        "propagate", examples / "slider_crank.yaml", "--set", "J12.s_j=-2.8,0.2,0.1", "--free", "s", "--tol", "1e-3"
+    )
     assert r.exit_code == 0
     assert "J12.s_j" in r.stdout and "converged in 1 iterations" in r.stdout
 
 
 def test_not_converged_exit_1(examples, tmp_path) -> None:
     out = tmp_path / "never.yaml"
-    r = run("propagate", examples / "slider_crank.yaml", "--set", "J12.s_j=-2.8,0.2,0.1", "--max-iter", "1", "--json", "-o", out)
+    r = run(
+        "propagate",
+        examples / "slider_crank.yaml",
+        "--set",
+        "J12.s_j=-2.8,0.2,0.1",
+        "--max-iter",
+        "1",
+        "--json",
+        "-o",
+        out,
+    )
     assert r.exit_code == 1
     assert json.loads(r.stdout)["status"] == "not_converged"
     assert not out.exists()  # no half-baked output

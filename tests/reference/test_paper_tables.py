@@ -31,7 +31,9 @@ def test_iteration_counts_and_residuals_are_the_papers() -> None:
     its = {t: [p.result.iterations for _, p in runs] for t, runs in RUNS.items()}
     assert its == {"table4": [2, 1, 2], "table1": [2, 3, 3, 2, 3, 2]}
     res = [p.result.residual_norm for _, p in RUNS["table1"]]
-    np.testing.assert_allclose(res, [0.000672544, 0.00015806, 0.000348392, 0.000564039, 1.85401e-05, 0.000647021], rtol=2e-6)
+    np.testing.assert_allclose(
+        res, [0.000672544, 0.00015806, 0.000348392, 0.000564039, 1.85401e-05, 0.000647021], rtol=2e-6
+    )
     np.testing.assert_allclose(RUNS["table4"][0][1].result.residual_norm, 1.26576e-05, rtol=1e-5)
 
 

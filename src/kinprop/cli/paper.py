@@ -53,7 +53,16 @@ def paper(
                     c.note,
                     style="yellow" if c.note.startswith(("typo", "label typo")) else None,
                 )
-                report[name].append({"column": c.column, "quantity": c.label, "paper": list(c.printed), "kinprop": list(c.ours), "agrees": c.ok, "note": c.note})
+                report[name].append(
+                    {
+                        "column": c.column,
+                        "quantity": c.label,
+                        "paper": list(c.printed),
+                        "kinprop": list(c.ours),
+                        "agrees": c.ok,
+                        "note": c.note,
+                    }
+                )
             if not as_json:
                 out.print(rt)
         if not as_json:

@@ -8,7 +8,16 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, handles_user_errors, out, parse_assignment, parse_weight, print_json
+from kinprop.cli.app import (
+    EXIT_NOT_CONVERGED,
+    app,
+    err,
+    handles_user_errors,
+    out,
+    parse_assignment,
+    parse_weight,
+    print_json,
+)
 from kinprop.io import dump_model, load_model
 from kinprop.io.results import propagation_json, variable_rows
 from kinprop.propagation import Propagation, propagate
@@ -34,7 +43,9 @@ def comparison_table(prop: Propagation, title: str) -> Table:
     t.add_column("max |change|", justify="right")
     for row in variable_rows(prop):
         style = {"set": "bold yellow", "moved": "cyan"}.get(row["role"])
-        t.add_row(row["variable"], row["unit"], _fmt(row["before"]), _fmt(row["after"]), f"{row['change']:.3g}", style=style)
+        t.add_row(
+            row["variable"], row["unit"], _fmt(row["before"]), _fmt(row["after"]), f"{row['change']:.3g}", style=style
+        )
     return t
 
 

@@ -2,4 +2,4 @@
 
 from kinprop.constraints.basic import BasicConstraint, BasicValue, Distance, Dot1, Dot2, Spherical
 
-__all__ = ["BasicConstraint", "BasicValue", "Dot1", "Dot2", "Spherical", "Distance"]
+__all__ = ["BasicConstraint", "BasicValue", "Distance", "Dot1", "Dot2", "Spherical"]

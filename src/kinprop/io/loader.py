@@ -51,7 +51,7 @@ def parse_text(text: str, file: str = "<string>") -> Any:
     try:
         if file.endswith(".json"):
             return json.loads(text)
-        return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - SafeLoader subclass
+        return yaml.load(text, Loader=_UniqueKeyLoader)
     except (yaml.YAMLError, json.JSONDecodeError) as exc:
         raise ModelError([Problem("syntax", " ".join(str(exc).split()), file)]) from None
 
@@ -112,11 +112,17 @@ def build_model(spec: ModelFile, file: str) -> Model:
         if b.orientation is not None:
             A = np.array(b.orientation)
             if not is_rotation(A, ROTATION_TOL):
-                problems.append(Problem(f"{loc}.orientation", "expected a proper rotation matrix (C^T C = I, det +1)", file))
+                problems.append(
+                    Problem(f"{loc}.orientation", "expected a proper rotation matrix (C^T C = I, det +1)", file)
+                )
         elif b.euler_parameters is not None:
             p = np.array(b.euler_parameters)
             if abs(p @ p - 1) > 1e-6:
-                problems.append(Problem(f"{loc}.euler_parameters", f"expected unit Euler parameters, |p| = {math.sqrt(p @ p):.6g}", file))
+                problems.append(
+                    Problem(
+                        f"{loc}.euler_parameters", f"expected unit Euler parameters, |p| = {math.sqrt(p @ p):.6g}", file
+                    )
+                )
             A = euler_to_matrix(p)
         if not b.fixed and (b.position is not None or b.orientation is not None or b.euler_parameters is not None):
             problems.append(Problem(loc, "only fixed bodies take a pose; moving bodies follow from the joints", file))
@@ -137,7 +143,9 @@ def build_model(spec: ModelFile, file: str) -> Model:
             C = getattr(j, f)
             if C is not None:
                 if not is_rotation(np.array(C), ROTATION_TOL):
-                    problems.append(Problem(f"{loc}.{f}", f"expected a proper rotation matrix (C^T C = I, det +1), found {C}", file))
+                    problems.append(
+                        Problem(f"{loc}.{f}", f"expected a proper rotation matrix (C^T C = I, det +1), found {C}", file)
+                    )
                 values[f"{name}.{f}"] = np.array(C, dtype=float)
         for f in ("s_i", "s_j"):
             if getattr(j, f) is not None:
@@ -163,7 +171,11 @@ def build_model(spec: ModelFile, file: str) -> Model:
             continue
         if len(j.q) != n:
             role = "tree" if name in tree else "cut"
-            problems.append(Problem(f"joints.{name}.q", f"expected {n} coordinates for a {role} {jt.name} joint, found {len(j.q)}", file))
+            problems.append(
+                Problem(
+                    f"joints.{name}.q", f"expected {n} coordinates for a {role} {jt.name} joint, found {len(j.q)}", file
+                )
+            )
             continue
         q = np.array(j.q, dtype=float)
         if deg and name in tree:

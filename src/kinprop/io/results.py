@@ -13,7 +13,7 @@ from kinprop.spatial import log_so3
 
 def _num(v: np.ndarray) -> float | list[float]:
     v = np.asarray(v, dtype=float)
-    return float(v) if v.ndim == 0 or v.size == 1 and v.ndim == 0 else v.ravel().tolist()
+    return float(v) if v.ndim == 0 or (v.size == 1 and v.ndim == 0) else v.ravel().tolist()
 
 
 def design_json(model) -> dict[str, Any]:
@@ -62,7 +62,9 @@ def variable_rows(prop: Propagation) -> list[dict[str, Any]]:
         if v.group == "C":
             Cb, Ca = prop.before.design[v.key], prop.after.design[v.key]
             ang = 0.0 if np.array_equal(Ca, Cb) else float(np.degrees(np.linalg.norm(log_so3(Ca @ Cb.T))))
-            rows.append({"variable": v.key, "unit": "deg", "before": [0.0], "after": [ang], "change": ang, "role": role})
+            rows.append(
+                {"variable": v.key, "unit": "deg", "before": [0.0], "after": [ang], "change": ang, "role": role}
+            )
             continue
         b = read(layout, prop.before.design, prop.before.coordinates, v.key).copy()
         a = read(layout, prop.after.design, prop.after.coordinates, v.key).copy()
@@ -73,7 +75,9 @@ def variable_rows(prop: Propagation) -> list[dict[str, Any]]:
                 b[idx], a[idx] = np.degrees(b[idx]), np.degrees(a[idx])
                 unit = "deg" if len(idx) == v.size else "deg/len"
         change = float(np.max(np.abs(a - b))) if a.size else 0.0
-        rows.append({"variable": v.key, "unit": unit, "before": b.tolist(), "after": a.tolist(), "change": change, "role": role})
+        rows.append(
+            {"variable": v.key, "unit": unit, "before": b.tolist(), "after": a.tolist(), "change": change, "role": role}
+        )
     return rows
 
 
@@ -85,5 +89,7 @@ def comparison_rows(prop: Propagation) -> list[dict[str, Any]]:
         for k in range(n):
             comp = row["variable"] if n == 1 else f"{row['variable']}[{k}]"
             b, a = row["before"][k], row["after"][k]
-            out.append({"variable": comp, "unit": row["unit"], "before": b, "after": a, "change": a - b, "role": row["role"]})
+            out.append(
+                {"variable": comp, "unit": row["unit"], "before": b, "after": a, "change": a - b, "role": row["role"]}
+            )
     return out

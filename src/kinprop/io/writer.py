@@ -77,5 +77,9 @@ def model_to_data(model: Model) -> dict[str, Any]:
 
 def dump_model(model: Model, path: str | Path) -> None:
     data = model_to_data(model)
-    text = json.dumps(data, indent=2) if str(path).endswith(".json") else yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
+    text = (
+        json.dumps(data, indent=2)
+        if str(path).endswith(".json")
+        else yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
+    )
     atomic_write(path, text)

@@ -62,4 +62,4 @@ def joint_type(name: str) -> JointType:
     return REGISTRY[key]
 
 
-__all__ = ["JointType", "REGISTRY", "ALIASES", "joint_type"]
+__all__ = ["ALIASES", "REGISTRY", "JointType", "joint_type"]

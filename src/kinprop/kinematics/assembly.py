@@ -82,7 +82,9 @@ class Assembly:
     def residual(self, design: Design, coords: Mapping[str, Array]) -> Array:
         return self.evaluate(design, coords, jacobian=False)[0]
 
-    def evaluate(self, design: Design, coords: Mapping[str, Array], jacobian: bool = True) -> tuple[Array, Array | None]:
+    def evaluate(
+        self, design: Design, coords: Mapping[str, Array], jacobian: bool = True
+    ) -> tuple[Array, Array | None]:
         """``(Phi, Phi_x)`` with ``Phi_x`` over every layout column (None when not asked)."""
         mech, topo, layout = self.mechanism, self.topology, self.layout
         kin = self.kinematics(design, coords)
@@ -112,7 +114,13 @@ class Assembly:
             vals, Pd, Wi, Wj, Pl = [], [], [], [], []
             for c in jt.constraints():
                 bv = c.evaluate(d, f.R_i, f.R_j, length)
-                vals.append(bv.value), Pd.append(bv.Phi_d), Wi.append(bv.Phi_wi), Wj.append(bv.Phi_wj), Pl.append(bv.Phi_l)
+                (
+                    vals.append(bv.value),
+                    Pd.append(bv.Phi_d),
+                    Wi.append(bv.Phi_wi),
+                    Wj.append(bv.Phi_wj),
+                    Pl.append(bv.Phi_l),
+                )
             Phi[blk.rows] = np.concatenate(vals)
             if J is None:
                 continue

@@ -101,7 +101,7 @@ def build_layout(mech: Mechanism, topo: Topology) -> VariableLayout:
 def retract(layout: VariableLayout, design, coords, dx: np.ndarray):
     """``(design, coords) (+) dx``: additive for q, s', l (Euler parameters too, never
     renormalised); ``C <- exp(tilde(dxi')) C`` for orientations (``dC = tilde(dxi') C``)."""
-    from kinprop.model.design import Design, as_coordinates
+    from kinprop.model.design import as_coordinates
     from kinprop.spatial import exp_so3
 
     new_q = dict(coords)

@@ -5,11 +5,11 @@ from kinprop.model.mechanism import DESIGN_FIELDS, Body, Joint, Mechanism
 from kinprop.model.model import Model
 
 __all__ = [
+    "DESIGN_FIELDS",
+    "GROUPS",
     "Address",
     "Body",
-    "DESIGN_FIELDS",
     "Design",
-    "GROUPS",
     "Joint",
     "Mechanism",
     "Model",

@@ -75,7 +75,9 @@ def apply_changes(model: Model, changes: Mapping[str, object]) -> tuple[Model, d
         val = np.asarray(value, dtype=float)
         if addr.index is not None:
             if addr.index >= new.size or val.size != 1:
-                raise AddressError(f"{text!r}: expected one number for component {addr.index} of a size-{new.size} variable")
+                raise AddressError(
+                    f"{text!r}: expected one number for component {addr.index} of a size-{new.size} variable"
+                )
             new.flat[addr.index] = float(val.ravel()[0])
         else:
             if val.size != new.size:

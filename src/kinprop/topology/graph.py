@@ -57,6 +57,11 @@ class Topology:
         return tuple(t.joint for t in self.tree)
 
 
+def _path(chain: list[str], junction: str, parent_joint: dict[str, str]) -> tuple[str, ...]:
+    """Tree joints from ``junction`` down to ``chain[0]`` (chain runs body -> world)."""
+    return tuple(parent_joint[b] for b in reversed(chain[: chain.index(junction)]))
+
+
 def build_topology(mech: Mechanism) -> Topology:
     """Spanning tree, cut joints and loops; raises :class:`ModelError` naming unreachable bodies."""
     G = nx.MultiGraph()
@@ -70,7 +75,9 @@ def build_topology(mech: Mechanism) -> Topology:
         jt = j.jtype
         if j.cut is True or not jt.tree:
             continue
-        G.add_edge(j.body_i, j.body_j, key=j.name, weight=jt.n_coordinates + k / (10.0 * n) - (1000 if j.cut is False else 0))
+        G.add_edge(
+            j.body_i, j.body_j, key=j.name, weight=jt.n_coordinates + k / (10.0 * n) - (1000 if j.cut is False else 0)
+        )
     T = nx.minimum_spanning_tree(G, weight="weight", algorithm="kruskal")
     tree_keys = {key for _, _, key in T.edges(keys=True)}
 
@@ -129,10 +136,7 @@ def build_topology(mech: Mechanism) -> Topology:
         cj_set = set(cj)
         junction = next(b for b in ci if b in cj_set)
 
-        def path(c: list[str]) -> tuple[str, ...]:
-            return tuple(parent_joint[b] for b in reversed(c[: c.index(junction)]))
-
-        pi, pj = path(ci), path(cj)
+        pi, pj = _path(ci, junction, parent_joint), _path(cj, junction, parent_joint)
         case = 1 if (len(pi) + len(pj) == 1) else 2
         loops.append(Loop(name, j.body_i, j.body_j, junction, pi, pj, case))
     return Topology(tuple(order), tuple(tree), tuple(cut), tuple(loops), parent_joint)
