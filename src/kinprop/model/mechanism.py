@@ -66,24 +66,21 @@ class Mechanism:
     joints: tuple[Joint, ...]
     name: str = "mechanism"
 
+    _bodies: dict[str, Body] = field(init=False, repr=False, compare=False, hash=False)
+    _joints: dict[str, Joint] = field(init=False, repr=False, compare=False, hash=False)
+
     def __post_init__(self) -> None:
         problems = validate_structure(self.bodies, self.joints)
         if problems:
             raise ModelError(problems)
+        object.__setattr__(self, "_bodies", {b.name: b for b in self.bodies})
+        object.__setattr__(self, "_joints", {j.name: j for j in self.joints})
 
     def body(self, name: str) -> Body:
         return self._bodies[name]
 
     def joint(self, name: str) -> Joint:
         return self._joints[name]
-
-    @property
-    def _bodies(self) -> dict[str, Body]:
-        return {b.name: b for b in self.bodies}
-
-    @property
-    def _joints(self) -> dict[str, Joint]:
-        return {j.name: j for j in self.joints}
 
     @property
     def body_names(self) -> list[str]:
