@@ -2,7 +2,7 @@
 
 With the paper's stopping rule ||Phi|| < 1e-3 every printed quantity agrees to within one
 unit of its last printed digit (typos compared with their corrected values, PAPER-NOTES),
-except a few 8-9 significant-digit values that agree to 5e-7 in solver units (see
+except a few 8-9 significant-digit values that agree only to 5e-7 in solver units (see
 kinprop.reference.paper). Iteration counts are exact.
 """
 
