@@ -14,6 +14,7 @@ from typing import Any, TypeVar
 import numpy as np
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from kinprop.errors import AddressError, ModelError
 
@@ -35,7 +36,7 @@ F = TypeVar("F", bound=Callable[..., Any])
 def fail(lines: list[str] | str, code: int = EXIT_INVALID) -> None:
     """Print one line per problem on stderr and exit with ``code``."""
     for line in [lines] if isinstance(lines, str) else lines:
-        err.print(f"[red]error:[/red] {line}", markup=True, soft_wrap=True)
+        err.print(f"[red]error:[/red] {escape(line)}", markup=True, soft_wrap=True)
     raise typer.Exit(code)
 
 
