@@ -13,8 +13,12 @@ joint-frame origins and rotations become, by the chain rule,
   ``Phi_P_i R_i du/dqc`` (eq. 57);
 
 and the tree variables enter through the loop paths from the junction (eqs. 43, 49-51):
-``Phi_q = Phi_z^_i sum_{path i} B + Phi_z^_j sum_{path j} B`` (and M, N alike). The
-contributions above the junction cancel because ``Phi_z^_i + Phi_z^_j = 0``.
+``Phi_q = Phi_z^_i sum_{path i} B + Phi_z^_j sum_{path j} B`` (and M, N alike). Tree
+variables above the junction move the whole loop rigidly; dot-1, dot-2 and distance rows are
+invariant to that (``Phi_z^_i + Phi_z^_j = 0``, eq. 48). Spherical rows (the gap ``d``, global
+axes) are invariant only at ``d = 0``: away from assembly this Jacobian is the exact derivative
+of those rows resolved in the junction body's axes — the same zeros and norm — which converges
+better than the global derivative (tests/kinematics/test_jacobians.py measures both).
 """
 
 from __future__ import annotations

@@ -58,8 +58,10 @@ class Topology:
 
 
 def _path(chain: list[str], junction: str, parent_joint: dict[str, str]) -> tuple[str, ...]:
-    """Tree joints from ``junction`` down to ``chain[0]`` (chain runs body -> world)."""
-    return tuple(parent_joint[b] for b in reversed(chain[: chain.index(junction)]))
+    """Tree joints from ``junction`` down to ``chain[0]`` (chain runs body -> world).
+
+    Fixed bodies have no parent joint: a loop between two fixed bases meets at WORLD."""
+    return tuple(parent_joint[b] for b in reversed(chain[: chain.index(junction)]) if b in parent_joint)
 
 
 def build_topology(mech: Mechanism) -> Topology:
