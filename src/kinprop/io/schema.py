@@ -1,8 +1,14 @@
 """Schema of kinprop model files (YAML or JSON), validated with pydantic.
 
-Frame style (the paper's): bodies with fixed poses; joints with the body-frame position
-vectors ``s_i``/``s_j``, joint-frame orientations ``C_i``/``C_j`` and ``length`` where the
-model defines them, and initial coordinate estimates ``q`` in the declared angle unit.
+Frame style (the paper's, ``style: frames``, the default): bodies with fixed poses; joints
+with the body-frame position vectors ``s_i``/``s_j``, joint-frame orientations ``C_i``/``C_j``
+and ``length`` where the model defines them, and initial coordinate estimates ``q`` in the
+declared angle unit.
+
+Hardpoint style (``style: hardpoints``): global joint points and axes at a reference
+(assembled) configuration, from which :mod:`kinprop.io.hardpoints` derives body frames,
+s', C and zero coordinates. Which keys a joint takes depends on its type
+(:data:`kinprop.io.hardpoints.KEYS`); the schema accepts them all and the builder checks.
 """
 
 from __future__ import annotations
@@ -15,6 +21,15 @@ Finite = Annotated[float, Field(allow_inf_nan=False)]
 Vec3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
 Vec4 = Annotated[list[Finite], Field(min_length=4, max_length=4)]
 Mat3 = Annotated[list[Vec3], Field(min_length=3, max_length=3)]
+Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+
+#: axis conventions a file may declare (all right-handed; kept as declared, never converted)
+AXES = {
+    "ISO8855": "ISO 8855: x forward, y left, z up",
+    "SAE": "SAE J670: x forward, y right, z down",
+    "right-handed": "a right-handed x, y, z with no vehicle meaning",
+}
+AxesName = Literal["ISO8855", "SAE", "right-handed"]
 
 
 class Strict(BaseModel):
@@ -24,6 +39,11 @@ class Strict(BaseModel):
 class Units(Strict):
     length: Literal["m", "mm"]
     angle: Literal["deg", "rad"]
+    axes: AxesName | None = None
+
+
+class HardpointUnits(Units):
+    axes: AxesName
 
 
 class BodySpec(Strict):
@@ -42,7 +62,7 @@ class JointSpec(Strict):
     s_j: Vec3 | None = None
     C_i: Mat3 | None = None
     C_j: Mat3 | None = None
-    length: Annotated[float, Field(gt=0, allow_inf_nan=False)] | None = None
+    length: Positive | None = None
     q: list[Finite] | None = None
 
     @field_validator("q", mode="before")
@@ -59,3 +79,41 @@ class ModelFile(Strict):
     units: Units
     bodies: dict[str, BodySpec]
     joints: dict[str, JointSpec]
+
+
+class HardpointBodySpec(Strict):
+    """A body: fixed bodies may declare their frame's pose (default: the global frame);
+    ``points`` are named points given globally at the reference configuration."""
+
+    fixed: bool = False
+    position: Vec3 | None = None
+    orientation: Mat3 | None = None
+    points: dict[str, Vec3] = Field(default_factory=dict)
+
+
+class HardpointJointSpec(Strict):
+    """A joint by its global points and axes at the reference configuration."""
+
+    type: str
+    bodies: Annotated[list[str], Field(min_length=2, max_length=2)]
+    cut: bool | None = None
+    point: Vec3 | None = None
+    axis: Vec3 | None = None
+    axis_i: Vec3 | None = None
+    axis_j: Vec3 | None = None
+    point_i: Vec3 | None = None
+    point_j: Vec3 | None = None
+    length: Positive | None = None
+
+
+class HardpointFile(Strict):
+    kinprop: Literal[1] = 1
+    name: str = "mechanism"
+    description: str | None = None
+    style: Literal["hardpoints"]
+    units: HardpointUnits
+    #: body-frame rule: ``global`` (axes parallel to the global axes at the reference) or
+    #: ``joint`` (axes of the body's tree-joint frame, the paper's convention)
+    body_frames: Literal["global", "joint"] = "global"
+    bodies: dict[str, HardpointBodySpec]
+    joints: dict[str, HardpointJointSpec]
