@@ -6,6 +6,7 @@ from typing import Any
 
 import numpy as np
 
+from kinprop.analysis.points import joint_hardpoints, named_points
 from kinprop.kinematics.layout import read
 from kinprop.propagation.propagate import Propagation, assembly_for
 from kinprop.spatial import log_so3
@@ -31,6 +32,9 @@ def coordinates_json(model) -> dict[str, list[float]]:
 
 
 def propagation_json(prop: Propagation) -> dict[str, Any]:
+    """The solve, the resulting coordinates and design, and where the joints sit afterwards:
+    ``hardpoints`` (``"JOINT.i"``/``"JOINT.j"`` -> global [x, y, z], see
+    :func:`kinprop.analysis.points.joint_hardpoints`) and ``points`` (named body points)."""
     r = prop.result
     return {
         "status": r.status,
@@ -44,6 +48,8 @@ def propagation_json(prop: Propagation) -> dict[str, Any]:
         "free": list(prop.free),
         "changes": {k: _num(v) for k, v in prop.changes.items()},
         "changed": prop.changed_variables(),
+        "hardpoints": joint_hardpoints(prop.after),
+        "points": named_points(prop.after),
     }
 
 
@@ -92,4 +98,27 @@ def comparison_rows(prop: Propagation) -> list[dict[str, Any]]:
             out.append(
                 {"variable": comp, "unit": row["unit"], "before": b, "after": a, "change": a - b, "role": row["role"]}
             )
+    return out
+
+
+def point_rows(prop: Propagation) -> list[dict[str, Any]]:
+    """Before/after of every joint hardpoint (``hardpoint:JOINT.i[x]``) and named point
+    (``point:BODY.NAME[x]``), one row per component, in the model's length unit."""
+    unit = prop.before.units.get("length", "")
+    out: list[dict[str, Any]] = []
+    for prefix, fn in (("hardpoint", joint_hardpoints), ("point", named_points)):
+        before, after = fn(prop.before), fn(prop.after)
+        for key, a in after.items():
+            for k, axis in enumerate("xyz"):
+                b = before[key][k]
+                out.append(
+                    {
+                        "variable": f"{prefix}:{key}[{axis}]",
+                        "unit": unit,
+                        "before": b,
+                        "after": a[k],
+                        "change": a[k] - b,
+                        "role": prefix,
+                    }
+                )
     return out

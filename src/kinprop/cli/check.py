@@ -1,0 +1,203 @@
+"""``kinprop check``: the mechanism report — structure, loops, counts, mobility, redundancy."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.markup import escape
+from rich.table import Table
+
+from kinprop.analysis.mobility import MobilityReport, mobility, row_names
+from kinprop.cli.app import EXIT_NOT_CONVERGED, app, fail, handles_user_errors, out, print_json
+from kinprop.io import load_model
+from kinprop.kinematics.assembly import Assembly
+from kinprop.model import Model
+from kinprop.propagation import assemble
+from kinprop.propagation.propagate import assembly_for
+
+#: ||Phi|| below which the configuration counts as assembled (the rank is then reliable)
+ASSEMBLED_TOL = 1e-8
+
+CASES = {
+    1: "the cut joint's bodies are also joined by a tree joint",
+    2: "the loop closes through the junction body",
+}
+
+
+def joint_rows(asm: Assembly) -> dict[str, list[str]]:
+    """Constraint-row labels of Phi per joint (cut-joint rows, Euler normalisation rows)."""
+    labels = row_names(asm)
+    rows: dict[str, list[str]] = {}
+    for blk in asm.row_blocks:
+        rows.setdefault(blk.joint, []).extend(labels[blk.rows])
+    return rows
+
+
+def check_json(model: Model, rep: MobilityReport, evaluated_at: str) -> dict[str, Any]:
+    """The report as one JSON object (see ``kinprop check --help``)."""
+    mech = model.mechanism
+    asm = assembly_for(mech)
+    topo = asm.topology
+    tree = set(topo.tree_joints)
+    rows = joint_rows(asm)
+    return {
+        "model": model.source,
+        "name": mech.name,
+        "units": dict(model.units),
+        "bodies": [
+            {
+                "name": b.name,
+                "fixed": b.fixed,
+                "joints": [j.name for j in mech.joints if b.name in (j.body_i, j.body_j)],
+                "points": [p for p, _ in b.points],
+            }
+            for b in mech.bodies
+        ],
+        "joints": [
+            {
+                "name": j.name,
+                "type": j.jtype.name,
+                "bodies": [j.body_i, j.body_j],
+                "role": "tree" if j.name in tree else "cut",
+                "n_coordinates": j.jtype.n_coordinates if j.name in tree else j.jtype.n_cut_coordinates,
+                "rows": rows.get(j.name, []),
+            }
+            for j in mech.joints
+        ],
+        "tree_joints": list(topo.tree_joints),
+        "cut_joints": list(topo.cut_joints),
+        "loops": [
+            {
+                "cut_joint": lp.cut_joint,
+                "bodies": [lp.body_i, lp.body_j],
+                "junction": lp.junction,
+                "case": lp.case,
+                "path_i": list(lp.path_i),
+                "path_j": list(lp.path_j),
+            }
+            for lp in topo.loops
+        ],
+        "n_coordinates": rep.n_coordinates,
+        "n_constraints": rep.n_constraints,
+        "rank": rep.rank,
+        "gruebler": rep.gruebler,
+        "mobility": rep.mobility,
+        "redundant": rep.redundant,
+        "redundant_joints": rep.redundant_joints,
+        "dependent": rep.dependent,
+        "singular_values": rep.singular_values,
+        "rtol": rep.rtol,
+        "residual_norm": rep.residual_norm,
+        "assembled": rep.residual_norm < ASSEMBLED_TOL,
+        "evaluated_at": evaluated_at,
+    }
+
+
+def _tables(obj: dict[str, Any]) -> list[Table]:
+    bodies = Table(title="bodies", title_justify="left")
+    for c in ("body", "fixed", "joints", "named points"):
+        bodies.add_column(c, overflow="fold")
+    for b in obj["bodies"]:
+        bodies.add_row(b["name"], "fixed" if b["fixed"] else "", " ".join(b["joints"]), " ".join(b["points"]))
+    joints = Table(title="joints", title_justify="left")
+    for c in ("joint", "type", "body i", "body j", "role", "coords", "constraint rows"):
+        joints.add_column(c, justify="right" if c == "coords" else "left", overflow="fold")
+    for j in obj["joints"]:
+        joints.add_row(
+            j["name"],
+            j["type"],
+            j["bodies"][0],
+            j["bodies"][1],
+            j["role"],
+            str(j["n_coordinates"]),
+            escape(" ".join(r.split(":", 1)[1] for r in j["rows"])),
+            style="cyan" if j["role"] == "cut" else None,
+        )
+    loops = Table(title="loops (one per cut joint)", title_justify="left")
+    for c in ("cut joint", "bodies", "junction", "case", "tree path i", "tree path j"):
+        loops.add_column(c, overflow="fold")
+    for lp in obj["loops"]:
+        loops.add_row(
+            lp["cut_joint"],
+            " - ".join(lp["bodies"]),
+            lp["junction"],
+            str(lp["case"]),
+            " ".join(lp["path_i"]) or "-",
+            " ".join(lp["path_j"]) or "-",
+        )
+    return [bodies, joints, loops]
+
+
+def print_report(obj: dict[str, Any], path: Path) -> None:
+    """Rich tables and a summary for a human reader."""
+    units = obj["units"]
+    out.print(escape(f"check {path}: {obj['name']}  (units: {units.get('length')}, {units.get('angle')})"))
+    for t in _tables(obj):
+        out.print(t)
+    if obj["loops"]:
+        for case in sorted({lp["case"] for lp in obj["loops"]}):
+            out.print(f"  case {case}: {CASES[case]}")
+    n, m, rank = obj["n_coordinates"], obj["n_constraints"], obj["rank"]
+    out.print(f"coordinates n = {n}, constraint rows m = {m}, rank of Phi_q = {rank}")
+    out.print(f"Gruebler-Kutzbach count: {obj['gruebler']}")
+    out.print(f"[bold]mobility (n - rank): {obj['mobility']}[/bold]")
+    if obj["redundant"]:
+        out.print(
+            f"[yellow]redundant constraint rows ({len(obj['redundant'])}): {escape(' '.join(obj['redundant']))}"
+            f"  (joints: {escape(' '.join(obj['redundant_joints']))})[/yellow]"
+        )
+        if obj["mobility"] > obj["gruebler"]:
+            out.print(
+                f"  the geometry makes {obj['mobility'] - obj['gruebler']} more degree(s) of freedom than the "
+                "Gruebler-Kutzbach count (an overconstrained mechanism)"
+            )
+    else:
+        out.print("redundant constraint rows: none")
+    res = obj["residual_norm"]
+    out.print(f"evaluated at {escape(obj['evaluated_at'])}: ||Phi|| = {res:.3g}")
+    if not obj["assembled"]:
+        out.print(
+            f"[yellow]note: not assembled (||Phi|| >= {ASSEMBLED_TOL:g}); the rank, mobility and redundant rows "
+            "hold at this configuration only. Assemble first: "
+            f"kinprop assemble {escape(str(path))} -o assembled.yaml (or kinprop check --assemble)[/yellow]",
+            soft_wrap=True,
+        )
+
+
+@app.command(name="check")
+@handles_user_errors
+def check_cmd(
+    model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
+    as_json: Annotated[bool, typer.Option("--json", help="print one JSON object instead of tables")] = False,
+    assemble_first: Annotated[
+        bool, typer.Option("--assemble", help="assemble (free: q) before computing the rank")
+    ] = False,
+) -> None:
+    """Mechanism report: structure, loops, counts, mobility and redundant constraints.
+
+    Bodies, joints, tree and cut joints, loops (junction body, case 1 or 2), the numbers of
+    coordinates and constraint rows, the Gruebler-Kutzbach count and the true mobility. The
+    rank of the Jacobian, the mobility and the redundant rows are computed at the model's
+    coordinates as given (or after --assemble); ||Phi|| there is reported. JSON keys: mobility,
+    gruebler, n_coordinates, n_constraints, rank, tree_joints, cut_joints, loops, redundant,
+    residual_norm, assembled, bodies, joints.
+    """
+    m = load_model(model)
+    evaluated_at = "the model's coordinates as given"
+    if assemble_first:
+        prop = assemble(m)
+        r = prop.result
+        if not r.converged:
+            fail(f"{model}: cannot assemble the model: {r.message}", EXIT_NOT_CONVERGED)
+        m = prop.after
+        evaluated_at = (
+            f"the assembled configuration (from ||Phi|| = {r.residual_history[0]:.3g}, {r.iterations} iterations)"
+        )
+    obj = check_json(m, mobility(m), evaluated_at)
+    obj["model"] = str(model)
+    if as_json:
+        print_json(obj)
+    else:
+        print_report(obj, model)

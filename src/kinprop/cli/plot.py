@@ -1,0 +1,81 @@
+"""``kinprop plot``: a 3D stick figure of a model, optionally over another one (before/after)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.markup import escape
+
+from kinprop.cli.app import app, err, handles_user_errors, out
+from kinprop.io import load_model
+from kinprop.model import Model
+from kinprop.propagation.propagate import assembly_for
+
+#: ||Phi|| above which a drawn model is flagged as not assembled
+DRAW_NOTE_TOL = 1e-6
+
+View = Annotated[str, typer.Option("--view", help="camera ELEV,AZIM in degrees (PNG only)")]
+
+
+def parse_view(text: str) -> tuple[float, float]:
+    try:
+        elev, azim = (float(x) for x in text.split(","))
+    except ValueError:
+        raise ValueError(f"--view {text!r}: expected ELEV,AZIM in degrees, e.g. 20,-60") from None
+    return elev, azim
+
+
+def note_if_unassembled(model: Model, path: Path | str) -> None:
+    """A stderr note when a model is drawn away from an assembled configuration."""
+    res = float(np.linalg.norm(assembly_for(model.mechanism).residual(model.design, model.coordinates)))
+    if res > DRAW_NOTE_TOL:
+        err.print(
+            escape(
+                f"note: {path} is drawn at its coordinates as given, not assembled (||Phi|| = {res:.3g}); "
+                "run kinprop assemble first for an assembled picture"
+            ),
+            soft_wrap=True,
+        )
+
+
+@app.command(name="plot")
+@handles_user_errors
+def plot_cmd(
+    model: Annotated[Path, typer.Argument(help="model file (YAML or JSON), drawn solid")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="FILE.png (matplotlib) or FILE.html (plotly)")],
+    compare: Annotated[
+        Path | None, typer.Option("--compare", help="another model drawn faded underneath, as 'before'")
+    ] = None,
+    title: Annotated[str | None, typer.Option("--title", help="figure title (default: the model's name)")] = None,
+    view: View = "20,-60",
+) -> None:
+    """Draw a 3D stick figure of a model (PNG or interactive HTML).
+
+    Bodies are lines from each body frame to its joints, joints are markers by type, joint
+    axes are arrows along z'' (both axes of a universal joint); drawn at the coordinates as given.
+
+    With --compare OTHER, OTHER is drawn faded as 'before' and MODEL solid as 'after' (the
+    paper's Figs. 5 and 6).
+    """
+    from kinprop.plot import save_plot
+
+    cam = parse_view(view)
+    m = load_model(model)
+    note_if_unassembled(m, model)
+    before = None
+    if compare is not None:
+        before = load_model(compare)
+        note_if_unassembled(before, compare)
+    save_plot(
+        output,
+        m,
+        before,
+        label=f"after: {model.name}" if before is not None else model.name,
+        before_label=f"before: {compare.name}" if compare is not None else "before",
+        title=title,
+        view=cam,
+    )
+    out.print(escape(f"wrote {output}"))
