@@ -1,26 +1,47 @@
 """Mobility and redundancy: Gruebler-Kutzbach count and the true mobility from the SVD rank.
 
-The true mobility is ``n_q - rank(Phi_q)`` at the current configuration, where ``n_q``
-counts every relative coordinate (Euler parameters as four, balanced by their normalisation
-rows). The rank uses singular values above ``rtol * s_max`` (default 1e-9). Redundant rows
-are the constraint rows left out of a rank-revealing (column-pivoted) QR of ``Phi_q^T``:
-removing them leaves the rank unchanged.
+The true (instantaneous) mobility is ``n - rank(Phi_x[:, free])`` at the model's current
+configuration, where ``n`` counts the free columns: by default every relative coordinate
+(group ``q``; Euler parameters as four, balanced by their normalisation rows, eq. 41), and
+with ``free=("q", "l")`` the lengths too (e.g. a Stewart platform's legs).
+
+Rank tolerance: a singular value counts when ``s_k > rtol * s_max`` (default
+``RANK_RTOL = 1e-9``). At a configuration assembled to ``||Phi|| < 1e-10`` the singular
+values of redundant rows are at rounding level (~1e-16 s_max in the examples) while the
+independent ones are O(link length), so the gap is wide; at a configuration solved only to a
+loose tolerance (the paper's 1e-3) or not assembled at all the dependent rows are not exactly
+dependent, so evaluate mobility at an assembled state (``residual_norm`` is reported).
+
+Redundant rows are those left out of a rank-revealing (column-pivoted) QR of ``Phi_q^T``:
+removing them leaves the rank unchanged. They are one removable set; any row with a
+component in the left null space (``dependent``) could take the place of one of them.
+
+The Gruebler-Kutzbach count is ``6 n_moving - sum_joints (6 - f_joint)``; it ignores the
+geometry, so it is -2 for a planar four-bar built from spatial revolutes and for the Bennett
+linkage, whose true mobility is 1.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
 
+from kinprop.kinematics.assembly import Assembly
 from kinprop.model import Model
 from kinprop.propagation.propagate import assembly_for
 from kinprop.solver.newton import RANK_RTOL
 
+#: a row is "dependent" when its component in the left null space exceeds this (unit vectors)
+DEPENDENT_TOL = 1e-6
+
 
 @dataclass(frozen=True)
 class MobilityReport:
+    """True mobility, Gruebler count and the redundant constraint rows, named by joint."""
+
     mobility: int
     gruebler: int
     n_coordinates: int
@@ -29,6 +50,26 @@ class MobilityReport:
     redundant: list[str]
     singular_values: list[float] = field(repr=False)
     rtol: float = RANK_RTOL
+    #: ``||Phi||`` at the evaluated configuration (should be ~0: assembled)
+    residual_norm: float = 0.0
+    #: rows with a component in the left null space (any of them can be the redundant one)
+    dependent: list[str] = field(default_factory=list)
+    free: tuple[str, ...] = ("q",)
+
+    @property
+    def redundant_joints(self) -> list[str]:
+        """Cut joints owning redundant rows, in row order."""
+        return list(dict.fromkeys(r.split(":", 1)[0] for r in self.redundant))
+
+    @property
+    def overconstrained(self) -> bool:
+        """True when the true mobility exceeds the Gruebler count (redundant constraints)."""
+        return self.mobility > self.gruebler
+
+
+def row_names(asm: Assembly) -> list[str]:
+    """``JOINT:constraint`` per row of Phi, unique (``Assembly.row_labels``): ``B:dot1[3]``."""
+    return asm.row_labels
 
 
 def joint_freedom(jtype, is_tree: bool) -> int:
@@ -47,17 +88,49 @@ def gruebler(model: Model) -> int:
     return 6 * moving - sum(6 - joint_freedom(j.jtype, j.name in tree) for j in mech.joints)
 
 
-def mobility(model: Model, rtol: float = RANK_RTOL) -> MobilityReport:
+def numerical_rank(sv: np.ndarray, rtol: float = RANK_RTOL) -> int:
+    """Number of singular values above ``rtol * s_max``."""
+    return int(np.sum(sv > rtol * sv[0])) if sv.size and sv[0] > 0 else 0
+
+
+def mobility(model: Model, rtol: float = RANK_RTOL, free: Sequence[str] = ("q",)) -> MobilityReport:
+    """True mobility at the model's configuration, Gruebler count and redundant rows.
+
+    ``free`` selects the Jacobian columns that may move (groups or addresses, as in
+    :func:`kinprop.propagation.propagate`); the default is every joint coordinate.
+    """
     asm = assembly_for(model.mechanism)
-    _, J = asm.evaluate(model.design, model.coordinates)
-    cols = asm.layout.columns(["q"])
+    Phi, J = asm.evaluate(model.design, model.coordinates)
+    cols = asm.layout.columns(list(free))
     Jq = J[:, cols]
     m, n = Jq.shape
-    sv = np.linalg.svd(Jq, compute_uv=False) if Jq.size else np.zeros(0)
-    rank = int(np.sum(sv > rtol * sv[0])) if sv.size and sv[0] > 0 else 0
+    if Jq.size:
+        U, sv, _ = np.linalg.svd(Jq)
+    else:
+        U, sv = np.eye(m), np.zeros(0)
+    rank = numerical_rank(sv, rtol)
     redundant: list[str] = []
+    dependent: list[str] = []
     if m and rank < m:
-        labels = asm.row_labels
-        _, _, piv = scipy.linalg.qr(Jq.T, mode="economic", pivoting=True)
-        redundant = [labels[i] for i in sorted(piv[rank:])]
-    return MobilityReport(n - rank, gruebler(model), n, m, rank, redundant, sv.tolist(), rtol)
+        labels = row_names(asm)
+        if n:
+            _, _, piv = scipy.linalg.qr(Jq.T, mode="economic", pivoting=True)
+            redundant = [labels[i] for i in sorted(piv[rank:])]
+        else:
+            redundant = list(labels)
+        null = U[:, rank:]
+        weight = np.sqrt(np.sum(null**2, axis=1))
+        dependent = [labels[i] for i in range(m) if weight[i] > DEPENDENT_TOL]
+    return MobilityReport(
+        n - rank,
+        gruebler(model),
+        n,
+        m,
+        rank,
+        redundant,
+        sv.tolist(),
+        rtol,
+        float(np.linalg.norm(Phi)),
+        dependent,
+        tuple(free),
+    )

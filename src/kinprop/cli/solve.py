@@ -18,14 +18,24 @@ from kinprop.cli.app import (
     parse_weight,
     print_json,
 )
+from kinprop.cli.continuation import run_propagation, shown_warnings
 from kinprop.io import dump_model, load_model
-from kinprop.io.results import propagation_json, variable_rows
+from kinprop.io.results import comparison_rows, point_rows, propagation_json, variable_rows
+from kinprop.io.units import changes_to_internal
+from kinprop.io.writer import atomic_write
 from kinprop.propagation import Propagation, propagate
 
 Tol = Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL (the paper used 1e-3)")]
 MaxIter = Annotated[int, typer.Option("--max-iter", help="maximum Newton iterations")]
 Output = Annotated[Path | None, typer.Option("-o", "--output", help="write the resulting model (full precision)")]
 Json = Annotated[bool, typer.Option("--json", help="print one JSON object instead of tables")]
+Csv = Annotated[
+    Path | None,
+    typer.Option("--csv", help="write the before/after values (variables, hardpoints, named points) as CSV"),
+]
+Plot = Annotated[
+    Path | None, typer.Option("--plot", help="draw before (faded) and after: FILE.png or FILE.html")
+]
 
 
 def _fmt(values: list[float]) -> str:
@@ -49,13 +59,49 @@ def comparison_table(prop: Propagation, title: str) -> Table:
     return t
 
 
-def report(prop: Propagation, title: str, output: Path | None, as_json: bool) -> None:
+def write_csv(prop: Propagation, path: Path) -> None:
+    """Before/after rows (:func:`comparison_rows`, then hardpoints and named points) as CSV."""
+    import pandas as pd
+
+    frame = pd.DataFrame(
+        comparison_rows(prop) + point_rows(prop), columns=["variable", "unit", "before", "after", "change", "role"]
+    )
+    atomic_write(path, frame.to_csv(index=False))  # shortest round-trip float text
+
+
+def write_plot(prop: Propagation, path: Path) -> None:
+    """Before (faded) and after of the propagation as a stick figure."""
+    from kinprop.plot import save_plot
+
+    changes = ", ".join(f"{k} = {_fmt(list(v.ravel()))}" for k, v in prop.changes.items()) or "assembled"
+    title = f"{prop.before.mechanism.name}\n{changes}; free: {' '.join(prop.free)}"
+    save_plot(path, prop.after, prop.before, label="after", before_label="before", title=title)
+
+
+def report(
+    prop: Propagation,
+    title: str,
+    output: Path | None,
+    as_json: bool,
+    csv: Path | None = None,
+    plot: Path | None = None,
+) -> None:
     r = prop.result
-    if output is not None:
+    if plot is not None and plot.suffix.lower() not in (".png", ".html"):
+        raise ValueError(f"--plot {str(plot)!r}: expected a name ending in .png or .html")
+    written = []
+    for path, write in (
+        (output, lambda p: dump_model(prop.after, p)),
+        (csv, lambda p: write_csv(prop, p)),
+        (plot, lambda p: write_plot(prop, p)),
+    ):
+        if path is None:
+            continue
         if r.converged:
-            dump_model(prop.after, output)
+            write(path)
+            written.append(path)
         else:
-            err.print(f"not writing {output}: the solve did not converge")
+            err.print(f"not writing {path}: the solve did not converge")
     if as_json:
         print_json(propagation_json(prop))
     else:
@@ -63,8 +109,8 @@ def report(prop: Propagation, title: str, output: Path | None, as_json: bool) ->
         out.print(f"free: {' '.join(prop.free)}   rank {r.rank} of {r.n_equations} equations, {r.n_free} free columns")
         out.print(f"||Phi|| history: {'  '.join(f'{x:.6g}' for x in r.residual_history)}")
         out.print(("[green]" if r.converged else "[red]") + r.message)
-        if output is not None and r.converged:
-            out.print(f"wrote {output}")
+        for path in written:
+            out.print(f"wrote {path}")
     if not r.converged:
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
@@ -78,11 +124,14 @@ def assemble(
     free: Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")] = None,
     output: Output = None,
     as_json: Json = False,
+    csv: Csv = None,
+    plot: Plot = None,
 ) -> None:
     """Solve for the joint coordinates from the model's estimates."""
     m = load_model(model)
-    prop = propagate(m, {}, tuple(free or ["q"]), tol=tol, max_iter=max_iter)
-    report(prop, f"assemble {model}", output, as_json)
+    with shown_warnings():
+        prop = propagate(m, {}, tuple(free or ["q"]), tol=tol, max_iter=max_iter)
+    report(prop, f"assemble {model}", output, as_json, csv, plot)
 
 
 @app.command(name="propagate")
@@ -96,10 +145,20 @@ def propagate_cmd(
     max_iter: MaxIter = 50,
     output: Output = None,
     as_json: Json = False,
+    csv: Csv = None,
+    plot: Plot = None,
+    continuation: Annotated[
+        bool | None,
+        typer.Option("--continuation/--no-continuation", help="predictor-corrector sub-steps (default: on failure)"),
+    ] = None,
 ) -> None:
     """Change design variables and re-assemble, moving only the free variables."""
     m = load_model(model)
-    changes = dict(parse_assignment(s) for s in (set_ or []))
+    changes = changes_to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
     weights = dict(parse_weight(w) for w in (weight or [])) or None
-    prop = propagate(m, changes, tuple(free or ["q"]), tol=tol, max_iter=max_iter, weights=weights)
-    report(prop, f"propagate {model}", output, as_json)
+    # continuation (explicit, or the fallback when Newton fails) and singularity warnings: cli/continuation.py
+    prop = run_propagation(
+        m, changes, tuple(free or ["q"]), tol=tol, max_iter=max_iter, weights=weights,
+        continuation=continuation, output=output, as_json=as_json,
+    )
+    report(prop, f"propagate {model}", output, as_json, csv, plot)

@@ -63,10 +63,12 @@ class Assembly:
         blocks, m = [], 0
         for name in self.topology.cut_joints:
             cons = self.mechanism.joint(name).jtype.constraints()
-            labels = []
+            raw = []
             for c in cons:
                 cname = type(c).__name__.lower()
-                labels += [cname] if c.rows == 1 else [f"{cname}[{k}]" for k in range(c.rows)]
+                raw += [cname] if c.rows == 1 else [f"{cname}[{k}]" for k in range(c.rows)]
+            # unique within the joint: a revolute's two dot-1 rows are dot1[3], dot1[4]
+            labels = [lab if raw.count(lab) == 1 else f"{lab}[{k}]" for k, lab in enumerate(raw)]
             blocks.append(RowBlock(name, "cut", slice(m, m + len(labels)), tuple(labels)))
             m += len(labels)
         for t in self.topology.tree:

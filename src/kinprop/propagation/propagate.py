@@ -6,20 +6,36 @@ overwritten, and they are never free (PAPER-NOTES 7).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
-from kinprop.errors import AddressError
+from kinprop.errors import AddressError, SingularityWarning
 from kinprop.kinematics.assembly import Assembly
 from kinprop.kinematics.layout import read, retract
 from kinprop.model.design import as_coordinates, parse_address
 from kinprop.model.mechanism import Mechanism
 from kinprop.model.model import Model
+from kinprop.propagation.conditioning import SINGULAR_RTOL, conditioning
 from kinprop.solver.newton import SolveOptions, SolveResult, newton
 from kinprop.spatial import Array, is_rotation
+
+
+def warn_if_singular(ratio: float, rtol: float = SINGULAR_RTOL, stacklevel: int = 3) -> None:
+    """Issue a :class:`SingularityWarning` when a solved configuration is near singular:
+    unit-independent ``s_r / s_1`` of the free-variable Jacobian below ``rtol``
+    (:mod:`kinprop.propagation.conditioning`; docs/analysis/mobility.md)."""
+    if ratio < rtol:
+        warnings.warn(
+            f"near-singular configuration (toggle): smallest/largest singular value of the (scaled) free-variable "
+            f"Jacobian = {ratio:.3g} < {rtol:g}; small design changes may move the free variables a lot or "
+            "leave no assembly",
+            SingularityWarning,
+            stacklevel=stacklevel,
+        )
 
 
 @lru_cache(maxsize=64)
@@ -37,6 +53,8 @@ class Propagation:
     result: SolveResult
     changes: Mapping[str, Array]
     free: tuple[str, ...]
+    #: unit-independent s_r / s_1 of the free-variable Jacobian at the solution (NaN if not converged)
+    singularity_ratio: float = float("nan")
 
     @property
     def converged(self) -> bool:
@@ -62,15 +80,19 @@ def apply_changes(model: Model, changes: Mapping[str, object]) -> tuple[Model, d
     coords = dict(model.coordinates)
     normalised: dict[str, Array] = {}
     changed: set[str] = set()
+    pending: dict[str, Array] = {}
     for text, value in changes.items():
         addr = parse_address(text)
         if addr.key not in asm.layout:
             known = ", ".join(v.key for v in asm.layout.variables)
             raise AddressError(f"{text!r} is not a design variable or coordinate of this model; known: {known}")
         var = asm.layout[addr.key]
-        current = read(asm.layout, model.design, model.coordinates, addr.key)
-        if var.group == "C":
+        if addr.key in pending:  # several components of one variable in the same change set
+            current = pending[addr.key]
+        elif var.group == "C":
             current = np.asarray(model.design[addr.key], dtype=float)
+        else:
+            current = read(asm.layout, model.design, model.coordinates, addr.key)
         new = np.array(current, dtype=float)
         val = np.asarray(value, dtype=float)
         if addr.index is not None:
@@ -90,6 +112,7 @@ def apply_changes(model: Model, changes: Mapping[str, object]) -> tuple[Model, d
         if var.group == "l" and new.ravel()[0] <= 0:
             raise AddressError(f"{text!r}: a length must be positive")
         normalised[str(addr)] = new
+        pending[addr.key] = new
         changed.add(addr.key)
         if var.group == "q":
             coords[var.joint] = new
@@ -137,7 +160,11 @@ def propagate(
     result = newton(evaluate, step, (start.design, start.coordinates), cols, layout.n, SolveOptions(tol, max_iter), w)
     design, coords = result.state
     after = start.with_state(design, coords)
-    return Propagation(model, after, result, normalised, tuple(free))
+    ratio = float("nan")
+    if result.converged and cols.size:
+        ratio = conditioning(asm, asm.evaluate(design, coords)[1][:, cols])
+        warn_if_singular(ratio)
+    return Propagation(model, after, result, normalised, tuple(free), ratio)
 
 
 def assemble(model: Model, free: Sequence[str] = ("q",), *, tol: float = 1e-10, max_iter: int = 50) -> Propagation:

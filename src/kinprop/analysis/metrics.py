@@ -1,0 +1,252 @@
+"""Suspension metrics of a wheel body (ISO 8855 / SAE J670 vehicle axes).
+
+Axes: x forward, y left, z up (ISO 8855). Angles are returned in degrees, lengths in the
+model's length unit. The sign conventions are the same for a left and a right wheel:
+
+* ``camber``: angle between the wheel plane and the vertical, negative when the top of the
+  wheel leans inboard: ``asin(-a_z)`` with ``a`` the unit spin axis pointing outboard;
+* ``toe``: angle in the ground plane between the wheel heading and x, toe-in positive (the
+  front of the wheel turned towards the centreline): ``atan2(a_x, |a_y|)``;
+* ``caster``: steering axis from vertical in the side view, positive with its top rearward:
+  ``atan2(-k_x, k_z)``, ``k`` the unit steering axis pointing up;
+* ``kpi`` (kingpin inclination): steering axis from vertical in the front view, positive
+  with its top inboard: ``atan2(-side k_y, k_z)``;
+* ``scrub_radius``: in the ground plane (horizontal through the contact point), from the
+  steering axis' ground point G to the contact point, along the wheel's horizontal outboard
+  direction; positive when the contact point is outboard of G;
+* ``trail`` (mechanical caster trail): G ahead of the contact point along the wheel heading;
+* ``wheel_centre_dx|dy|dz``: wheel-centre displacement from the reference configuration
+  (``dz`` is the wheel travel, jounce positive).
+
+A left wheel is one whose outboard spin axis points to +y, a right wheel to -y.
+
+How a model declares a wheel, without any schema change: named points (``points:`` of a
+body, body frame) on the wheel body (the upright/knuckle carrying the wheel):
+
+* ``wheel_centre``: the wheel centre;
+* ``spin_axis``: a point one unit (any positive distance) along the spin axis, outboard;
+* ``contact_patch`` (optional): the tyre contact point at the reference configuration; only
+  its distance from the spin axis (the loaded radius) is used — the contact point is the
+  lowest point of that wheel circle at every configuration;
+* ``kingpin_upper``, ``kingpin_lower`` (optional): two points on the steering axis.
+
+A wheel point NAME is looked up on the wheel body, then on a fixed body as ``WHEEL.NAME``,
+then on a fixed body as ``NAME`` — so a McPherson top mount, fixed on the chassis, can be a
+chassis point ``kingpin_upper``. The reference wheel centre is the point ``wheel_centre_ref``
+on a fixed body (same lookup), or the wheel centre of an explicit ``reference`` model. The
+steering axis can also be given per call as two point specs (``hardpoint:JOINT.i|j`` or
+``point:BODY.NAME``) through :class:`WheelSpec`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from kinprop.errors import AddressError
+from kinprop.model import Model
+from kinprop.spatial import EZ, Array
+
+if TYPE_CHECKING:
+    from kinprop.analysis.outputs import OutputContext
+
+ANGLE_METRICS = ("camber", "toe", "caster", "kpi")
+LENGTH_METRICS = ("scrub_radius", "trail", "wheel_centre_dx", "wheel_centre_dy", "wheel_centre_dz")
+METRICS = ANGLE_METRICS + LENGTH_METRICS
+#: accepted long names
+METRIC_ALIASES = {"kingpin_inclination": "kpi", "scrub": "scrub_radius", "wheel_travel": "wheel_centre_dz"}
+
+
+@dataclass(frozen=True)
+class WheelSpec:
+    """Per-call metric parameters of one wheel: the steering axis as two point specs
+    (``hardpoint:JOINT.i|j`` or ``point:BODY.NAME``), upper first."""
+
+    steering_axis: tuple[str, str] | None = None
+
+
+# --- closed-form geometry (vectors in vehicle axes) -----------------------------------------
+def wheel_side(axis: Array) -> int:
+    """+1 for a left wheel (outboard spin axis towards +y), -1 for a right wheel."""
+    return 1 if axis[1] >= 0 else -1
+
+
+def camber_toe(axis: Array) -> tuple[float, float]:
+    """``(camber, toe)`` in degrees from the outboard spin axis (any length)."""
+    a = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    camber = math.degrees(math.asin(float(np.clip(-a[2], -1.0, 1.0))))
+    toe = math.degrees(math.atan2(float(a[0]), abs(float(a[1]))))
+    return camber, toe
+
+
+def steering_angles(upper: Array, lower: Array, side: int) -> tuple[float, float]:
+    """``(caster, kpi)`` in degrees of the steering axis through ``lower`` and ``upper``."""
+    k = np.asarray(upper, dtype=float) - np.asarray(lower, dtype=float)
+    caster = math.degrees(math.atan2(-k[0], k[2]))
+    kpi = math.degrees(math.atan2(-side * k[1], k[2]))
+    return caster, kpi
+
+
+def contact_point(centre: Array, axis: Array, radius: float) -> Array:
+    """Lowest point of the wheel circle (centre, unit outboard axis, radius)."""
+    a = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    down = -EZ + a[2] * a  # -z projected onto the wheel plane
+    return np.asarray(centre, dtype=float) + radius * down / np.linalg.norm(down)
+
+
+def ground_offsets(upper: Array, lower: Array, contact: Array, axis: Array) -> tuple[float, float]:
+    """``(scrub_radius, trail)``: the steering axis' ground point G relative to the contact
+    point, in the horizontal plane through the contact point."""
+    k = np.asarray(upper, dtype=float) - np.asarray(lower, dtype=float)
+    G = lower + k * (contact[2] - lower[2]) / k[2]
+    a = np.asarray(axis, dtype=float)
+    side = wheel_side(a)
+    lateral = np.array([a[0], a[1], 0.0])
+    lateral /= np.linalg.norm(lateral)
+    heading = side * np.cross(lateral, EZ)
+    return float((contact - G) @ lateral), float((G - contact) @ heading)
+
+
+# --- wheels of a model -------------------------------------------------------------------------
+def wheel_bodies(model: Model) -> list[str]:
+    """Bodies carrying both ``wheel_centre`` and ``spin_axis`` named points."""
+    return [b.name for b in model.mechanism.bodies if {"wheel_centre", "spin_axis"} <= {n for n, _ in b.points}]
+
+
+def _find_point(model: Model, wheel: str, name: str, on_wheel: bool = True) -> tuple[str, str] | None:
+    """(body, point name) of a wheel point by the lookup rule of the module docstring."""
+    mech = model.mechanism
+    if on_wheel and name in dict(mech.body(wheel).points):
+        return wheel, name
+    for key in (f"{wheel}.{name}", name):
+        for b in mech.bodies:
+            if b.fixed and key in dict(b.points):
+                return b.name, key
+    return None
+
+
+def available_metrics(
+    model: Model, wheel: str, spec: WheelSpec | None = None, has_reference: bool = False
+) -> list[str]:
+    """Metrics a wheel body supports with the points the model declares."""
+    out = ["camber", "toe"]
+    steer = (spec is not None and spec.steering_axis is not None) or all(
+        _find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")
+    )
+    if steer:
+        out += ["caster", "kpi"]
+        if "contact_patch" in dict(model.mechanism.body(wheel).points):
+            out += ["scrub_radius", "trail"]
+    if has_reference or _find_point(model, wheel, "wheel_centre_ref", on_wheel=False):
+        out += ["wheel_centre_dx", "wheel_centre_dy", "wheel_centre_dz"]
+    return out
+
+
+def metric_names(model: Model) -> list[str]:
+    """``metric:WHEEL.NAME`` for every wheel body and every metric it supports."""
+    return [f"metric:{w}.{m}" for w in wheel_bodies(model) for m in available_metrics(model, w)]
+
+
+def resolve_metric(model: Model, name: str) -> tuple[str, str]:
+    """``metric:WHEEL.NAME`` or a bare ``NAME`` (one wheel) -> ``(wheel, metric)``."""
+    wheels = wheel_bodies(model)
+    if name.startswith("metric:"):
+        wheel, _, metric = name[len("metric:") :].partition(".")
+        if wheel not in wheels:
+            raise AddressError(
+                f"output {name!r}: {wheel!r} is not a wheel body (a wheel body has named points "
+                f"'wheel_centre' and 'spin_axis'); wheels: {', '.join(wheels) or 'none'}"
+            )
+    else:
+        metric = name
+        if len(wheels) != 1:
+            raise AddressError(
+                f"output {name!r}: not a variable (JOINT.field), point or metric; a bare metric name needs "
+                f"exactly one wheel body, found {len(wheels)} — write metric:WHEEL.{name}"
+            )
+        wheel = wheels[0]
+    metric = METRIC_ALIASES.get(metric, metric)
+    if metric not in METRICS:
+        raise AddressError(f"output {name!r}: unknown metric {metric!r}; metrics: {', '.join(METRICS)}")
+    return wheel, metric
+
+
+def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:
+    """Every metric the wheel supports at the context's state (angles deg, lengths model unit)."""
+    model = ctx.model
+    spec = spec if spec is not None else ctx.wheels.get(wheel) if ctx.wheels else None
+    centre = ctx.body_point(wheel, "wheel_centre")
+    axis = ctx.body_point(wheel, "spin_axis") - centre
+    axis /= np.linalg.norm(axis)
+    side = wheel_side(axis)
+    camber, toe = camber_toe(axis)
+    out = {"camber": camber, "toe": toe}
+    upper = lower = None
+    if spec is not None and spec.steering_axis is not None:
+        upper, lower = (ctx.point(s) for s in spec.steering_axis)
+    else:
+        found_upper, found_lower = (_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
+        if found_upper is not None and found_lower is not None:
+            upper, lower = ctx.body_point(*found_upper), ctx.body_point(*found_lower)
+    if upper is not None and lower is not None:
+        out["caster"], out["kpi"] = steering_angles(upper, lower, side)
+        pts = dict(model.mechanism.body(wheel).points)
+        if "contact_patch" in pts:
+            v = np.asarray(pts["contact_patch"], dtype=float) - np.asarray(pts["wheel_centre"], dtype=float)
+            a_B = np.asarray(pts["spin_axis"], dtype=float) - np.asarray(pts["wheel_centre"], dtype=float)
+            a_B /= np.linalg.norm(a_B)
+            radius = float(np.linalg.norm(v - (v @ a_B) * a_B))
+            contact = contact_point(centre, axis, radius)
+            out["scrub_radius"], out["trail"] = ground_offsets(upper, lower, contact, axis)
+    ref = None
+    if ctx.reference is not None:
+        from kinprop.analysis.outputs import OutputContext as _Ctx
+
+        ref = _Ctx.of(ctx.reference).body_point(wheel, "wheel_centre")
+    else:
+        found_ref = _find_point(model, wheel, "wheel_centre_ref", on_wheel=False)
+        if found_ref is not None:
+            ref = ctx.body_point(*found_ref)
+    if ref is not None:
+        d = centre - ref
+        out["wheel_centre_dx"], out["wheel_centre_dy"], out["wheel_centre_dz"] = (float(x) for x in d)
+    return out
+
+
+def suspension_metrics(
+    model: Model, wheel: str | None = None, *, reference: Model | None = None, spec: WheelSpec | None = None
+) -> dict[str, float]:
+    """Metrics of ``wheel`` (the only wheel body when None) at the model's current state."""
+    from kinprop.analysis.outputs import OutputContext
+
+    wheels = wheel_bodies(model)
+    if wheel is None:
+        if len(wheels) != 1:
+            raise AddressError(f"name the wheel body: the model has {len(wheels)} ({', '.join(wheels) or 'none'})")
+        wheel = wheels[0]
+    elif wheel not in wheels:
+        raise AddressError(f"{wheel!r} is not a wheel body (needs named points 'wheel_centre' and 'spin_axis')")
+    return wheel_metrics(OutputContext.of(model, reference), wheel, spec)
+
+
+def metric_unit(metric: str, length_unit: str = "m") -> str:
+    """``deg`` for angle metrics, the model's length unit otherwise."""
+    return "deg" if METRIC_ALIASES.get(metric, metric) in ANGLE_METRICS else length_unit
+
+
+__all__ = [
+    "METRICS",
+    "WheelSpec",
+    "camber_toe",
+    "contact_point",
+    "ground_offsets",
+    "metric_names",
+    "metric_unit",
+    "steering_angles",
+    "suspension_metrics",
+    "wheel_bodies",
+    "wheel_metrics",
+]

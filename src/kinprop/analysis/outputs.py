@@ -1,0 +1,225 @@
+"""Named outputs of a model at its current state: one place that evaluates them.
+
+Output names (all scalars once expanded; a vector name without a component expands into
+its components, e.g. ``point:wheel.wheel_centre`` into ``...[x]``, ``...[y]``, ``...[z]``):
+
+* coordinates: ``J01.q`` (one coordinate), ``J32.q[1]``; angles in radians;
+* design variables: ``RS.s_i[2]``, ``RS.s_i`` (three), ``RS.length``;
+* named points (``Body.points``, body frame) in global coordinates:
+  ``point:BODY.NAME[x|y|z]``;
+* joint hardpoints, the global origin of the joint frame on the joint's first (``i``) or
+  second (``j``) body: ``hardpoint:JOINT.i[x]``, ``hardpoint:JOINT.j[z]``;
+* suspension metrics of a wheel body (:mod:`kinprop.analysis.metrics`):
+  ``metric:WHEEL.camber`` (``camber`` alone when the model has one wheel); angles in degrees.
+
+Lengths are in the model's length unit. Everything is evaluated from one forward-kinematics
+pass over the spanning tree; the model is not re-assembled here.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from kinprop.analysis.metrics import WheelSpec, metric_names, resolve_metric, wheel_metrics
+from kinprop.errors import AddressError
+from kinprop.kinematics.forward import Kinematics, frames_on_bodies
+from kinprop.model import Model
+from kinprop.model.design import Address, parse_address
+from kinprop.propagation.propagate import assembly_for
+from kinprop.spatial import Array
+
+AXES = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
+_XYZ = "xyz"
+
+_POINT = re.compile(r"^point:(?P<body>[^.\s\[\]]+)\.(?P<name>[^\s\[\]]+?)(\[(?P<c>[xyz012])\])?$")
+_HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[ij])(\[(?P<c>[xyz012])\])?$")
+
+
+@dataclass
+class OutputContext:
+    """A model with its forward kinematics, shared by every output evaluated at one state."""
+
+    model: Model
+    kin: Kinematics
+    reference: Model | None = None
+    wheels: Mapping[str, WheelSpec] | None = None
+
+    @classmethod
+    def of(
+        cls, model: Model, reference: Model | None = None, wheels: Mapping[str, WheelSpec] | None = None
+    ) -> OutputContext:
+        """Forward kinematics of ``model`` at its current state."""
+        asm = assembly_for(model.mechanism)
+        return cls(model, asm.kinematics(model.design, model.coordinates), reference, wheels)
+
+    def body_point(self, body: str, point: str) -> Array:
+        """Global position of the named point ``point`` of ``body``."""
+        mech = self.model.mechanism
+        if body not in mech.body_names:
+            raise AddressError(f"unknown body {body!r}; bodies are {', '.join(mech.body_names)}")
+        pts = dict(mech.body(body).points)
+        if point not in pts:
+            known = ", ".join(pts) or "none"
+            raise AddressError(f"body {body!r} has no named point {point!r}; its points: {known}")
+        return self.kin.r[body] + self.kin.A[body] @ np.asarray(pts[point], dtype=float)
+
+    def hardpoint(self, joint: str, side: str) -> Array:
+        """Global origin of ``joint``'s frame on its first (``i``) or second (``j``) body."""
+        mech = self.model.mechanism
+        if joint not in mech.joint_names:
+            raise AddressError(f"unknown joint {joint!r}; joints are {', '.join(mech.joint_names)}")
+        f = self.kin.frames.get(joint)
+        if f is None:  # cut joint: from its two bodies' poses
+            j = mech.joint(joint)
+            k = self.kin
+            f = frames_on_bodies(self.model.design, joint, k.r[j.body_i], k.A[j.body_i], k.r[j.body_j], k.A[j.body_j])
+        return f.P_i if side == "i" else f.P_j
+
+    def point(self, spec: str) -> Array:
+        """A global point from a ``point:BODY.NAME`` or ``hardpoint:JOINT.i|j`` spec."""
+        m = _POINT.match(spec)
+        if m and m.group("c") is None:
+            return self.body_point(m.group("body"), m.group("name"))
+        m = _HARD.match(spec)
+        if m and m.group("c") is None:
+            return self.hardpoint(m.group("joint"), m.group("side"))
+        raise AddressError(f"{spec!r} is not a point: expected point:BODY.NAME or hardpoint:JOINT.i|j")
+
+
+def _vector_name(base: str, n: int, letters: bool) -> list[str]:
+    return [f"{base}[{_XYZ[k] if letters else k}]" for k in range(n)]
+
+
+def expand_outputs(model: Model, names: Sequence[str]) -> list[str]:
+    """Scalar output names: vector names are expanded into their components (validated)."""
+    out: list[str] = []
+    for name in names:
+        name = name.strip()
+        if name.startswith(("point:", "hardpoint:")):
+            m = _POINT.match(name) or _HARD.match(name)
+            if not m:
+                raise AddressError(
+                    f"bad output {name!r}: expected point:BODY.NAME[x|y|z] or hardpoint:JOINT.i|j[x|y|z]"
+                )
+            out += [name] if m.group("c") is not None else _vector_name(name, 3, True)
+        elif name.startswith("metric:") or "." not in name:
+            resolve_metric(model, name)  # a wheel body and a known metric
+            out.append(name)
+        else:
+            addr = _parse_variable(model, name)
+            size = _variable_size(model, addr.key)
+            out += [name] if addr.index is not None or size == 1 else _vector_name(name, size, False)
+    return out
+
+
+def _parse_variable(model: Model, name: str) -> Address:
+    try:
+        addr = parse_address(name)
+    except AddressError:
+        raise AddressError(
+            f"bad output {name!r}: expected a coordinate (J.q[k]), a design variable (J.s_i[k], J.length), "
+            "point:BODY.NAME[x], hardpoint:JOINT.i[x] or a metric (metric:WHEEL.camber)"
+        ) from None
+    if addr.field in ("C_i", "C_j"):
+        raise AddressError(f"output {name!r}: orientations are not scalar outputs; use points or metrics")
+    layout = assembly_for(model.mechanism).layout
+    if addr.key not in layout:
+        known = ", ".join(v.key for v in layout.variables if v.group != "C")
+        raise AddressError(f"output {name!r} is not a variable of this model; known: {known}")
+    if addr.index is not None and addr.index >= layout[addr.key].size:
+        raise AddressError(f"output {name!r}: index out of range for a variable of size {layout[addr.key].size}")
+    return addr
+
+
+def _variable_size(model: Model, key: str) -> int:
+    return assembly_for(model.mechanism).layout[key].size
+
+
+def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, float]]) -> float:
+    m = _POINT.match(name)
+    if name.startswith("point:") and m:
+        return float(ctx.body_point(m.group("body"), m.group("name"))[AXES[m.group("c")]])
+    m = _HARD.match(name)
+    if name.startswith("hardpoint:") and m:
+        return float(ctx.hardpoint(m.group("joint"), m.group("side"))[AXES[m.group("c")]])
+    if name.startswith("metric:") or "." not in name:
+        wheel, metric = resolve_metric(ctx.model, name)
+        if wheel not in metric_cache:
+            metric_cache[wheel] = wheel_metrics(ctx, wheel)
+        values = metric_cache[wheel]
+        if metric not in values:
+            available = ", ".join(values)
+            raise AddressError(f"metric {metric!r} is not available for wheel {wheel!r}; available: {available}")
+        return float(values[metric])
+    addr = _parse_variable(ctx.model, name)
+    model = ctx.model
+    if addr.field == "q":
+        v = np.atleast_1d(np.asarray(model.coordinates[addr.joint], dtype=float))
+    else:
+        v = np.atleast_1d(np.asarray(model.design[addr.key], dtype=float)).ravel()
+    return float(v[addr.index or 0])
+
+
+def evaluate_outputs(
+    model: Model,
+    names: Sequence[str],
+    *,
+    reference: Model | None = None,
+    wheels: Mapping[str, WheelSpec] | None = None,
+) -> dict[str, float]:
+    """Values of the named outputs at the model's current state, keyed by expanded name
+    (a scalar name is its own key).
+
+    ``reference`` (same mechanism) sets the reference configuration of the wheel-centre
+    displacement metrics; without it the fixed-body point ``wheel_centre_ref`` is used.
+    ``wheels`` gives per-wheel metric parameters (:class:`~kinprop.analysis.metrics.WheelSpec`).
+    Raises :class:`AddressError` for unknown names.
+    """
+    ctx = OutputContext.of(model, reference, wheels)
+    cache: dict[str, dict[str, float]] = {}
+    return {n: _scalar(ctx, n, cache) for n in expand_outputs(model, names)}
+
+
+def output_function(
+    model: Model,
+    names: Sequence[str],
+    *,
+    reference: Model | None = None,
+    wheels: Mapping[str, WheelSpec] | None = None,
+) -> tuple[Callable[[Model], Array], list[str]]:
+    """``(f, expanded)``: ``f(model) -> array`` of the expanded outputs (names checked once)."""
+    expanded = expand_outputs(model, names)
+
+    def f(m: Model) -> Array:
+        ctx = OutputContext.of(m, reference, wheels)
+        cache: dict[str, dict[str, float]] = {}
+        return np.array([_scalar(ctx, n, cache) for n in expanded])
+
+    return f, expanded
+
+
+def output_names(model: Model) -> list[str]:
+    """Every scalar output the model defines: coordinates, design variables (not C), named
+    points, joint hardpoints and the suspension metrics of its wheel bodies."""
+    mech = model.mechanism
+    layout = assembly_for(mech).layout
+    names: list[str] = []
+    for v in layout.variables:
+        if v.group == "C":
+            continue
+        names += [v.key] if v.size == 1 else [f"{v.key}[{k}]" for k in range(v.size)]
+    for b in mech.bodies:
+        for p, _ in b.points:
+            names += _vector_name(f"point:{b.name}.{p}", 3, True)
+    for j in mech.joints:
+        for side in "ij":
+            names += _vector_name(f"hardpoint:{j.name}.{side}", 3, True)
+    names += metric_names(model)
+    return names
+
+
+__all__ = ["OutputContext", "evaluate_outputs", "expand_outputs", "output_function", "output_names"]

@@ -1,0 +1,429 @@
+"""Sweeps: drive joint coordinates over a range, each step re-assembled from the previous one.
+
+A drive ``JOINT=START:STOP:STEPS`` sets the coordinate to ``STEPS + 1`` evenly spaced
+values from START to STOP (both included), in the model's units (degrees when the file says
+``angle: deg`` and the coordinate is an angle). Several drives move together (lockstep) and
+must have the same STEPS. Step k is a design propagation (section 5) from the last
+successful state with the driven coordinates set (never free) and the ``free`` variables
+moving; step 0 goes from the model's estimates (assembled first) to the start values, with
+the ``--set`` changes, by continuation (:mod:`kinprop.propagation.continuation`), so that it
+stays on the estimates' assembly branch.
+
+Each step gives one row: ``step``, the drive values, ``status`` (``converged`` /
+``failed``), ``iterations``, ``residual_norm``, ``sv_ratio`` (unit-independent
+smallest/largest singular value of the free-variable Jacobian,
+:mod:`kinprop.propagation.conditioning`; ``near_singular`` when below ``SINGULAR_RTOL``),
+every joint coordinate (model units),
+the outputs (named points ``point:BODY.NAME[x]``, suspension metrics, or any name
+:func:`kinprop.analysis.outputs.evaluate_outputs` accepts) and ``message``. A failed step is
+recorded with NaN values and its reason, and the sweep goes on from the last good state.
+
+Rows are handed to a sink as they are computed: CSV appended and flushed row by row, Parquet
+in row groups (:class:`ParquetSink`); the sink is closed (Parquet footer written) even when
+the sweep is interrupted, so every finished row is kept.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from kinprop.errors import AddressError, SingularityWarning
+from kinprop.model import Model
+from kinprop.propagation.propagate import (
+    SINGULAR_RTOL,
+    Propagation,
+    assembly_for,
+    propagate,
+)
+from kinprop.spatial import Array
+
+_DRIVE = re.compile(r"^(?P<joint>[^\s=\[\].]+)(\.q)?(\[(?P<index>\d+)\])?=(?P<range>.+)$")
+
+#: columns before the coordinates and outputs
+META = ("step", "status", "iterations", "residual_norm", "sv_ratio", "near_singular")
+
+
+@dataclass(frozen=True)
+class Drive:
+    """One driven coordinate: ``joint``'s coordinate ``index`` over ``values`` (model units)."""
+
+    joint: str
+    index: int
+    values: Array
+    angle: bool = False
+    #: coordinates the joint has (for the label)
+    size: int = 1
+
+    @property
+    def label(self) -> str:
+        return f"{self.joint}.q" if self.size == 1 else f"{self.joint}.q[{self.index}]"
+
+    @property
+    def address(self) -> str:
+        return f"{self.joint}.q[{self.index}]"
+
+
+def _coordinate_info(model: Model, joint: str) -> tuple[int, tuple[int, ...]]:
+    """(number of coordinates, indices that are angles in model units) of a joint."""
+    asm = assembly_for(model.mechanism)
+    if joint not in model.mechanism.joint_names:
+        raise AddressError(f"--drive: unknown joint {joint!r}; joints are {', '.join(model.mechanism.joint_names)}")
+    key = f"{joint}.q"
+    if key not in asm.layout:
+        raise AddressError(f"--drive: joint {joint!r} has no coordinates to drive")
+    size = asm.layout[key].size
+    tree = joint in asm.topology.tree_joints
+    angles = model.mechanism.joint(joint).jtype.angle_indices if tree else ()
+    return size, tuple(angles) if model.units.get("angle") == "deg" else ()
+
+
+def parse_drive(model: Model, text: str) -> Drive:
+    """``JOINT=START:STOP:STEPS`` (also ``JOINT[k]=...``, ``JOINT.q[k]=...``) -> :class:`Drive`."""
+    m = _DRIVE.match(text.strip())
+    if not m:
+        raise AddressError(f"--drive {text!r}: expected JOINT=START:STOP:STEPS (e.g. O2=0:360:360)")
+    parts = m.group("range").split(":")
+    if len(parts) != 3:
+        raise AddressError(f"--drive {text!r}: expected START:STOP:STEPS, found {m.group('range')!r}")
+    try:
+        start, stop = float(parts[0]), float(parts[1])
+        steps = int(parts[2])
+    except ValueError:
+        raise AddressError(f"--drive {text!r}: START and STOP must be numbers and STEPS an integer") from None
+    if steps < 1 or not (math.isfinite(start) and math.isfinite(stop)):
+        raise AddressError(f"--drive {text!r}: STEPS must be >= 1 and START, STOP finite")
+    joint = m.group("joint")
+    size, angles = _coordinate_info(model, joint)
+    index = int(m.group("index") or 0)
+    if m.group("index") is None and size != 1:
+        raise AddressError(f"--drive {text!r}: joint {joint!r} has {size} coordinates; say which, e.g. {joint}[0]=...")
+    if index >= size:
+        raise AddressError(f"--drive {text!r}: joint {joint!r} has {size} coordinate(s), index {index} is out of range")
+    return Drive(joint, index, np.linspace(start, stop, steps + 1), index in angles, size)
+
+
+def coordinate_columns(model: Model) -> list[tuple[str, str, int, bool]]:
+    """``(column, joint, index, is_angle_in_degrees)`` for every coordinate of the layout."""
+    asm = assembly_for(model.mechanism)
+    out = []
+    for v in asm.layout.group("q"):
+        _, angles = _coordinate_info(model, v.joint)
+        for k in range(v.size):
+            out.append((v.key if v.size == 1 else f"{v.key}[{k}]", v.joint, k, k in angles))
+    return out
+
+
+def default_outputs(model: Model) -> list[str]:
+    """Named points of every body, plus the suspension metrics of wheel bodies if any."""
+    names = [f"point:{b.name}.{p}" for b in model.mechanism.bodies for p, _ in b.points]
+    try:
+        from kinprop.analysis.metrics import metric_names
+    except ImportError:  # pragma: no cover - metrics are optional
+        return names
+    try:
+        return names + metric_names(model)
+    except Exception:  # a model without wheels, or metrics unavailable: points only
+        return names
+
+
+class Sink(Protocol):
+    def write(self, row: Mapping[str, Any]) -> None: ...
+    def close(self) -> None: ...
+
+
+class CsvSink:
+    """Append rows to a CSV file, flushing after each row."""
+
+    def __init__(self, path: str | Path, columns: Sequence[str]):
+        self.path = Path(path)
+        self.columns = list(columns)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._fh = self.path.open("w", newline="")
+        self._w = csv.DictWriter(self._fh, fieldnames=self.columns)
+        self._w.writeheader()
+        self._fh.flush()
+
+    def write(self, row: Mapping[str, Any]) -> None:
+        self._w.writerow({k: ("" if isinstance(v, float) and math.isnan(v) else v) for k, v in row.items()})
+        self._fh.flush()
+
+    def close(self) -> None:
+        if not self._fh.closed:
+            self._fh.close()
+
+
+class ParquetSink:
+    """Write rows to a Parquet file in row groups of ``row_group_size`` (pyarrow ParquetWriter)."""
+
+    def __init__(self, path: str | Path, columns: Sequence[str], text_columns: Sequence[str], row_group_size: int = 32):
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        self._pa = pa
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        ints = {"step", "iterations"}
+        fields = []
+        for c in columns:
+            t = (
+                pa.string()
+                if c in text_columns
+                else pa.int64()
+                if c in ints
+                else pa.bool_()
+                if c == "near_singular"
+                else pa.float64()
+            )
+            fields.append(pa.field(c, t))
+        self.schema = pa.schema(fields)
+        self.row_group_size = max(1, int(row_group_size))
+        self._rows: list[Mapping[str, Any]] = []
+        self._writer = pq.ParquetWriter(str(self.path), self.schema)
+
+    def write(self, row: Mapping[str, Any]) -> None:
+        self._rows.append(dict(row))
+        if len(self._rows) >= self.row_group_size:
+            self.flush()
+
+    def flush(self) -> None:
+        if self._rows:
+            table = self._pa.Table.from_pylist(self._rows, schema=self.schema)
+            self._writer.write_table(table)
+            self._rows = []
+
+    def close(self) -> None:
+        if self._writer is not None:
+            self.flush()
+            self._writer.close()
+            self._writer = None
+
+
+def open_sink(path: str | Path, columns: Sequence[str], text_columns: Sequence[str] = ("status", "message")) -> Sink:
+    """A sink for ``path`` by its suffix: ``.csv`` or ``.parquet`` / ``.pq``."""
+    suffix = Path(path).suffix.lower()
+    if suffix == ".csv":
+        return CsvSink(path, columns)
+    if suffix in (".parquet", ".pq"):
+        return ParquetSink(path, columns, text_columns)
+    raise ValueError(f"output {str(path)!r}: expected a .csv or .parquet file")
+
+
+@dataclass
+class SweepResult:
+    """The sweep's rows as a DataFrame (``frame``), with counts."""
+
+    frame: Any  # pandas.DataFrame
+    drives: tuple[Drive, ...]
+    outputs: list[str] = field(default_factory=list)
+    last: Model | None = None
+
+    @property
+    def n_steps(self) -> int:
+        return len(self.frame)
+
+    @property
+    def n_failed(self) -> int:
+        return int((self.frame["status"] != "converged").sum()) if len(self.frame) else 0
+
+    @property
+    def ok(self) -> bool:
+        return self.n_failed == 0
+
+
+def sweep(
+    model: Model,
+    drives: Sequence[Drive] | Sequence[str],
+    *,
+    changes: Mapping[str, object] | None = None,
+    free: Sequence[str] = ("q",),
+    outputs: Sequence[str] | None = None,
+    tol: float = 1e-10,
+    max_iter: int = 50,
+    output: str | Path | Sink | None = None,
+    on_step: Callable[[int, int, Mapping[str, Any]], None] | None = None,
+    continuation: bool = False,
+) -> SweepResult:
+    """Drive coordinates over their ranges; one row per step (see the module docstring).
+
+    ``drives``: :class:`Drive` objects or ``JOINT=START:STOP:STEPS`` strings. ``outputs``:
+    names for :func:`kinprop.analysis.outputs.evaluate_outputs` (default
+    :func:`default_outputs`). ``output``: a ``.csv`` / ``.parquet`` path or a :class:`Sink`;
+    it receives each row as it is computed and is closed at the end, also on an exception
+    (KeyboardInterrupt). ``on_step(k, n, row)`` is called after
+    each row (progress). Step 0 goes from the model's (assembled) estimates to the start values
+    by continuation (:mod:`kinprop.propagation.continuation`); later steps are plain Newton
+    propagations, with continuation as a fallback for a failed step when ``continuation``.
+    """
+    import pandas as pd
+
+    from kinprop.analysis.outputs import output_function
+
+    dr = tuple(parse_drive(model, d) if isinstance(d, str) else d for d in drives)
+    if not dr:
+        raise AddressError("a sweep needs at least one --drive")
+    n = {d.values.size for d in dr}
+    if len(n) != 1:
+        raise AddressError(
+            f"--drive: all drives move together and need the same STEPS, found {sorted(k - 1 for k in n)}"
+        )
+    n_steps = n.pop()
+    seen = [d.address for d in dr]
+    if len(set(seen)) != len(seen):
+        raise AddressError("--drive: a coordinate is driven twice")
+    if any(c.startswith(tuple(f"{d.joint}.q" for d in dr)) for c in (changes or {})):
+        raise AddressError("--set: a driven coordinate cannot also be set")
+    names = list(default_outputs(model) if outputs is None else outputs)
+    fout, expanded = output_function(model, names)
+    coord_cols = coordinate_columns(model)
+    drive_cols = [d.label for d in dr]
+    # an output naming a coordinate is already a column (in model units, not radians)
+    taken = {c for c, *_ in coord_cols} | set(drive_cols)
+    keep = [i for i, e in enumerate(expanded) if e not in taken]
+    expanded = [expanded[i] for i in keep]
+    columns = list(dict.fromkeys(["step", *drive_cols, *META[1:], *(c for c, *_ in coord_cols), *expanded, "message"]))
+    rows: list[dict[str, Any]] = []
+    good = model
+    sink = open_sink(output, columns) if isinstance(output, (str, Path)) else output
+    try:
+        for k in range(n_steps):
+            step_changes: dict[str, object] = dict(changes or {}) if k == 0 else {}
+            for d in dr:
+                key = f"{d.joint}.q"  # two drives may move coordinates of one joint
+                cur = np.array(step_changes.get(key, good.coordinates[d.joint]), dtype=float)
+                v = d.values[k]
+                cur[d.index] = math.radians(v) if d.angle else v
+                step_changes[key] = cur
+            mode = "continuation" if k == 0 else "fallback" if continuation else "newton"
+            prop, note = _solve_step(good, step_changes, free, tol, max_iter, mode)
+            r = prop.result
+            row: dict[str, Any] = dict.fromkeys(columns, float("nan"))
+            row.update({"step": k, **{d.label: float(d.values[k]) for d in dr}})
+            ratio = prop.singularity_ratio
+            row.update(
+                {
+                    "status": "converged" if r.converged else "failed",
+                    "iterations": int(r.iterations),
+                    "residual_norm": float(r.residual_norm),
+                    "sv_ratio": ratio,
+                    "near_singular": bool(r.converged and ratio < SINGULAR_RTOL),
+                    "message": note or r.message,
+                }
+            )
+            if r.converged:
+                good = prop.after
+                for col, joint, idx, deg in coord_cols:
+                    val = float(np.atleast_1d(good.coordinates[joint])[idx])
+                    row[col] = math.degrees(val) if deg else val
+                try:
+                    values = fout(good)
+                    row.update(zip(expanded, (float(values[i]) for i in keep), strict=True))
+                except Exception as exc:  # an output that cannot be evaluated here
+                    row["message"] = f"{r.message}; outputs: {exc}"
+            rows.append(row)
+            if sink is not None:
+                sink.write(row)
+            if on_step is not None:
+                on_step(k, n_steps, row)
+    finally:
+        if sink is not None:
+            sink.close()
+    frame = pd.DataFrame(rows, columns=columns)
+    frame.attrs["units"] = dict(model.units)
+    frame.attrs["drives"] = drive_cols
+    frame.attrs["angle_columns"] = [c for c, _, _, deg in coord_cols if deg]
+    return SweepResult(frame, dr, expanded, good)
+
+
+def _solve_step(
+    good: Model, changes: Mapping[str, object], free: Sequence[str], tol: float, max_iter: int, mode: str
+) -> tuple[Propagation, str]:
+    """``mode``: "newton" (plain), "fallback" (continuation when Newton fails) or
+    "continuation". Returns the propagation and a note (the continuation's message) or ``""``."""
+    if mode != "continuation":
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", SingularityWarning)
+            prop = propagate(good, changes, free, tol=tol, max_iter=max_iter)
+        if prop.converged or mode == "newton":
+            return prop, ""
+    from kinprop.propagation.continuation import propagate_continuation
+
+    cont = propagate_continuation(good, changes, free, tol=tol, max_iter=min(max_iter, 20), min_step=1e-4)
+    if cont.converged:
+        return cont.propagation, f"continuation: {cont.message}"
+    failed = replace(cont.propagation.result, converged=False, message=cont.message)
+    return replace(cont.propagation, result=failed), f"continuation: {cont.message}"
+
+
+def plot_sweep(
+    result: SweepResult, path: str | Path, columns: Sequence[str] | None = None, title: str | None = None
+) -> Path:
+    """Plot the swept coordinates and outputs against the first drive (matplotlib, lazy).
+
+    One panel for the coordinates that move, one per output group (points, metrics, other);
+    failed steps are marked with red crosses on the x axis.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    df = result.frame
+    x = result.drives[0].label
+    drive_cols = {d.label for d in result.drives}
+    skip = set(META) | drive_cols | {"message"}
+    cand = [c for c in (columns or df.columns) if c not in skip]
+    moving = [c for c in cand if df[c].notna().any() and float(np.nanmax(df[c]) - np.nanmin(df[c])) > 1e-12]
+    groups: dict[str, list[str]] = {}
+    for c in moving:
+        g = (
+            "points"
+            if c.startswith(("point:", "hardpoint:"))
+            else "metrics"
+            if c.startswith("metric:")
+            else "coordinates"
+            if ".q" in c
+            else "outputs"
+        )
+        groups.setdefault(g, []).append(c)
+    if not groups:
+        groups = {"coordinates": []}
+    unit = result.frame.attrs.get("units", {})
+    fig, axes = plt.subplots(len(groups), 1, figsize=(7.5, 2.8 * len(groups) + 0.6), sharex=True, squeeze=False)
+    failed = df["status"] != "converged"
+    for ax, (g, cols) in zip(axes[:, 0], groups.items(), strict=True):
+        for c in cols:
+            ax.plot(df[x], df[c], label=c, lw=1.4)
+        if failed.any():
+            y0 = ax.get_ylim()[0]
+            ax.plot(df.loc[failed, x], np.full(int(failed.sum()), y0), "x", color="red", label="failed step")
+        angles = set(df.attrs.get("angle_columns", ()))
+        n_ang = sum(c in angles for c in cols)
+        coord_unit = unit.get("angle", "") if n_ang == len(cols) else unit.get("length", "") if n_ang == 0 else "mixed"
+        ylabel = {
+            "coordinates": f"coordinate [{coord_unit}]",
+            "points": f"position [{unit.get('length', '')}]",
+        }
+        ax.set_ylabel(ylabel.get(g, g))
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="best", ncol=2)
+    axes[-1, 0].set_xlabel(f"{x} [{unit.get('angle', '') if result.drives[0].angle else unit.get('length', '')}]")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+__all__ = ["CsvSink", "Drive", "ParquetSink", "SweepResult", "open_sink", "parse_drive", "plot_sweep", "sweep"]

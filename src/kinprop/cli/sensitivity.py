@@ -1,0 +1,96 @@
+"""``kinprop sensitivity``: first-order derivatives of outputs with respect to design variables."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import numpy as np
+import typer
+from rich.markup import escape
+from rich.table import Table
+
+from kinprop.analysis.sensitivity import RESIDUAL_WARN, design_sensitivity, output_sensitivity
+from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, fail, handles_user_errors, out, parse_weight, print_json
+from kinprop.cli.continuation import shown_warnings
+from kinprop.io import load_model
+from kinprop.propagation import assemble
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+Json = Annotated[bool, typer.Option("--json", help="print one JSON object instead of a table")]
+
+
+def sensitivity_table(frame: pd.DataFrame, title: str) -> Table:
+    """A labelled matrix: one row per output, one column per design variable."""
+    t = Table(title=escape(title), title_justify="left")
+    t.add_column("d(output) / d(design)", style="bold")
+    for c in frame.columns:
+        t.add_column(escape(str(c)), justify="right")
+    for name, row in frame.iterrows():
+        cells = [f"{x:.6g}" if abs(x) > 1e-9 * max(1.0, np.max(np.abs(row.values))) else "0" for x in row.values]
+        t.add_row(escape(str(name)), *cells)
+    return t
+
+
+@app.command(name="sensitivity")
+@handles_user_errors
+def sensitivity_cmd(
+    model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
+    wrt: Annotated[list[str], typer.Option("--wrt", help="design variables: addresses (RS.s_i[2]) or groups")],
+    of: Annotated[
+        list[str] | None,
+        typer.Option("--of", help="outputs: J.q[k], J.s_i[k], point:BODY.NAME[x], hardpoint:J.i[x], metric:W.camber"),
+    ] = None,
+    free: Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")] = None,
+    weight: Annotated[list[str] | None, typer.Option("--weight", help="ADDRESS_OR_GROUP=W: larger moves more")] = None,
+    tol: Annotated[float, typer.Option("--tol", help="assembly tolerance on ||Phi||_2")] = 1e-10,
+    as_json: Json = False,
+) -> None:
+    """Derivatives of outputs (default: the free variables) with respect to design variables.
+
+    The model is assembled first (free: q), then the implicit-function theorem gives the free
+    variables' response with the same weighted minimum-norm inverse as `propagate`.
+    """
+    m = load_model(model)
+    free_set = tuple(free or ["q"])
+    weights = dict(parse_weight(w) for w in (weight or [])) or None
+    with shown_warnings():  # a near-singular assembly is one "warning:" line on stderr
+        prop = assemble(m, tol=tol)
+    r = prop.result
+    initial = r.residual_history[0]
+    if not r.converged:
+        fail(f"{model}: cannot assemble the model before differentiating: {r.message}", EXIT_NOT_CONVERGED)
+    if initial > RESIDUAL_WARN:
+        err.print(
+            escape(f"note: {model} was not assembled (||Phi|| = {initial:.3g}); assembled first: {r.message}"),
+            soft_wrap=True,
+        )
+    assembled = prop.after
+    if of:
+        frame = output_sensitivity(assembled, of, wrt, free_set, weights)
+    else:
+        frame = design_sensitivity(assembled, wrt, free_set, weights).frame()
+    if as_json:
+        print_json(
+            {
+                "model": str(model),
+                "of": [str(i) for i in frame.index],
+                "wrt": [str(c) for c in frame.columns],
+                "matrix": frame.to_numpy().tolist(),
+                "free": list(free_set),
+                "weights": weights or {},
+                "assembly": {"initial_residual": initial, "residual": r.residual_norm, "iterations": r.iterations},
+            }
+        )
+        return
+    title = f"sensitivity {model}"
+    out.print(sensitivity_table(frame, title))
+    weights_text = "; weights " + " ".join(f"{k}={v:g}" for k, v in weights.items()) if weights else ""
+    out.print(escape(f"free: {' '.join(free_set)}{weights_text}"))
+    out.print(
+        "units: output unit per design unit; coordinates in rad (or length), metric angles in deg, "
+        "C columns per rad of body-frame rotation"
+    )
+    out.print(f"assembled: {r.message}")

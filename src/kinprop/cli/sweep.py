@@ -1,0 +1,152 @@
+"""``kinprop sweep``: drive joint coordinates over a range, one re-assembly per step.
+
+Exit codes: 0 every step converged, 1 some step failed (recorded, the sweep went on),
+2 invalid input, 130 interrupted (rows already computed are in the output file).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.table import Table
+
+from kinprop.analysis.sweep import parse_drive, plot_sweep, sweep
+from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, handles_user_errors, out, parse_assignment
+from kinprop.io import load_model
+from kinprop.io.units import changes_to_internal
+
+#: show a progress bar from this many steps on
+PROGRESS_FROM = 50
+
+
+def _fmt(v: object) -> str:
+    if isinstance(v, float):
+        return "" if v != v else f"{v:.6g}"
+    return str(v)
+
+
+def _table(frame, columns: list[str], limit: int = 24) -> Table:
+    t = Table(show_lines=False, title_justify="left")
+    for c in columns:
+        t.add_column(escape(c), justify="left" if c in ("status",) else "right")
+    n = len(frame)
+    idx = list(range(n)) if n <= limit else list(range(limit // 2)) + [-1] + list(range(n - limit // 2, n))
+    for i in idx:
+        if i < 0:
+            t.add_row(*["..."] * len(columns))
+            continue
+        row = frame.iloc[i]
+        style = None if row["status"] == "converged" else "red"
+        t.add_row(*[escape(_fmt(row[c])) for c in columns], style=style)
+    return t
+
+
+def _shown_columns(res, limit: int = 10) -> list[str]:
+    """Step, drives, status, iterations, then the outputs and the coordinates that vary."""
+    df = res.frame
+    head = ["step", *(d.label for d in res.drives), "status", "iterations"]
+    coords = [c for c in df.columns if ".q" in c and c not in head and not c.startswith(("point:", "metric:"))]
+    rest = [c for c in res.outputs if c not in head] + coords
+    varying = [c for c in rest if df[c].notna().any() and float(df[c].max() - df[c].min()) > 1e-12]
+    return head + varying[: max(0, limit - len(head))]
+
+
+@app.command(name="sweep")
+@handles_user_errors
+def sweep_cmd(
+    model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
+    drive: Annotated[
+        list[str], typer.Option("--drive", help="JOINT=START:STOP:STEPS (model units; repeat to drive together)")
+    ],
+    set_: Annotated[
+        list[str] | None, typer.Option("--set", help="ADDRESS=VALUE design change applied at step 0")
+    ] = None,
+    free: Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")] = None,
+    outputs: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--out",
+            help="output names (point:BODY.NAME, metric:WHEEL.camber, J.q ...); default: named points and metrics",
+        ),
+    ] = None,
+    output: Annotated[
+        Path | None, typer.Option("-o", "--output", help="results.csv or results.parquet, written as computed")
+    ] = None,
+    plot: Annotated[
+        Path | None, typer.Option("--plot", help="plot the swept coordinates and outputs (PNG, PDF, SVG)")
+    ] = None,
+    continuation: Annotated[bool, typer.Option("--continuation", help="retry a failed step by continuation")] = False,
+    tol: Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL")] = 1e-10,
+    max_iter: Annotated[int, typer.Option("--max-iter", help="maximum Newton iterations per step")] = 50,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="no table, no progress bar")] = False,
+) -> None:
+    """Drive joint coordinates over a range; each step is solved from the previous one."""
+    m = load_model(model)
+    drives = [parse_drive(m, d) for d in drive]
+    changes = changes_to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
+    if output is not None and output.suffix.lower() not in (".csv", ".parquet", ".pq"):
+        raise ValueError(f"--output {str(output)!r}: expected a .csv or .parquet file")
+    n = max(d.values.size for d in drives)
+    show = not quiet and n >= PROGRESS_FROM
+    progress = Progress(
+        TextColumn("sweep"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[failed]} failed"),
+        TimeRemainingColumn(),
+        console=err,
+        transient=True,
+        disable=not show,
+    )
+    failed = done = 0
+    with progress:
+        task = progress.add_task("sweep", total=n, failed=0)
+
+        def on_step(k: int, total: int, row) -> None:
+            nonlocal failed, done
+            failed += row["status"] != "converged"
+            done += 1
+            progress.update(task, advance=1, failed=failed)
+
+        try:
+            res = sweep(
+                m,
+                drives,
+                changes=changes,
+                free=tuple(free or ["q"]),
+                outputs=outputs,
+                tol=tol,
+                max_iter=max_iter,
+                output=output,
+                on_step=on_step,
+                continuation=continuation,
+            )
+        except KeyboardInterrupt:
+            where = f"; rows computed so far are in {output}" if output is not None else ""
+            err.print(f"[yellow]interrupted[/yellow] after {done} of {n} steps ({failed} failed){where}")
+            raise typer.Exit(130) from None
+    df = res.frame
+    if not quiet:
+        out.print(_table(df, _shown_columns(res)))
+    bad = df[df["status"] != "converged"]
+    near = int(df["near_singular"].sum())
+    out.print(
+        f"{len(df)} steps: {len(df) - len(bad)} converged, {len(bad)} failed"
+        + (f", {near} near-singular" if near else "")
+    )
+    if len(bad):
+        first = bad.iloc[0]
+        label = res.drives[0].label
+        why = escape(str(first["message"]))
+        out.print(f"[red]first failure at step {int(first['step'])} ({label} = {first[label]:g}): {why}")
+    if output is not None:
+        out.print(f"wrote {output}")
+    if plot is not None:
+        plot_sweep(res, plot, title=f"sweep {model.name}")
+        out.print(f"wrote {plot}")
+    if len(bad):
+        raise typer.Exit(EXIT_NOT_CONVERGED)

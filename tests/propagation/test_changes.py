@@ -1,0 +1,27 @@
+"""Design changes by address: components, units at the CLI boundary."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+from typer.testing import CliRunner
+
+from kinprop import load_model
+from kinprop.cli import app
+from kinprop.propagation import apply_changes
+
+
+def test_several_components_of_one_variable(examples) -> None:
+    m = load_model(examples / "fourbar.yaml")
+    before = np.array(m.design["B.s_i"])
+    changed, _, keys = apply_changes(m, {"B.s_i[0]": 0.41, "B.s_i[1]": 0.01})
+    np.testing.assert_array_equal(changed.design["B.s_i"], [0.41, 0.01, before[2]])
+    assert keys == {"B.s_i"}
+
+
+def test_cli_set_coordinates_in_model_angle_unit(examples) -> None:
+    """The four-bar file uses degrees: --set O2.q=30 means 30 degrees."""
+    r = CliRunner().invoke(app, ["propagate", str(examples / "fourbar.yaml"), "--set", "O2.q=30", "--json"])
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["coordinates"]["O2"][0] == np.radians(30)
