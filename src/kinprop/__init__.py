@@ -4,11 +4,12 @@ Implements Zou, Abdel-Malek & Wang (1997), "Design Propagation in Mechanical Sys
 Kinematic Analysis", ASME J. Mech. Des. 119(3).
 """
 
+from kinprop.analysis import design_sensitivity, evaluate_outputs, mobility, output_sensitivity, sweep
 from kinprop.errors import AddressError, ConvergenceError, KinpropError, ModelError, SingularityWarning
 from kinprop.io import dump_model, load_model
 from kinprop.kinematics import Assembly
 from kinprop.model import Body, Design, Joint, Mechanism, Model
-from kinprop.propagation import Propagation, assemble, propagate
+from kinprop.propagation import Propagation, assemble, propagate, propagate_continuation
 from kinprop.solver import SolveOptions, SolveResult
 
 __version__ = "0.1.0"
@@ -29,7 +30,13 @@ __all__ = [
     "SolveOptions",
     "SolveResult",
     "assemble",
+    "design_sensitivity",
     "dump_model",
+    "evaluate_outputs",
     "load_model",
+    "mobility",
+    "output_sensitivity",
     "propagate",
+    "propagate_continuation",
+    "sweep",
 ]

@@ -26,7 +26,7 @@ import numpy as np
 
 from kinprop.analysis.metrics import WheelSpec, metric_names, resolve_metric, wheel_metrics
 from kinprop.errors import AddressError
-from kinprop.kinematics.forward import Kinematics, frames_on_bodies
+from kinprop.kinematics.forward import Kinematics, joint_frames
 from kinprop.model import Model
 from kinprop.model.design import Address, parse_address
 from kinprop.propagation.propagate import assembly_for
@@ -72,11 +72,7 @@ class OutputContext:
         mech = self.model.mechanism
         if joint not in mech.joint_names:
             raise AddressError(f"unknown joint {joint!r}; joints are {', '.join(mech.joint_names)}")
-        f = self.kin.frames.get(joint)
-        if f is None:  # cut joint: from its two bodies' poses
-            j = mech.joint(joint)
-            k = self.kin
-            f = frames_on_bodies(self.model.design, joint, k.r[j.body_i], k.A[j.body_i], k.r[j.body_j], k.A[j.body_j])
+        f = joint_frames(mech, self.model.design, self.kin, joint)
         return f.P_i if side == "i" else f.P_j
 
     def point(self, spec: str) -> Array:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from kinprop.kinematics.forward import JointFrames, Kinematics, frames_on_bodies
+from kinprop.kinematics.forward import JointFrames, Kinematics, joint_frames
 from kinprop.model import Model
 from kinprop.propagation.propagate import assembly_for
 from kinprop.spatial import Array
@@ -56,13 +56,7 @@ def snapshot(model: Model) -> Snapshot:
     """Forward kinematics of ``model`` and the global frames of all its joints."""
     mech = model.mechanism
     kin = assembly_for(mech).kinematics(model.design, model.coordinates)
-    frames: dict[str, JointFrames] = {}
-    for j in mech.joints:
-        f = kin.frames.get(j.name)
-        if f is None:
-            bi, bj = j.body_i, j.body_j
-            f = frames_on_bodies(model.design, j.name, kin.r[bi], kin.A[bi], kin.r[bj], kin.A[bj])
-        frames[j.name] = f
+    frames = {j.name: joint_frames(mech, model.design, kin, j.name) for j in mech.joints}
     return Snapshot(model, kin, frames)
 
 

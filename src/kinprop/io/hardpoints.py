@@ -38,7 +38,7 @@ from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.loader import build_or_report
 from kinprop.io.schema import HardpointFile, HardpointJointSpec
 from kinprop.joints import joint_type
-from kinprop.kinematics.forward import JointFrames, frames_on_bodies
+from kinprop.kinematics.forward import JointFrames
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates, parse_address
 from kinprop.model.mechanism import validate_structure
 from kinprop.propagation.propagate import assembly_for
@@ -325,18 +325,10 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
 
 def joint_frames(model: Model) -> dict[str, JointFrames]:
     """Global joint frames of every joint at the model's coordinates (T-D: at the slid point)."""
-    mech = model.mechanism
-    asm = assembly_for(mech)
-    kin = asm.kinematics(model.design, model.coordinates)
-    out: dict[str, JointFrames] = {}
-    for j in mech.joints:
-        if j.name in kin.frames:
-            out[j.name] = kin.frames[j.name]
-            continue
-        f = frames_on_bodies(model.design, j.name, kin.r[j.body_i], kin.A[j.body_i], kin.r[j.body_j], kin.A[j.body_j])
-        u, _ = j.jtype.cut_offset(model.coordinates.get(j.name, np.zeros(0)))
-        out[j.name] = JointFrames(f.P_i + f.R_i @ u, f.R_i, f.P_j, f.R_j)
-    return out
+    from kinprop.analysis.points import snapshot
+
+    snap = snapshot(model)
+    return {name: JointFrames(snap.cut_point(name), f.R_i, f.P_j, f.R_j) for name, f in snap.frames.items()}
 
 
 def _clean(v: Array) -> list[float]:

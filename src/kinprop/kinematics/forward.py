@@ -47,6 +47,15 @@ def frames_on_bodies(design: Design, joint: str, r_i: Array, A_i: Array, r_j: Ar
     )
 
 
+def joint_frames(mech: Mechanism, design: Design, kin: Kinematics, joint: str) -> JointFrames:
+    """Global frames of any joint: tree joints from the recursion, cut joints from their bodies."""
+    f = kin.frames.get(joint)
+    if f is None:
+        j = mech.joint(joint)
+        f = frames_on_bodies(design, joint, kin.r[j.body_i], kin.A[j.body_i], kin.r[j.body_j], kin.A[j.body_j])
+    return f
+
+
 def forward_kinematics(mech: Mechanism, topo: Topology, design: Design, coords: Mapping[str, Array]) -> Kinematics:
     r: dict[str, Array] = {}
     A: dict[str, Array] = {}
