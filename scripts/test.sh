@@ -6,5 +6,6 @@ python3 -m venv .venv
 .venv/bin/python -m pip install -q --upgrade pip
 .venv/bin/python -m pip install -q -e ".[all]"
 .venv/bin/python -m ruff check src tests benchmarks
+.venv/bin/python -m ruff format --check src tests benchmarks
 scripts/install-test-deps.sh || echo "warning: chromium not installed: the browser test fails when CI is set, else skips" >&2
 .venv/bin/python -m pytest

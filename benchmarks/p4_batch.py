@@ -1,0 +1,79 @@
+"""P4: N = 10,000 variants of P1 (each with its own six leg changes) solved together: variants per second.
+
+Methods: kinprop fast batch (one numba call, serial), the same split over numba's threads,
+the hand-written numpy Newton vectorised over the batch (stacked ``solve``), and
+``least_squares`` per variant (timed on a subset and scaled). Check: leg lengths by inverse
+kinematics for every variant.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(__file__))
+from common import Row, compare, leg_lengths, stewart_hand_newton, stewart_least_squares
+
+from kinprop.builders import STEWART, stewart, stewart_hardpoints
+from kinprop.fast import Solver, State, compile_model, pack
+from kinprop.spatial import euler_to_matrix
+
+
+def run(N: int = 10_000, trials: int = 5, lsq_subset: int = 200, seed: int = 0) -> list[Row]:
+    rng = np.random.default_rng(seed)
+    a, b = stewart_hardpoints()
+    model = stewart()
+    comp = compile_model(model.mechanism)
+    legs = [f"M1_L{k}" for k in range(1, 7)]
+    lidx = [comp.joint_index[j] for j in legs]
+    fcol = comp.assembly.layout["M1_F.q"].start
+    st1 = pack(comp, model.design, model.coordinates)
+    l0 = st1.L[0, lidx]
+    solver = Solver(comp, ("q",), exclude={f"{j}.length" for j in legs})
+    batches = [l0 + rng.uniform(-3e-3, 3e-3, (N, 6)) for _ in range(trials)]
+    base = State(np.repeat(st1.Q, N, 0), np.repeat(st1.S, N, 0), np.repeat(st1.C, N, 0), np.repeat(st1.L, N, 0))
+    A, B = np.broadcast_to(a, (N, 6, 3)), np.broadcast_to(b, (N, 6, 3))
+    x0, R0 = np.tile([0.0, 0.0, STEWART["height"]], (N, 1)), np.tile(np.eye(3), (N, 1, 1))
+
+    def fast(dl, parallel=False):
+        st = State(base.Q.copy(), base.S, base.C, base.L.copy())
+        st.L[:, lidx] = dl
+        res = solver.solve(st, copy=False, parallel=parallel)
+        q = res.state.Q[:, fcol : fcol + 7]
+        return q[:, :3], euler_to_matrix(q[:, 3:]), res.converged.all()
+
+    def hand(dl):
+        x, R, _ = stewart_hand_newton(A, B, dl, x0, R0)
+        return x, R, True
+
+    def lsq(dl):
+        out = [stewart_least_squares(a, b, dl[k], x0[0], R0[0]) for k in range(lsq_subset)]
+        return np.array([o[0] for o in out]), np.array([o[1] for o in out]), True
+
+    def check(dl, res):
+        x, R, ok = res
+        n = x.shape[0]
+        return np.abs(leg_lengths(A[:n], B[:n], x, R) - dl[:n]).max() if ok else np.inf
+
+    methods = {"kinprop fast batch": fast, "kinprop fast batch, threads": lambda dl: fast(dl, True),
+               "hand numpy Newton (vectorised)": hand, "scipy least_squares (FD), per variant": lsq}  # fmt: skip
+    rows = compare(f"P4 {N} Stewart variants", batches, methods, check, unit="variants/s", scale=1.0)
+    for row in rows:  # seconds per batch -> variants per second
+        n = lsq_subset if "least_squares" in row.method else N
+        row.times = [n / t for t in row.times]
+        row.ratios = [x * N / n for x in row.ratios]  # time per variant relative to kinprop fast
+        if n != N:
+            row.note = f"timed on {n} variants"
+    rows[0].note = "serial (1 thread)"
+    import numba
+
+    rows[1].note = f"{numba.get_num_threads()} numba threads"
+    return rows
+
+
+if __name__ == "__main__":
+    from common import print_table
+
+    print_table(run())

@@ -1,0 +1,490 @@
+"""Design studies: a design of experiments of propagations, local or on a Dask cluster.
+
+A study varies scalar design variables (``RS.s_i[2]``, ``coupler.length``, ``crank.q``) over
+ranges — a full grid, a Latin hypercube (``scipy.stats.qmc``) or plain Monte Carlo — or over
+a given plan, and re-assembles every variant from the model's state with the varied
+variables (and ``sets``) overwritten and never free, like :func:`kinprop.propagate`.
+
+Per variant it records the inputs, ``converged``, ``status``, ``iterations``, ``residual``,
+every coordinate (layout labels ``J01.q``, ``J32.q[1]``), every named point
+(``point:BODY.NAME[x]``) and the outputs of :func:`kinprop.analysis.outputs.evaluate_outputs`
+(by default the suspension metrics of wheel bodies, if any).
+
+Variants run in chunks. Locally the compiled batched Newton (:mod:`kinprop.fast`) solves a
+chunk in one call (the numpy reference when the mechanism cannot be compiled); with a
+``scheduler`` address the chunks go to a Dask distributed cluster. Finished chunks are
+streamed to the output as one Parquet file per chunk in a directory
+(``results.parquet/part-000012.parquet``), each written to a temporary name and renamed
+atomically, next to a ``_study.json`` manifest. A killed study therefore never leaves a
+half-written or footer-less file (a single ``ParquetWriter`` would lose every row group if
+the process died before closing it), chunks can finish in any order (Dask), and ``resume``
+computes only the chunks whose part is missing. ``pandas.read_parquet`` reads the directory
+as one table.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import os
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from kinprop.errors import AddressError
+from kinprop.model import Design, Model
+from kinprop.model.design import as_coordinates, parse_address
+from kinprop.propagation.propagate import apply_changes, assembly_for, propagate
+from kinprop.spatial import Array
+
+METHODS = ("grid", "lhs", "mc")
+MANIFEST = "_study.json"
+
+
+@dataclass(frozen=True)
+class Factor:
+    """A scalar design variable varied over ``[low, high]``."""
+
+    address: str
+    low: float
+    high: float
+
+
+def parse_vary(text: str) -> Factor:
+    """``ADDRESS=LOW:HIGH`` -> :class:`Factor` (raises :class:`AddressError`)."""
+    addr, sep, rng = text.partition("=")
+    lo, sep2, hi = rng.partition(":")
+    try:
+        if not sep or not sep2:
+            raise ValueError
+        low, high = float(lo), float(hi)
+    except ValueError:
+        raise AddressError(f"--vary {text!r}: expected ADDRESS=LOW:HIGH (e.g. RS.s_i[2]=-0.40:-0.38)") from None
+    if not (np.isfinite(low) and np.isfinite(high)) or high < low:
+        raise AddressError(f"--vary {text!r}: need finite LOW <= HIGH")
+    return Factor(addr.strip(), low, high)
+
+
+def sample_plan(factors: Sequence[Factor], method: str = "lhs", samples: int = 100, seed: int | None = 0) -> Array:
+    """The (N, F) matrix of factor values: ``grid`` (``samples`` levels per factor, N = samples^F),
+    ``lhs`` (Latin hypercube, N = samples) or ``mc`` (uniform, N = samples)."""
+    F = len(factors)
+    if method not in METHODS:
+        raise AddressError(f"method {method!r}: expected one of {', '.join(METHODS)}")
+    if F == 0 or samples < 1:
+        raise AddressError("a study needs at least one --vary factor and --samples >= 1")
+    lo = np.array([f.low for f in factors])
+    hi = np.array([f.high for f in factors])
+    if method == "grid":
+        levels = [
+            np.linspace(a, b, samples) if samples > 1 else np.array([(a + b) / 2]) for a, b in zip(lo, hi, strict=True)
+        ]
+        return np.array(list(itertools.product(*levels)), dtype=float).reshape(-1, F)
+    if method == "lhs":
+        from scipy.stats import qmc
+
+        u = qmc.LatinHypercube(d=F, seed=seed).random(samples)
+    else:
+        u = np.random.default_rng(seed).uniform(size=(samples, F))
+    return lo + u * (hi - lo)
+
+
+@dataclass
+class StudySpec:
+    """Everything that defines a study's rows (stored in the manifest, checked on resume)."""
+
+    addresses: list[str]
+    free: list[str] = field(default_factory=lambda: ["q"])
+    sets: dict[str, list[float]] = field(default_factory=dict)
+    outputs: list[str] | None = None
+    tol: float = 1e-10
+    max_iter: int = 50
+    chunk_size: int = 256
+    method: str = "plan"
+    samples: int = 0
+    seed: int | None = None
+    plan_hash: str = ""
+    model_hash: str = ""
+    #: "auto" (compiled batched Newton when the mechanism compiles), "fast" or "reference"
+    engine: str = "auto"
+
+
+# --- model transport (Design holds read-only mapping proxies, which do not pickle) ---------------
+
+
+def _model_payload(model: Model) -> dict[str, Any]:
+    return {
+        "mechanism": model.mechanism,
+        "design": {k: np.array(v) for k, v in model.design.items()},
+        "coordinates": {k: np.array(v) for k, v in model.coordinates.items()},
+        "units": dict(model.units),
+    }
+
+
+def _model_from_payload(p: Mapping[str, Any]) -> Model:
+    return Model(p["mechanism"], Design(p["design"]), as_coordinates(p["coordinates"]), p["units"])
+
+
+def _model_hash(model: Model) -> str:
+    h = hashlib.sha256(repr(model.mechanism).encode())
+    for k in sorted(model.design):
+        h.update(k.encode() + np.ascontiguousarray(model.design[k], dtype=float).tobytes())
+    for k in sorted(model.coordinates):
+        h.update(k.encode() + np.ascontiguousarray(model.coordinates[k], dtype=float).tobytes())
+    return h.hexdigest()[:16]
+
+
+# --- one chunk ----------------------------------------------------------------------------------
+
+
+def _point_specs(model: Model) -> list[tuple[int, Array, str]]:
+    idx = {b.name: k for k, b in enumerate(model.mechanism.bodies)}
+    return [
+        (idx[b.name], np.array(p, dtype=float), f"point:{b.name}.{name}")
+        for b in model.mechanism.bodies
+        for name, p in b.points
+    ]
+
+
+def _default_outputs(model: Model) -> list[str]:
+    try:
+        from kinprop.analysis.metrics import metric_names
+    except ImportError:  # pragma: no cover - metrics are another module's, optional here
+        return []
+    try:
+        return list(metric_names(model))
+    except Exception:  # a model without wheel bodies
+        return []
+
+
+def _outputs_for(model: Model, names: list[str]) -> dict[str, float]:
+    if not names:
+        return {}
+    try:
+        from kinprop.analysis.outputs import evaluate_outputs
+    except ImportError:  # pragma: no cover
+        return {}
+    return evaluate_outputs(model, names)
+
+
+def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, start: int) -> pd.DataFrame:
+    """Rows of variants ``start .. start + len(values) - 1`` (runs on a Dask worker too)."""
+    model = _model_from_payload(payload)
+    asm = assembly_for(model.mechanism)
+    from kinprop.kinematics.layout import column_labels
+
+    labels = column_labels(asm.layout)
+    qcols = [v for v in asm.layout.variables if v.group == "q"]
+    nq = sum(v.size for v in qcols)
+    n = values.shape[0]
+    points = _point_specs(model)
+    point_cols = {f"{name}[{ax}]" for _, _, name in points for ax in "xyz"}
+    out_names = spec.outputs if spec.outputs is not None else _default_outputs(model)
+    if out_names:
+        try:
+            from kinprop.analysis.outputs import expand_outputs
+
+            out_names = [x for x in expand_outputs(model, out_names) if x not in point_cols]
+        except ImportError:  # pragma: no cover
+            out_names = []
+    rows: dict[str, Any] = {"variant": np.arange(start, start + n, dtype=np.int64)}
+    for k, a in enumerate(spec.addresses):
+        rows[a] = values[:, k]
+    comp = None
+    if spec.engine != "reference":
+        try:
+            from kinprop.fast import NotCompilableError, compile_model
+
+            comp = compile_model(model.mechanism)
+        except (ImportError, NotCompilableError):
+            if spec.engine == "fast":
+                raise
+    Q = np.full((n, nq), np.nan)
+    P = np.full((n, len(points), 3), np.nan)
+    status = np.empty(n, dtype=object)
+    conv = np.zeros(n, dtype=bool)
+    iters = np.zeros(n, dtype=np.int64)
+    resid = np.full(n, np.nan)
+    outs: dict[str, Array] = {}
+    states: list[tuple[Design, Mapping[str, Array]] | None] = [None] * n
+    if comp is not None:
+        from kinprop.fast import Solver, pack
+        from kinprop.fast.compiled import STATUS
+        from kinprop.fast.solve import body_poses
+
+        st = pack(comp, model.design, model.coordinates)
+        st = type(st)(*(np.repeat(a, n, axis=0) for a in (st.Q, st.S, st.C, st.L)))
+        ok = np.ones(n, dtype=bool)
+        for k, a in enumerate(spec.addresses):
+            c = comp.column(a)
+            kind, j, side, x = comp.colinfo[c]
+            v = values[:, k]
+            if kind == 0:
+                st.Q[:, c] = v
+            elif kind == 1:
+                st.S[:, j, side, x] = v
+            elif kind == 3:
+                st.L[:, j] = v
+                ok &= v > 0
+        changed = {parse_address(a).key for a in spec.addresses} | {parse_address(a).key for a in spec.sets}
+        res = Solver(comp, spec.free, exclude=changed, tol=spec.tol, max_iter=spec.max_iter).solve(st, copy=False)
+        conv = res.converged & ok
+        iters, resid = res.iterations.copy(), res.residual.copy()
+        status = np.array(
+            [STATUS[int(s)] if o else "invalid" for s, o in zip(res.status, ok, strict=True)], dtype=object
+        )
+        Q = res.state.Q.copy()
+        r, A = body_poses(comp, res.state)
+        for k, (b, p, _) in enumerate(points):
+            P[:, k] = r[:, b] + A[:, b] @ p
+        if out_names:
+            from kinprop.fast import unpack
+
+            for i in np.flatnonzero(conv):
+                states[i] = unpack(comp, res.state, int(i))
+    else:
+        for i in range(n):
+            changes: dict[str, object] = {**spec.sets, **{a: values[i, k] for k, a in enumerate(spec.addresses)}}
+            try:
+                prop = propagate(model, changes, tuple(spec.free), tol=spec.tol, max_iter=spec.max_iter)
+            except AddressError:
+                status[i] = "invalid"
+                continue
+            rr = prop.result
+            conv[i], iters[i], resid[i] = rr.converged, rr.iterations, rr.residual_norm
+            status[i] = rr.status
+            Q[i] = (
+                np.concatenate([np.asarray(prop.after.coordinates[v.joint], dtype=float) for v in qcols]) if nq else []
+            )
+            kin = asm.kinematics(prop.after.design, prop.after.coordinates)
+            body_names = [b.name for b in model.mechanism.bodies]
+            for k, (b, p, _) in enumerate(points):
+                P[i, k] = kin.r[body_names[b]] + kin.A[body_names[b]] @ p
+            states[i] = (prop.after.design, prop.after.coordinates)
+    Q[~conv] = np.nan
+    P[~conv] = np.nan
+    for i in range(n):
+        if out_names and states[i] is not None and conv[i]:
+            vals = _outputs_for(model.with_state(*states[i]), out_names)
+            for key, v in vals.items():
+                outs.setdefault(key, np.full(n, np.nan))[i] = v
+    rows["converged"] = conv
+    rows["status"] = status.astype(str)
+    rows["iterations"] = iters
+    rows["residual"] = resid
+    for c in range(nq):
+        if labels[c] not in rows:
+            rows[labels[c]] = Q[:, c]
+    for k, (_, _, name) in enumerate(points):
+        for x, ax in enumerate("xyz"):
+            rows[f"{name}[{ax}]"] = P[:, k, x]
+    for key in outs:
+        rows[key] = outs[key]
+    return pd.DataFrame(rows)
+
+
+# --- the study ----------------------------------------------------------------------------------
+
+
+def _write_part(directory: Path, index: int, frame: pd.DataFrame) -> None:
+    final = directory / f"part-{index:06d}.parquet"
+    tmp = directory / f".part-{index:06d}.parquet.tmp"
+    frame.to_parquet(tmp, index=False)
+    os.replace(tmp, final)
+
+
+def _done_chunks(directory: Path) -> set[int]:
+    return {int(p.stem.split("-")[1]) for p in directory.glob("part-*.parquet")}
+
+
+def read_study(path: str | Path) -> pd.DataFrame:
+    """All finished rows of a study directory, ordered by variant."""
+    parts = sorted(Path(path).glob("part-*.parquet"))
+    if not parts:
+        return pd.DataFrame()
+    return pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True).sort_values("variant", ignore_index=True)
+
+
+def run_study(
+    model: Model,
+    factors: Sequence[Factor] | None = None,
+    *,
+    method: str = "lhs",
+    samples: int = 100,
+    seed: int | None = 0,
+    plan: Array | None = None,
+    addresses: Sequence[str] | None = None,
+    free: Sequence[str] = ("q",),
+    sets: Mapping[str, object] | None = None,
+    outputs: Sequence[str] | None = None,
+    tol: float = 1e-10,
+    max_iter: int = 50,
+    chunk_size: int = 256,
+    output: str | Path | None = None,
+    resume: bool = False,
+    scheduler: str | None = None,
+    progress: bool = False,
+    on_chunk: Callable[[int], None] | None = None,
+    engine: str = "auto",
+) -> pd.DataFrame:
+    """Run a design study and return one row per variant (see the module docstring).
+
+    Either ``factors`` (sampled by ``method``/``samples``/``seed``) or an explicit ``plan``
+    (N, F) with its ``addresses``. ``sets`` are changes applied to every variant. With
+    ``output`` the chunks are streamed to that directory; ``resume`` keeps the finished ones
+    (the manifest must match). ``scheduler``: a Dask scheduler address (``tcp://host:8786``)
+    or a ``distributed.Client``. ``on_chunk(index)`` is called after each chunk is stored.
+    ``engine``: ``"auto"`` (compiled when possible), ``"fast"`` or ``"reference"`` (numpy).
+    Raises :class:`AddressError` / :class:`ValueError` for invalid input.
+    """
+    if plan is None:
+        factors = list(factors or [])
+        values = sample_plan(factors, method, samples, seed)
+        addrs = [f.address for f in factors]
+    else:
+        values = np.atleast_2d(np.asarray(plan, dtype=float))
+        addrs = list(addresses or [])
+        if values.shape[1] != len(addrs):
+            raise AddressError(f"plan has {values.shape[1]} columns for {len(addrs)} addresses")
+        method, samples, seed = "plan", values.shape[0], None
+    if chunk_size < 1:
+        raise AddressError("--chunk-size must be >= 1")
+    # validate every address once (component, group, existence) with the reference code path
+    for a in addrs:
+        addr = parse_address(a)
+        lay = assembly_for(model.mechanism).layout
+        if addr.key in lay and lay[addr.key].group == "C":
+            raise AddressError(f"--vary {a!r}: orientations cannot be varied component by component")
+        if addr.key in lay and lay[addr.key].size > 1 and addr.index is None:
+            raise AddressError(f"--vary {a!r}: give a component, e.g. {a}[0]")
+    base, _, _ = apply_changes(model, dict(sets or {}))
+    if len(values):
+        apply_changes(base, {a: values[0, k] for k, a in enumerate(addrs)})
+    spec = StudySpec(
+        addresses=addrs,
+        free=list(free),
+        sets={k: np.atleast_1d(np.asarray(v, dtype=float)).tolist() for k, v in (sets or {}).items()},
+        outputs=list(outputs) if outputs is not None else None,
+        tol=tol,
+        max_iter=max_iter,
+        chunk_size=chunk_size,
+        method=method,
+        samples=samples,
+        seed=seed,
+        plan_hash=hashlib.sha256(np.ascontiguousarray(values).tobytes()).hexdigest()[:16],
+        model_hash=_model_hash(model),
+        engine=engine,
+    )
+    if engine not in ("auto", "fast", "reference"):
+        raise AddressError(f"engine {engine!r}: expected auto, fast or reference")
+    n_chunks = -(-len(values) // chunk_size)
+    done: set[int] = set()
+    directory = Path(output) if output is not None else None
+    fresh = directory is not None and not (directory.exists() and any(directory.iterdir()))
+    if directory is not None and not fresh:
+        manifest = directory / MANIFEST
+        if not resume:
+            raise AddressError(f"{directory} exists: use --resume to complete it, or remove it")
+        if not manifest.exists():
+            raise AddressError(f"{directory} is not a study directory (no {MANIFEST})")
+        old = json.loads(manifest.read_text())
+        if old != asdict(spec):
+            diff = sorted(k for k in old if old.get(k) != asdict(spec).get(k))
+            raise AddressError(f"cannot resume {directory}: the study differs in {', '.join(diff)}")
+        done = _done_chunks(directory) & set(range(n_chunks))
+    client, own_client = _connect(scheduler)  # before creating anything: a bad address leaves no directory
+    if directory is not None and fresh:
+        directory.mkdir(parents=True, exist_ok=True)
+        tmp = directory / (MANIFEST + ".tmp")
+        tmp.write_text(json.dumps(asdict(spec), indent=1))
+        os.replace(tmp, directory / MANIFEST)
+    payload = _model_payload(base)
+    todo = [c for c in range(n_chunks) if c not in done]
+    frames: dict[int, pd.DataFrame] = {}
+
+    def store(c: int, frame: pd.DataFrame) -> None:
+        if directory is not None:
+            _write_part(directory, c, frame)
+        else:
+            frames[c] = frame
+        if on_chunk is not None:
+            on_chunk(c)
+
+    def chunk(c: int) -> Array:
+        return values[c * chunk_size : (c + 1) * chunk_size]
+
+    bar = _progress(progress, len(values), sum(len(chunk(c)) for c in done))
+    try:
+        if client is None:
+            for c in todo:
+                store(c, evaluate_chunk(payload, spec, chunk(c), c * chunk_size))
+                bar.advance(len(chunk(c)))
+        else:
+            _run_dask(client, payload, spec, todo, chunk, chunk_size, store, bar)
+    finally:
+        bar.close()
+        if own_client:
+            client.close()
+    if directory is not None:
+        return read_study(directory)
+    if not frames:
+        return pd.DataFrame()
+    return pd.concat([frames[c] for c in sorted(frames)], ignore_index=True)
+
+
+def _connect(scheduler: Any) -> tuple[Any, bool]:
+    """``(client, owned)``: a new Client for an address (closed by us), or the given Client."""
+    if scheduler is None or not isinstance(scheduler, str):
+        return scheduler, False
+    from distributed import Client
+
+    try:
+        return Client(scheduler, timeout="20s"), True
+    except (OSError, TimeoutError) as exc:
+        raise AddressError(f"--scheduler {scheduler!r}: cannot connect ({exc})") from None
+
+
+def _run_dask(client: Any, payload: Any, spec: StudySpec, todo: list[int], chunk: Callable[[int], Array],
+              chunk_size: int, store: Callable[[int, pd.DataFrame], None], bar: Any) -> None:  # fmt: skip
+    """Submit the chunks to a Dask cluster and store each as it completes (any order)."""
+    from distributed import as_completed
+
+    data = client.scatter(payload, broadcast=True)
+    futures = {client.submit(evaluate_chunk, data, spec, chunk(c), c * chunk_size, pure=False): c for c in todo}
+    for fut in as_completed(futures):
+        c = futures[fut]
+        store(c, fut.result())
+        bar.advance(len(chunk(c)))
+
+
+class _Bar:
+    def __init__(self, enabled: bool, total: int, completed: int) -> None:
+        self.p = None
+        if enabled:
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+            cols = (TextColumn("study"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
+            self.p = Progress(*cols, console=Console(stderr=True))
+            self.p.start()
+            self.task = self.p.add_task("study", total=total, completed=completed)
+
+    def advance(self, n: int) -> None:
+        if self.p is not None:
+            self.p.advance(self.task, n)
+
+    def close(self) -> None:
+        if self.p is not None:
+            self.p.stop()
+
+
+def _progress(enabled: bool, total: int, completed: int) -> _Bar:
+    return _Bar(enabled, total, completed)
+
+
+__all__ = ["Factor", "StudySpec", "evaluate_chunk", "parse_vary", "read_study", "run_study", "sample_plan"]

@@ -1,0 +1,183 @@
+"""Tolerance analysis: linearised output covariance from design-variable standard deviations.
+
+With independent tolerances ``sigma_p`` on scalar design variables ``p`` (components such as
+``RS.s_i[2]``, or a whole vector, each component with the same sigma), the first-order
+output change is ``do = G dp`` with ``G = do/dx_free S + do/dp``, where
+``S = dx_free/dp`` is the min-norm sensitivity matrix of
+:func:`kinprop.analysis.sensitivity.design_sensitivity` (the step a propagation takes). Then
+``cov(o) = G diag(sigma^2) G^T``.
+
+Outputs are coordinates (``J32.q[1]``, ``rocker.q``: rows of ``S`` directly) or any name of
+:func:`kinprop.analysis.outputs.evaluate_outputs` (named points, hardpoints, metrics): those
+are differentiated along the linearised solution ``x(p + h e_k) = x + h S e_k`` by central
+differences (O(h^2), h = 1e-4 sigma), which keeps them on the same first-order model.
+:func:`monte_carlo` samples the same tolerances (normal) through a design study.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from kinprop.analysis.sensitivity import design_sensitivity
+from kinprop.errors import AddressError
+from kinprop.kinematics.layout import column_labels, retract
+from kinprop.model import Model
+from kinprop.model.design import parse_address
+from kinprop.propagation.propagate import assembly_for
+from kinprop.spatial import Array
+
+
+@dataclass(frozen=True)
+class ToleranceResult:
+    outputs: list[str]
+    nominal: Array  # (n_out,)
+    std: Array  # (n_out,)
+    covariance: Array  # (n_out, n_out)
+    gain: Array  # (n_out, n_in): d output / d input
+    inputs: list[str]  # scalar input labels (layout column labels)
+    sigma: Array  # (n_in,)
+
+
+def _inputs(model: Model, tolerances: Mapping[str, float]) -> tuple[list[int], Array]:
+    layout = assembly_for(model.mechanism).layout
+    cols: dict[int, float] = {}
+    for text, sigma in tolerances.items():
+        if not sigma > 0:
+            raise AddressError(f"tolerance {text!r}: the standard deviation must be positive, found {sigma}")
+        addr = parse_address(text)
+        if addr.key in layout and layout[addr.key].group == "C":
+            raise AddressError(
+                f"tolerance {text!r}: orientation tolerances are not supported; give positions or lengths"
+            )
+        for c in layout.columns([text]):
+            cols[int(c)] = float(sigma)
+    order = sorted(cols)
+    return order, np.array([cols[c] for c in order])
+
+
+def _output_value(model: Model, name: str, labels: list[str]) -> float:
+    if name in labels:
+        col = labels.index(name)
+        layout = assembly_for(model.mechanism).layout
+        for v in layout.variables:
+            if v.start <= col < v.start + v.size:
+                from kinprop.kinematics.layout import read
+
+                return float(read(layout, model.design, model.coordinates, v.key)[col - v.start])
+    from kinprop.analysis.outputs import evaluate_outputs
+
+    return float(evaluate_outputs(model, [name])[name])
+
+
+def expand_names(model: Model, names: Sequence[str]) -> list[str]:
+    """Scalar output names: ``J.q`` of a multi-coordinate joint becomes ``J.q[0]``, ...; others via outputs."""
+    labels = column_labels(assembly_for(model.mechanism).layout)
+    out: list[str] = []
+    for n in names:
+        if n in labels:
+            out.append(n)
+        elif any(lab.startswith(n + "[") for lab in labels):
+            out += [lab for lab in labels if lab.startswith(n + "[")]
+        else:
+            try:
+                from kinprop.analysis.outputs import expand_outputs
+            except ImportError:  # pragma: no cover
+                raise AddressError(f"output {n!r} is not a coordinate of this model") from None
+            out += expand_outputs(model, [n])
+    return out
+
+
+def tolerance_analysis(
+    model: Model,
+    tolerances: Mapping[str, float],
+    outputs: Sequence[str],
+    free: Sequence[str] = ("q",),
+    fixed: Sequence[str] = (),
+) -> ToleranceResult:
+    """Linearised standard deviations and covariance of ``outputs`` at the model's (assembled) state.
+
+    ``tolerances``: address -> standard deviation; ``free``: what absorbs the variations
+    (as in a propagation); ``fixed``: addresses that are never free (e.g. set drives).
+    """
+    asm = assembly_for(model.mechanism)
+    layout = asm.layout
+    labels = column_labels(layout)
+    pcols, sigma = _inputs(model, tolerances)
+    wrt = [labels[c] for c in pcols]
+    sens = design_sensitivity(model, wrt, free=[*free])
+    # design_sensitivity frees everything in `free` except the wrt keys; drop `fixed` addresses too
+    fixed_cols = set(layout.columns(list(fixed)).tolist()) if fixed else set()
+    if fixed_cols & set(sens.free_columns.tolist()):
+        keep = [f for f in free if f not in fixed]
+        excl = {parse_address(a).key for a in fixed}
+        fc = layout.columns(keep, exclude=excl | {parse_address(w).key for w in wrt})
+        _, J = asm.evaluate(model.design, model.coordinates)
+        S = -np.linalg.pinv(J[:, fc]) @ J[:, pcols]
+        free_cols = fc
+    else:
+        S = sens.matrix[:, [list(sens.wrt_columns).index(c) for c in pcols]]
+        free_cols = sens.free_columns
+    names = expand_names(model, outputs)
+    G = np.zeros((len(names), len(pcols)))
+    nominal = np.array([_output_value(model, n, labels) for n in names])
+    frow = {int(c): k for k, c in enumerate(free_cols)}
+    pidx = {c: k for k, c in enumerate(pcols)}
+    for i, name in enumerate(names):
+        if name in labels:
+            c = labels.index(name)
+            if c in frow:
+                G[i] = S[frow[c]]
+            elif c in pidx:
+                G[i, pidx[c]] = 1.0
+            continue
+        for k, c in enumerate(pcols):
+            h = 1e-4 * sigma[k]
+            vals = []
+            for sgn in (1.0, -1.0):
+                dx = np.zeros(layout.n)
+                dx[free_cols] = sgn * h * S[:, k]
+                dx[c] += sgn * h
+                design, coords = retract(layout, model.design, model.coordinates, dx)
+                vals.append(_output_value(model.with_state(design, coords), name, labels))
+            G[i, k] = (vals[0] - vals[1]) / (2 * h)
+    cov = G @ np.diag(sigma**2) @ G.T
+    return ToleranceResult(names, nominal, np.sqrt(np.diag(cov)), cov, G, wrt, sigma)
+
+
+def monte_carlo(
+    model: Model,
+    tolerances: Mapping[str, float],
+    outputs: Sequence[str],
+    n: int = 2000,
+    seed: int = 0,
+    free: Sequence[str] = ("q",),
+    fixed: Sequence[str] = (),
+) -> Array:
+    """Sample standard deviations of ``outputs`` over ``n`` normal draws of the tolerances
+    (a design study with an explicit plan; failed variants are dropped)."""
+    from kinprop.analysis.study import run_study
+
+    layout = assembly_for(model.mechanism).layout
+    labels = column_labels(layout)
+    pcols, sigma = _inputs(model, tolerances)
+    addrs = [labels[c] for c in pcols]
+    nominal = [_output_value(model, a, labels) for a in addrs]
+    rng = np.random.default_rng(seed)
+    plan = np.array(nominal) + rng.normal(size=(n, len(addrs))) * sigma
+    names = expand_names(model, outputs)
+    extra = [x for x in names if x not in labels and not x.startswith("point:")]  # the study records points itself
+    sets: dict[str, object] = {}
+    for a in fixed:
+        addr = parse_address(a)
+        if addr.field == "q":
+            q = np.asarray(model.coordinates[addr.joint], dtype=float)
+            sets[a] = q if addr.index is None else q[addr.index]
+    df = run_study(model, plan=plan, addresses=addrs, free=free, outputs=extra or [], sets=sets or None)
+    ok = df[df["converged"]]
+    return np.array([ok[x].std(ddof=1) for x in names])
+
+
+__all__ = ["ToleranceResult", "expand_names", "monte_carlo", "tolerance_analysis"]

@@ -1,0 +1,155 @@
+"""``kinprop study`` (design of experiments of propagations) and ``kinprop tolerance``.
+
+Exit codes: 0 every variant converged, 1 some variants failed (recorded in the output),
+2 invalid input, 130 interrupted (finished chunks are kept; ``--resume`` completes the study).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.markup import escape
+from rich.table import Table
+
+from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, handles_user_errors, out, parse_assignment, print_json
+from kinprop.errors import AddressError
+from kinprop.io import load_model
+
+Free = Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")]
+EXIT_INTERRUPTED = 130
+Sets = Annotated[list[str] | None, typer.Option("--set", help="ADDRESS=VALUE applied to every variant")]
+
+
+def _to_internal(model, changes: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    try:
+        from kinprop.io.units import changes_to_internal
+    except ImportError:  # pragma: no cover
+        return changes
+    return changes_to_internal(model, changes)
+
+
+@app.command(name="study")
+@handles_user_errors
+def study_cmd(
+    model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
+    vary: Annotated[list[str], typer.Option("--vary", help="ADDRESS=LOW:HIGH, a scalar (component) address")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="result directory of Parquet parts (results.parquet)")],
+    method: Annotated[str, typer.Option("--method", help="grid | lhs | mc")] = "lhs",
+    samples: Annotated[int, typer.Option("--samples", help="variants (lhs, mc) or levels per factor (grid)")] = 100,
+    seed: Annotated[int, typer.Option("--seed", help="random seed (lhs, mc)")] = 0,
+    free: Free = None,
+    set_: Sets = None,
+    out_names: Annotated[
+        list[str] | None, typer.Option("--output-name", help="extra outputs (point:, metric:, ...)")
+    ] = None,
+    tol: Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL")] = 1e-10,
+    max_iter: Annotated[int, typer.Option("--max-iter")] = 50,
+    scheduler: Annotated[
+        str | None, typer.Option("--scheduler", help="Dask scheduler address, tcp://host:8786")
+    ] = None,
+    resume: Annotated[bool, typer.Option("--resume", help="complete an interrupted study in OUTPUT")] = False,
+    chunk_size: Annotated[int, typer.Option("--chunk-size", help="variants per chunk (one Parquet part each)")] = 256,
+    as_json: Annotated[bool, typer.Option("--json", help="print a JSON summary")] = False,
+) -> None:
+    """Run a design study: every variant re-assembled, inputs and results streamed to Parquet."""
+    from kinprop.analysis.study import Factor, parse_vary, run_study  # pandas/pyarrow only when used
+
+    m = load_model(model)
+    sets = _to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
+    factors = []
+    for text in vary:
+        f = parse_vary(text)
+        lo = float(_to_internal(m, {f.address: np.array([f.low])})[f.address][0])
+        hi = float(_to_internal(m, {f.address: np.array([f.high])})[f.address][0])
+        factors.append(Factor(f.address, lo, hi))
+    if method not in ("grid", "lhs", "mc"):
+        raise AddressError(f"--method {method!r}: expected grid, lhs or mc")
+    try:
+        frame = run_study(
+            m, factors, method=method, samples=samples, seed=seed, free=tuple(free or ["q"]), sets=sets,
+            outputs=out_names, tol=tol, max_iter=max_iter, chunk_size=chunk_size, output=output, resume=resume,
+            scheduler=scheduler, progress=not as_json,
+        )  # fmt: skip
+    except KeyboardInterrupt:
+        err.print(f"interrupted: finished chunks are kept in {escape(str(output))}; run again with --resume")
+        raise typer.Exit(EXIT_INTERRUPTED) from None
+    n_failed = int((~frame["converged"]).sum()) if len(frame) else 0
+    if as_json:
+        print_json({"variants": len(frame), "failed": n_failed, "output": str(output)})
+    else:
+        out.print(
+            f"{len(frame)} variants, {n_failed} failed; wrote {escape(str(output))}/ (read with pandas.read_parquet)"
+        )
+        if len(frame):
+            out.print(_summary(frame, [f.address for f in factors]))
+    if n_failed:
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _summary(frame, inputs: list[str]) -> Table:
+    t = Table(title="study summary (converged variants)", title_justify="left")
+    for c in ("column", "min", "mean", "max"):
+        t.add_column(c, justify="left" if c == "column" else "right")
+    ok = frame[frame["converged"]]
+    skip = {"variant", "converged", "status"}
+    for c in [*inputs, "iterations", "residual"] + [c for c in frame.columns if c not in skip and c not in inputs][
+        2:14
+    ]:
+        if c in ok and len(ok):
+            col = ok[c].astype(float)
+            t.add_row(escape(c), f"{col.min():.6g}", f"{col.mean():.6g}", f"{col.max():.6g}")
+    return t
+
+
+@app.command(name="tolerance")
+@handles_user_errors
+def tolerance_cmd(
+    model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
+    tolerance: Annotated[list[str], typer.Option("--tolerance", help="ADDRESS=SIGMA (standard deviation)")],
+    of: Annotated[list[str], typer.Option("--of", help="output: a coordinate (J32.q[1]) or point:/metric: name")],
+    free: Free = None,
+    set_: Sets = None,
+    mc: Annotated[int, typer.Option("--mc", help="also run a Monte Carlo study of N samples to compare")] = 0,
+    seed: Annotated[int, typer.Option("--seed")] = 0,
+    as_json: Annotated[bool, typer.Option("--json", help="print one JSON object")] = False,
+) -> None:
+    """Linearised output standard deviations from design-variable tolerances (sensitivity matrix)."""
+    from kinprop.analysis.tolerance import monte_carlo, tolerance_analysis
+    from kinprop.propagation import propagate
+
+    m = load_model(model)
+    sets = _to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
+    tols = {}
+    for text in tolerance:
+        addr, vals = parse_assignment(text)
+        if vals.size != 1 or not vals[0] > 0:
+            raise AddressError(f"--tolerance {text!r}: expected one positive standard deviation")
+        tols[addr] = float(vals[0])
+    freeset = tuple(free or ["q"])
+    if sets:
+        prop = propagate(m, sets, freeset)
+        if not prop.converged:
+            err.print(f"the model does not assemble with --set: {prop.result.message}")
+            raise typer.Exit(EXIT_NOT_CONVERGED)
+        m = prop.after
+    res = tolerance_analysis(m, tols, of, free=freeset, fixed=tuple(sets))
+    mc_std = monte_carlo(m, tols, res.outputs, n=mc, seed=seed, free=freeset, fixed=tuple(sets)) if mc else None
+    if as_json:
+        obj = {"outputs": res.outputs, "nominal": res.nominal.tolist(), "std": res.std.tolist(),
+               "covariance": res.covariance.tolist(), "inputs": res.inputs, "sigma": res.sigma.tolist()}  # fmt: skip
+        if mc_std is not None:
+            obj["mc_std"] = mc_std.tolist()
+        print_json(obj)
+        return
+    t = Table(title=f"tolerance analysis of {escape(str(model))} (linearised)", title_justify="left")
+    for c in ("output", "nominal", "std", *(["MC std", "MC / linear"] if mc_std is not None else [])):
+        t.add_column(c, justify="left" if c == "output" else "right")
+    for k, name in enumerate(res.outputs):
+        cells = [escape(name), f"{res.nominal[k]:.7g}", f"{res.std[k]:.4g}"]
+        if mc_std is not None:
+            cells += [f"{mc_std[k]:.4g}", f"{mc_std[k] / res.std[k]:.3f}" if res.std[k] > 0 else "-"]
+        t.add_row(*cells)
+    out.print(t)
