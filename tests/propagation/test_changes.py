@@ -25,3 +25,17 @@ def test_cli_set_coordinates_in_model_angle_unit(examples) -> None:
     r = CliRunner().invoke(app, ["propagate", str(examples / "fourbar.yaml"), "--set", "O2.q=30", "--json"])
     assert r.exit_code == 0, r.output
     assert json.loads(r.stdout)["coordinates"]["O2"][0] == np.radians(30)
+
+
+def test_models_pickle_for_distributed_studies(examples) -> None:
+    import pickle
+
+    from kinprop import assemble, propagate
+
+    m = assemble(load_model(examples / "mcpherson.yaml")).after
+    m2 = pickle.loads(pickle.dumps(m))
+    assert m2.mechanism == m.mechanism
+    np.testing.assert_array_equal(m2.coordinates["ST"], m.coordinates["ST"])
+    a = propagate(m, {"ST.s_i": [0.5, 1.0, 0.0]}, ("q",))
+    b = propagate(m2, {"ST.s_i": [0.5, 1.0, 0.0]}, ("q",))
+    np.testing.assert_array_equal(a.after.coordinates["ST"], b.after.coordinates["ST"])

@@ -33,9 +33,7 @@ Csv = Annotated[
     Path | None,
     typer.Option("--csv", help="write the before/after values (variables, hardpoints, named points) as CSV"),
 ]
-Plot = Annotated[
-    Path | None, typer.Option("--plot", help="draw before (faded) and after: FILE.png or FILE.html")
-]
+Plot = Annotated[Path | None, typer.Option("--plot", help="draw before (faded) and after: FILE.png or FILE.html")]
 
 
 def _fmt(values: list[float]) -> str:
@@ -158,7 +156,14 @@ def propagate_cmd(
     weights = dict(parse_weight(w) for w in (weight or [])) or None
     # continuation (explicit, or the fallback when Newton fails) and singularity warnings: cli/continuation.py
     prop = run_propagation(
-        m, changes, tuple(free or ["q"]), tol=tol, max_iter=max_iter, weights=weights,
-        continuation=continuation, output=output, as_json=as_json,
+        m,
+        changes,
+        tuple(free or ["q"]),
+        tol=tol,
+        max_iter=max_iter,
+        weights=weights,
+        continuation=continuation,
+        output=output,
+        as_json=as_json,
     )
     report(prop, f"propagate {model}", output, as_json, csv, plot)

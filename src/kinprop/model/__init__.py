@@ -1,6 +1,6 @@
 """Model layer: Mechanism (structure), Design (numbers), Model (both plus coordinates)."""
 
-from kinprop.model.design import GROUPS, Address, Design, as_coordinates, parse_address
+from kinprop.model.design import GROUPS, Address, Coordinates, Design, as_coordinates, parse_address
 from kinprop.model.mechanism import DESIGN_FIELDS, Body, Joint, Mechanism
 from kinprop.model.model import Model
 
@@ -9,6 +9,7 @@ __all__ = [
     "GROUPS",
     "Address",
     "Body",
+    "Coordinates",
     "Design",
     "Joint",
     "Mechanism",

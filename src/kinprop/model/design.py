@@ -85,6 +85,9 @@ class Design(Mapping[str, Array]):
     def __repr__(self) -> str:
         return f"Design({dict(self._values)!r})"
 
+    def __reduce__(self) -> tuple[type, tuple[dict[str, Array]]]:  # picklable (Dask, multiprocessing)
+        return (type(self), (dict(self._values),))
+
     def value(self, joint: str, field: str) -> Array:
         """The joint's field, or its default (zero vector / identity) when not a design variable."""
         v = self._values.get(f"{joint}.{field}")
@@ -100,6 +103,30 @@ class Design(Mapping[str, Array]):
         return Design(new)
 
 
-def as_coordinates(values: Mapping[str, object]) -> Mapping[str, Array]:
+class Coordinates(Mapping[str, Array]):
+    """Immutable mapping ``joint -> coordinates`` (read-only arrays); picklable."""
+
+    __slots__ = ("_values",)
+
+    def __init__(self, values: Mapping[str, object]):
+        self._values = MappingProxyType({k: _frozen(v) for k, v in values.items()})
+
+    def __getitem__(self, key: str) -> Array:
+        return self._values[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._values)
+
+    def __len__(self) -> int:
+        return len(self._values)
+
+    def __repr__(self) -> str:
+        return f"Coordinates({dict(self._values)!r})"
+
+    def __reduce__(self) -> tuple[type, tuple[dict[str, Array]]]:
+        return (type(self), (dict(self._values),))
+
+
+def as_coordinates(values: Mapping[str, object]) -> Coordinates:
     """Immutable mapping ``joint -> coordinates``."""
-    return MappingProxyType({k: _frozen(v) for k, v in values.items()})
+    return values if isinstance(values, Coordinates) else Coordinates(values)

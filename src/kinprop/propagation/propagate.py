@@ -162,7 +162,7 @@ def propagate(
     after = start.with_state(design, coords)
     ratio = float("nan")
     if result.converged and cols.size:
-        ratio = conditioning(asm, asm.evaluate(design, coords)[1][:, cols])
+        ratio = conditioning(asm, result.jacobian[:, cols])
         warn_if_singular(ratio)
     return Propagation(model, after, result, normalised, tuple(free), ratio)
 

@@ -41,6 +41,8 @@ class SolveResult:
     singular_values: Array
     message: str
     state: Any = field(repr=False, default=None)
+    #: the full Jacobian at the final state (every column, not only the free ones)
+    jacobian: Array | None = field(repr=False, default=None)
 
     @property
     def status(self) -> str:
@@ -107,4 +109,4 @@ def newton(
         message = f"converged in {it} iterations: ||Phi|| = {norm:.3g} < {options.tol:g}"
     elif not message:
         message = f"not converged after {it} iterations: ||Phi|| = {norm:.3g} >= {options.tol:g}"
-    return SolveResult(converged, it, norm, history, rank, int(free.size), int(J.shape[0]), sv, message, state)
+    return SolveResult(converged, it, norm, history, rank, int(free.size), int(J.shape[0]), sv, message, state, J)
