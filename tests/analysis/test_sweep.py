@@ -121,3 +121,31 @@ def test_cli_sweep(tmp_path):
         app, ["sweep", str(EXAMPLES / "fourbar.yaml"), "--drive", "O2=0:1:1", "-o", str(tmp_path / "x.txt")]
     )
     assert wrong_suffix.exit_code == 2
+
+
+def test_cli_baseline_plot_and_json(tmp_path) -> None:
+    """--baseline sweeps the design without --set too and draws both on one figure; --json."""
+    import json as _json
+
+    from typer.testing import CliRunner
+
+    from kinprop.cli import app
+
+    png = tmp_path / "before_after.png"
+    r = CliRunner().invoke(
+        app,
+        [
+            "sweep", str(EXAMPLES / "fourbar.yaml"), "--drive", "O2=0:90:6", "--set", "B.s_i[0]=0.42",
+            "--baseline", "--plot", str(png), "--json",
+        ],
+    )  # fmt: skip
+    assert r.exit_code == 0, r.output
+    obj = _json.loads(r.stdout)
+    assert obj["steps"] == 7 and obj["converged"] == 7 and obj["failed"] == []
+    assert len(obj["rows"]) == 7 and len(obj["baseline_rows"]) == 7
+    # the change moved the rocker: after differs from before at the same crank angle
+    col = next(c for c in obj["rows"][0] if c.startswith("O4.q"))
+    assert abs(obj["rows"][3][col] - obj["baseline_rows"][3][col]) > 1e-3
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    bad = CliRunner().invoke(app, ["sweep", str(EXAMPLES / "fourbar.yaml"), "--drive", "O2=0:90:6", "--baseline"])
+    assert bad.exit_code == 2 and "--set" in bad.output

@@ -15,7 +15,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from kinprop.analysis.sweep import parse_drive, plot_sweep, sweep
-from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, handles_user_errors, out, parse_assignment
+from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, handles_user_errors, out, parse_assignment, print_json
 from kinprop.io import load_model
 from kinprop.io.units import changes_to_internal
 
@@ -55,6 +55,56 @@ def _shown_columns(res, limit: int = 10) -> list[str]:
     return head + varying[: max(0, limit - len(head))]
 
 
+def _records(frame) -> list[dict]:
+    """Rows as JSON-ready dicts (NaN -> null)."""
+    return [
+        {k: (None if isinstance(v, float) and v != v else v) for k, v in row.items()}
+        for row in frame.to_dict("records")
+    ]
+
+
+def _summary(res, base, output: Path | None, plot: Path | None) -> dict:
+    df = res.frame
+    ok = df["status"] == "converged"
+    obj = {
+        "steps": len(df),
+        "converged": int(ok.sum()),
+        "failed": [int(k) for k in df.loc[~ok, "step"]],
+        "drives": [d.label for d in res.drives],
+        "outputs": list(res.outputs),
+        "output_file": None if output is None else str(output),
+        "plot_file": None if plot is None else str(plot),
+        "rows": _records(df),
+    }
+    if base is not None:
+        obj["baseline_rows"] = _records(base.frame)
+    return obj
+
+
+def _plot_before_after(base, res, path: Path, x: str | None, title: str) -> None:
+    """The swept outputs before (the design without --set) and after, on one figure."""
+    from kinprop.plot.curves import plot_curves
+
+    x = x or res.drives[0].label
+    if x not in res.frame.columns:
+        raise ValueError(f"--x {x!r}: not a column of the sweep; columns: {', '.join(map(str, res.frame.columns))}")
+    ys = [c for c in res.outputs if c != x and c in res.frame.columns] or [
+        c for c in res.frame.columns if ".q" in c and c != x and not c.startswith(("point:", "metric:"))
+    ]
+    if not ys:
+        raise ValueError("nothing to plot: give outputs with --out")
+    from kinprop.analysis.metrics import METRICS, metric_unit
+
+    units = dict(res.frame.attrs.get("units", {}))
+    length = res.last.units.get("length", "m") if res.last is not None else "m"
+    for c in [x, *ys]:
+        short = c.rsplit(".", 1)[-1]
+        if c not in units and short in METRICS:
+            units[c] = metric_unit(short, length)
+    ok = {k: f[f["status"] == "converged"] for k, f in (("before", base.frame), ("after", res.frame))}
+    plot_curves(ok, x, ys, units=units, title=title, path=path)
+
+
 @app.command(name="sweep")
 @handles_user_errors
 def sweep_cmd(
@@ -80,6 +130,14 @@ def sweep_cmd(
         Path | None, typer.Option("--plot", help="plot the swept coordinates and outputs (PNG, PDF, SVG)")
     ] = None,
     continuation: Annotated[bool, typer.Option("--continuation", help="retry a failed step by continuation")] = False,
+    baseline: Annotated[
+        bool,
+        typer.Option("--baseline", help="also sweep the design without --set; --plot draws before and after together"),
+    ] = False,
+    x: Annotated[
+        str | None, typer.Option("--x", help="abscissa of the --baseline plot (an output, e.g. wheel_centre_dz)")
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="print one JSON object (summary and every row)")] = False,
     tol: Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL")] = 1e-10,
     max_iter: Annotated[int, typer.Option("--max-iter", help="maximum Newton iterations per step")] = 50,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="no table, no progress bar")] = False,
@@ -88,6 +146,9 @@ def sweep_cmd(
     m = load_model(model)
     drives = [parse_drive(m, d) for d in drive]
     changes = changes_to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
+    if baseline and not changes:
+        raise ValueError("--baseline compares with the design before the --set changes: give at least one --set")
+    quiet = quiet or as_json
     if output is not None and output.suffix.lower() not in (".csv", ".parquet", ".pq"):
         raise ValueError(f"--output {str(output)!r}: expected a .csv or .parquet file")
     n = max(d.values.size for d in drives)
@@ -129,12 +190,20 @@ def sweep_cmd(
             where = f"; rows computed so far are in {output}" if output is not None else ""
             err.print(f"[yellow]interrupted[/yellow] after {done} of {n} steps ({failed} failed){where}")
             raise typer.Exit(130) from None
+    base = None
+    if baseline:
+        base = sweep(
+            m, drives, free=tuple(free or ["q"]), outputs=outputs, tol=tol, max_iter=max_iter, continuation=continuation
+        )
     df = res.frame
+    if as_json:
+        print_json(_summary(res, base, output, plot))
     if not quiet:
         out.print(_table(df, _shown_columns(res)))
     bad = df[df["status"] != "converged"]
     near = int(df["near_singular"].sum())
-    out.print(
+    say = err.print if as_json else out.print
+    say(
         f"{len(df)} steps: {len(df) - len(bad)} converged, {len(bad)} failed"
         + (f", {near} near-singular" if near else "")
     )
@@ -142,11 +211,14 @@ def sweep_cmd(
         first = bad.iloc[0]
         label = res.drives[0].label
         why = escape(str(first["message"]))
-        out.print(f"[red]first failure at step {int(first['step'])} ({label} = {first[label]:g}): {why}")
+        say(f"[red]first failure at step {int(first['step'])} ({label} = {first[label]:g}): {why}")
     if output is not None:
-        out.print(f"wrote {output}")
+        say(f"wrote {output}")
     if plot is not None:
-        plot_sweep(res, plot, title=f"sweep {model.name}")
-        out.print(f"wrote {plot}")
+        if base is None:
+            plot_sweep(res, plot, title=f"sweep {model.name}")
+        else:
+            _plot_before_after(base, res, plot, x, title=f"sweep {model.name}: before and after {', '.join(changes)}")
+        say(f"wrote {plot}")
     if len(bad):
         raise typer.Exit(EXIT_NOT_CONVERGED)
