@@ -69,8 +69,8 @@ def _as_state(
     return pack(comp, designs, coords if coords is not None else {})
 
 
-class Solver:
-    """A Newton solver bound to a compiled mechanism and a free set (minimal per-call overhead)."""
+class BoundSolver:
+    """A compiled mechanism bound to a free set and stopping rule (shared by the solvers)."""
 
     def __init__(
         self,
@@ -86,6 +86,10 @@ class Solver:
         self.free = np.ascontiguousarray(cols, dtype=np.int64)
         self.tol, self.max_iter, self.divergence = float(tol), int(max_iter), float(divergence)
         self._args = (comp.tables, comp.colinfo, comp.rows, comp.cols, comp.m, comp.n, self.free)
+
+
+class Solver(BoundSolver):
+    """A Newton solver bound to a compiled mechanism and a free set (minimal per-call overhead)."""
 
     def solve_one(self, Q: Array, S: Array, C: Array, L: Array) -> tuple[int, int, float]:
         """Solve one variant in place (arrays without the batch axis); ``(status, iterations, residual)``."""

@@ -26,6 +26,7 @@ from scipy.sparse.linalg import splu
 
 from kinprop.fast import kernels as kn
 from kinprop.fast.compiled import Compiled, State
+from kinprop.fast.solve import BoundSolver
 from kinprop.spatial import Array
 
 
@@ -83,7 +84,7 @@ def _newton_blocks(tb, colinfo, m, n, free, Q, S, C, L, tol, max_iter, divergenc
     return status, it, norm
 
 
-class SparseSolver:
+class SparseSolver(BoundSolver):
     """Newton over the free columns of one large mechanism with a sparse (or block) linear solve."""
 
     def __init__(
@@ -96,10 +97,7 @@ class SparseSolver:
         divergence: float = 1e6,
         method: str = "auto",
     ) -> None:
-        self.comp = comp
-        cols = np.asarray(free) if isinstance(free, np.ndarray) else comp.free_columns(free, exclude)
-        self.free = np.ascontiguousarray(cols, dtype=np.int64)
-        self.tol, self.max_iter, self.divergence = float(tol), int(max_iter), float(divergence)
+        super().__init__(comp, free, exclude, tol, max_iter, divergence)
         m, nf = comp.m, self.free.size
         fidx = -np.ones(comp.n, dtype=np.int64)
         fidx[self.free] = np.arange(nf)
