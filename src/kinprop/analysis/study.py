@@ -39,7 +39,7 @@ import pandas as pd
 from kinprop.errors import AddressError
 from kinprop.model import Design, Model
 from kinprop.model.design import as_coordinates, parse_address
-from kinprop.propagation.propagate import apply_changes, assembly_for, propagate
+from kinprop.propagation.propagate import apply_changes, assembly_for, propagate, roundoff_floor
 from kinprop.spatial import Array
 
 METHODS = ("grid", "lhs", "mc")
@@ -232,7 +232,8 @@ def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, s
                 st.L[:, j] = v
                 ok &= v > 0
         changed = {parse_address(a).key for a in spec.addresses} | {parse_address(a).key for a in spec.sets}
-        res = Solver(comp, spec.free, exclude=changed, tol=spec.tol, max_iter=spec.max_iter).solve(st, copy=False)
+        tol = max(spec.tol, roundoff_floor(model))  # the reference's stopping rule
+        res = Solver(comp, spec.free, exclude=changed, tol=tol, max_iter=spec.max_iter).solve(st, copy=False)
         conv = res.converged & ok
         iters, resid = res.iterations.copy(), res.residual.copy()
         status = np.array(

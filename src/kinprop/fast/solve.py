@@ -158,11 +158,12 @@ def propagate_fast(
     ``result.residual_history`` holds the initial and final norms only (the kernel keeps no
     history), rank and singular values are those of the free Jacobian at the result.
     """
-    from kinprop.propagation.propagate import apply_changes
+    from kinprop.propagation.propagate import apply_changes, roundoff_floor
     from kinprop.solver.newton import RANK_RTOL, SolveResult
 
     start, normalised, changed = apply_changes(model, dict(changes or {}))
     comp = compile_model(model.mechanism)
+    tol = max(tol, roundoff_floor(start))  # the reference's stopping rule (SolveOptions.target)
     solver = Solver(comp, free, exclude=changed, tol=tol, max_iter=max_iter)
     st = pack(comp, start.design, start.coordinates)
     Phi0 = evaluate(comp, st)[0][0]

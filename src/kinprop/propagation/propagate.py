@@ -72,6 +72,27 @@ class Propagation:
         return out
 
 
+#: converged when ||Phi|| < max(tol, ROUNDOFF * eps * L^2): distance rows d.d - l^2 carry
+#: round-off of about eps * L^2, which exceeds 1e-10 for metre-sized mechanisms in mm
+ROUNDOFF = 16.0
+
+
+def length_scale(model: Model) -> float:
+    """Characteristic length L of a model: the largest body position, s' or length (>= 1)."""
+    kin = assembly_for(model.mechanism).kinematics(model.design, model.coordinates)
+    vals = [1.0, *(float(np.linalg.norm(r)) for r in kin.r.values())]
+    for k, v in model.design.items():
+        if k.endswith((".s_i", ".s_j", ".length")):
+            vals.append(float(np.linalg.norm(v)))
+    return max(vals)
+
+
+def roundoff_floor(model: Model) -> float:
+    """``ROUNDOFF * eps * L^2``: below this ||Phi|| is round-off (about 1e-13 for the paper's
+    metre-scale examples, 1e-8 for a vehicle suspension in mm)."""
+    return ROUNDOFF * float(np.finfo(float).eps) * length_scale(model) ** 2
+
+
 def apply_changes(model: Model, changes: Mapping[str, object]) -> tuple[Model, dict[str, Array], set[str]]:
     """Overwrite design variables / coordinates by address; returns the model, the normalised
     change values and the set of changed variable keys."""
@@ -157,7 +178,8 @@ def propagate(
     def step(state, dx):
         return retract(layout, state[0], state[1], dx)
 
-    result = newton(evaluate, step, (start.design, start.coordinates), cols, layout.n, SolveOptions(tol, max_iter), w)
+    options = SolveOptions(tol, max_iter, floor=roundoff_floor(start))
+    result = newton(evaluate, step, (start.design, start.coordinates), cols, layout.n, options, w)
     design, coords = result.state
     after = start.with_state(design, coords)
     ratio = float("nan")

@@ -27,6 +27,13 @@ class SolveOptions:
     max_iter: int = 50
     #: stop when the residual grows beyond this factor of the initial one (divergence)
     divergence: float = 1e6
+    #: round-off floor of ||Phi|| for the model's length scale; converged when
+    #: ``||Phi|| < max(tol, floor)`` (0: the tolerance alone)
+    floor: float = 0.0
+
+    @property
+    def target(self) -> float:
+        return max(self.tol, self.floor)
 
 
 @dataclass
@@ -87,7 +94,8 @@ def newton(
     history = [norm]
     it = 0
     message = ""
-    while norm >= options.tol and it < options.max_iter:
+    target = options.target
+    while norm >= target and it < options.max_iter:
         if free.size == 0:
             message = "no free variables: nothing can move to satisfy the constraints"
             break
@@ -101,12 +109,17 @@ def newton(
         if not np.isfinite(norm) or norm > options.divergence * max(history[0], 1e-300):
             message = f"diverged at iteration {it}: ||Phi|| = {norm:.3g}"
             break
-    converged = bool(norm < options.tol)
+    converged = bool(norm < target)
     Jf = J[:, free] if free.size else np.zeros((J.shape[0], 0))
     sv = np.linalg.svd(Jf, compute_uv=False) if Jf.size else np.zeros(0)
     rank = int(np.sum(sv > RANK_RTOL * sv[0])) if sv.size and sv[0] > 0 else 0
+    bound = (
+        f"{target:.3g} (round-off floor at this model's length scale; tol {options.tol:g})"
+        if target > options.tol
+        else f"{options.tol:g}"
+    )
     if converged:
-        message = f"converged in {it} iterations: ||Phi|| = {norm:.3g} < {options.tol:g}"
+        message = f"converged in {it} iterations: ||Phi|| = {norm:.3g} < {bound}"
     elif not message:
-        message = f"not converged after {it} iterations: ||Phi|| = {norm:.3g} >= {options.tol:g}"
+        message = f"not converged after {it} iterations: ||Phi|| = {norm:.3g} >= {bound}"
     return SolveResult(converged, it, norm, history, rank, int(free.size), int(J.shape[0]), sv, message, state, J)
