@@ -129,25 +129,18 @@ class _Path:
 
 
 def _build_path(model: Model, changes: Mapping[str, object]) -> _Path:
-    apply_changes(model, changes)  # validates addresses and values (AddressError)
+    """Straight path from the model's values of the changed variables to their targets."""
+    target_model, _, keys = apply_changes(model, changes)  # validates (AddressError)
     layout = assembly_for(model.mechanism).layout
-    start: dict[str, Array] = {}
-    target: dict[str, Array] = {}
-    groups: dict[str, str] = {}
-    for text, value in changes.items():
-        addr = parse_address(text)
-        var = layout[addr.key]
-        if addr.key not in start:
-            cur = model.coordinates[var.joint] if var.group == "q" else model.design[addr.key]
-            start[addr.key] = np.array(cur, dtype=float)
-            target[addr.key] = start[addr.key].copy()
-            groups[addr.key] = var.group
-        val = np.asarray(value, dtype=float)
-        if addr.index is None:
-            target[addr.key] = val.reshape(start[addr.key].shape).copy()
-        else:
-            target[addr.key].flat[addr.index] = float(val.ravel()[0])
-    return _Path(start, target, groups)
+
+    def value(m: Model, key: str) -> Array:
+        var = layout[key]
+        return np.array(m.coordinates[var.joint] if var.group == "q" else m.design[key], dtype=float)
+
+    keys_in_order = [k for k in dict.fromkeys(parse_address(t).key for t in changes) if k in keys]
+    start = {k: value(model, k) for k in keys_in_order}
+    target = {k: value(target_model, k) for k in keys_in_order}
+    return _Path(start, target, {k: layout[k].group for k in keys_in_order})
 
 
 def _delta(group: str, a: Array, b: Array) -> Array:
