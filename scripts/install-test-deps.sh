@@ -13,6 +13,7 @@ if ! command -v apt-get >/dev/null 2>&1; then
     echo "install-test-deps: no apt-get here; install the 'chromium' browser by hand" >&2
     exit 1
 fi
-$SUDO apt-get update
-$SUDO apt-get install -y chromium
+export DEBIAN_FRONTEND=noninteractive  # CI has no terminal: never prompt
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends chromium
 command -v chromium >/dev/null
