@@ -15,5 +15,5 @@ if ! command -v apt-get >/dev/null 2>&1; then
 fi
 export DEBIAN_FRONTEND=noninteractive  # CI has no terminal: never prompt
 $SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends chromium
+$SUDO apt-get install -y -qq chromium
 command -v chromium >/dev/null
