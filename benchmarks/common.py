@@ -154,3 +154,34 @@ def stewart_least_squares(a, b, lengths, x0, R0):
 def leg_lengths(a, b, x, R):
     """Closed-form inverse kinematics: leg lengths ``|x + R b_k - a_k|`` of a platform pose."""
     return np.linalg.norm(x[..., None, :] + np.einsum("...ij,...kj->...ki", R, b) - a, axis=-1)
+
+
+@dataclass
+class StewartBench:
+    """The P1/P4 setup: the distance-leg Stewart model, compiled, with its leg columns."""
+
+    a: np.ndarray  # base hardpoints
+    b: np.ndarray  # platform hardpoints
+    model: object
+    comp: object
+    legs: list[str]
+    lcol: list[int]  # leg-length columns of the state's L array
+    fcol: int  # first column of the platform's free joint in Q
+    st: object  # packed nominal state
+    l0: np.ndarray  # nominal leg lengths
+    solver: object  # fast solver over q with the leg lengths locked
+
+
+def stewart_bench() -> StewartBench:
+    from kinprop.builders import stewart, stewart_hardpoints
+    from kinprop.fast import Solver, compile_model, pack
+
+    a, b = stewart_hardpoints()
+    model = stewart()
+    comp = compile_model(model.mechanism)
+    legs = [f"M1_L{k}" for k in range(1, 7)]
+    lcol = [comp.joint_index[j] for j in legs]
+    st = pack(comp, model.design, model.coordinates)
+    solver = Solver(comp, ("q",), exclude={f"{j}.length" for j in legs})
+    fcol = comp.assembly.layout["M1_F.q"].start
+    return StewartBench(a, b, model, comp, legs, lcol, fcol, st, st.L[0, lcol].copy(), solver)

@@ -13,10 +13,10 @@ import sys
 import numpy as np
 
 sys.path.insert(0, __import__("os").path.dirname(__file__))
-from common import Row, compare, leg_lengths, stewart_hand_newton, stewart_least_squares
+from common import Row, compare, leg_lengths, stewart_bench, stewart_hand_newton, stewart_least_squares
 
 from kinprop import propagate
-from kinprop.builders import STEWART, stewart, stewart_hardpoints
+from kinprop.builders import STEWART, stewart
 from kinprop.fast import Solver, compile_model, pack
 from kinprop.spatial import euler_to_matrix
 
@@ -31,15 +31,19 @@ def pose(res: tuple) -> tuple[np.ndarray, np.ndarray]:
 
 def run(trials: int = 50, seed: int = 0, inner: int = 5) -> list[Row]:
     rng = np.random.default_rng(seed)
-    a, b = stewart_hardpoints()
+    sb = stewart_bench()
+    a, b, model, comp, legs, lcol, fcol, st0, l0 = (
+        sb.a,
+        sb.b,
+        sb.model,
+        sb.comp,
+        sb.legs,
+        sb.lcol,
+        sb.fcol,
+        sb.st,
+        sb.l0,
+    )
     h = STEWART["height"]
-    model = stewart()
-    comp = compile_model(model.mechanism)
-    legs = [f"M1_L{k}" for k in range(1, 7)]
-    lcol = [comp.joint_index[j] for j in legs]
-    fcol = comp.assembly.layout["M1_F.q"].start
-    st0 = pack(comp, model.design, model.coordinates)
-    l0 = st0.L[0, lcol].copy()
     x0, R0 = np.array([0.0, 0.0, h]), np.eye(3)
 
     ups = stewart("ups")
@@ -52,7 +56,7 @@ def run(trials: int = 50, seed: int = 0, inner: int = 5) -> list[Row]:
     rows: list[Row] = []
     # (a) all six legs change by up to +-3 mm
     dls = [l0 + rng.uniform(-3e-3, 3e-3, 6) for _ in range(trials)]
-    solver = Solver(comp, ("q",), exclude={f"{j}.length" for j in legs})
+    solver = sb.solver
 
     def fast(dl):
         Q, L = st0.Q[0].copy(), st0.L[0].copy()

@@ -14,24 +14,17 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
-from common import Row, compare, leg_lengths, stewart_hand_newton, stewart_least_squares
+from common import Row, compare, leg_lengths, stewart_bench, stewart_hand_newton, stewart_least_squares
 
-from kinprop.builders import STEWART, stewart, stewart_hardpoints
-from kinprop.fast import Solver, State, compile_model, pack
+from kinprop.builders import STEWART
+from kinprop.fast import State
 from kinprop.spatial import euler_to_matrix
 
 
 def run(N: int = 10_000, trials: int = 5, lsq_subset: int = 200, seed: int = 0) -> list[Row]:
     rng = np.random.default_rng(seed)
-    a, b = stewart_hardpoints()
-    model = stewart()
-    comp = compile_model(model.mechanism)
-    legs = [f"M1_L{k}" for k in range(1, 7)]
-    lidx = [comp.joint_index[j] for j in legs]
-    fcol = comp.assembly.layout["M1_F.q"].start
-    st1 = pack(comp, model.design, model.coordinates)
-    l0 = st1.L[0, lidx]
-    solver = Solver(comp, ("q",), exclude={f"{j}.length" for j in legs})
+    sb = stewart_bench()
+    a, b, lidx, fcol, st1, l0, solver = sb.a, sb.b, sb.lcol, sb.fcol, sb.st, sb.l0, sb.solver
     batches = [l0 + rng.uniform(-3e-3, 3e-3, (N, 6)) for _ in range(trials)]
     base = State(np.repeat(st1.Q, N, 0), np.repeat(st1.S, N, 0), np.repeat(st1.C, N, 0), np.repeat(st1.L, N, 0))
     A, B = np.broadcast_to(a, (N, 6, 3)), np.broadcast_to(b, (N, 6, 3))
