@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from kinprop.joints import joint_type
-from kinprop.kinematics import Assembly
+from kinprop.engine import Engine as Assembly
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates
 from kinprop.spatial import exp_so3, rot_x, rot_z
 

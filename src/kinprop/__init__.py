@@ -5,21 +5,22 @@ Kinematic Analysis", ASME J. Mech. Des. 119(3).
 """
 
 from kinprop.analysis import design_sensitivity, evaluate_outputs, mobility, output_sensitivity, sweep
+from kinprop.engine import BatchSolution, Engine, Solution, State, Status, compile
 from kinprop.errors import AddressError, ConvergenceError, KinpropError, ModelError, SingularityWarning
 from kinprop.io import dump_model, load_model
-from kinprop.kinematics import Assembly
 from kinprop.model import Body, Design, Joint, Mechanism, Model
 from kinprop.propagation import Propagation, assemble, propagate, propagate_continuation
-from kinprop.solver import SolveOptions, SolveResult
+from kinprop.solver import SolveResult
 
 __version__ = "0.1.0"
 
 __all__ = [
     "AddressError",
-    "Assembly",
+    "BatchSolution",
     "Body",
     "ConvergenceError",
     "Design",
+    "Engine",
     "Joint",
     "KinpropError",
     "Mechanism",
@@ -27,9 +28,12 @@ __all__ = [
     "ModelError",
     "Propagation",
     "SingularityWarning",
-    "SolveOptions",
+    "Solution",
     "SolveResult",
+    "State",
+    "Status",
     "assemble",
+    "compile",
     "design_sensitivity",
     "dump_model",
     "evaluate_outputs",

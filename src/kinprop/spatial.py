@@ -1,12 +1,15 @@
 """Spatial algebra: tilde operator (eq. 3), rotations, Euler parameters (eqs. 40-42).
 
-All functions accept an optional leading batch shape (``[..., 3]``, ``[..., 3, 3]``).
+The numpy functions accept an optional leading batch shape (``[..., 3]``, ``[..., 3, 3]``); the
+compiled ``*_into`` helpers at the end write one 3-vector / 3x3 result into a given array.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from kinprop.jit import njit
 
 Array = NDArray[np.float64]
 
@@ -120,3 +123,103 @@ def is_rotation(C: ArrayLike, tol: float = 1e-6) -> bool:
     if C.shape != (3, 3) or not np.all(np.isfinite(C)):
         return False
     return bool(np.allclose(C.T @ C, np.eye(3), atol=tol) and abs(np.linalg.det(C) - 1) < tol)
+
+
+# --- compiled 3-vector / 3x3 helpers (write into preallocated arrays; used by the kernels) ----
+
+
+@njit
+def mm_into(A: Array, B: Array, out: Array) -> None:
+    """``out = A @ B`` (3 x 3)."""
+    for a in range(3):
+        for b in range(3):
+            out[a, b] = A[a, 0] * B[0, b] + A[a, 1] * B[1, b] + A[a, 2] * B[2, b]
+
+
+@njit
+def mmT_into(A: Array, B: Array, out: Array) -> None:
+    """``out = A @ B.T`` (3 x 3)."""
+    for a in range(3):
+        for b in range(3):
+            out[a, b] = A[a, 0] * B[b, 0] + A[a, 1] * B[b, 1] + A[a, 2] * B[b, 2]
+
+
+@njit
+def mTm_into(A: Array, B: Array, out: Array) -> None:
+    """``out = A.T @ B`` (3 x 3)."""
+    for a in range(3):
+        for b in range(3):
+            out[a, b] = A[0, a] * B[0, b] + A[1, a] * B[1, b] + A[2, a] * B[2, b]
+
+
+@njit
+def mv_into(A: Array, v: Array, out: Array) -> None:
+    """``out = A @ v``."""
+    for a in range(3):
+        out[a] = A[a, 0] * v[0] + A[a, 1] * v[1] + A[a, 2] * v[2]
+
+
+@njit
+def cross_into(a: Array, b: Array, out: Array) -> None:
+    """``out = a x b = tilde(a) b`` (eq. 3)."""
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+
+
+@njit
+def eye_into(out: Array) -> None:
+    for a in range(3):
+        for b in range(3):
+            out[a, b] = 1.0 if a == b else 0.0
+
+
+@njit
+def rot_z_into(angle: float, out: Array) -> None:
+    """``out = Rz(angle)``."""
+    c, s = np.cos(angle), np.sin(angle)
+    eye_into(out)
+    out[0, 0], out[0, 1], out[1, 0], out[1, 1] = c, -s, s, c
+
+
+@njit
+def euler_A_into(p: Array, out: Array) -> None:
+    """``out = E(p) G(p)^T`` (eq. 42 text), with ``p`` as given (never renormalised)."""
+    e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
+    out[0, 0] = e0 * e0 + e1 * e1 - e2 * e2 - e3 * e3
+    out[0, 1] = 2.0 * (e1 * e2 - e0 * e3)
+    out[0, 2] = 2.0 * (e1 * e3 + e0 * e2)
+    out[1, 0] = 2.0 * (e1 * e2 + e0 * e3)
+    out[1, 1] = e0 * e0 - e1 * e1 + e2 * e2 - e3 * e3
+    out[1, 2] = 2.0 * (e2 * e3 - e0 * e1)
+    out[2, 0] = 2.0 * (e1 * e3 - e0 * e2)
+    out[2, 1] = 2.0 * (e2 * e3 + e0 * e1)
+    out[2, 2] = e0 * e0 - e1 * e1 - e2 * e2 + e3 * e3
+
+
+@njit
+def euler_E_into(p: Array, scale: float, out: Array, col0: int) -> None:
+    """``out[:, col0:col0+4] = scale * E(p)``, E = [-e, tilde(e) + e0 I] (eq. 40)."""
+    e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
+    c = col0
+    out[0, c], out[0, c + 1], out[0, c + 2], out[0, c + 3] = -e1 * scale, e0 * scale, -e3 * scale, e2 * scale
+    out[1, c], out[1, c + 1], out[1, c + 2], out[1, c + 3] = -e2 * scale, e3 * scale, e0 * scale, -e1 * scale
+    out[2, c], out[2, c + 1], out[2, c + 2], out[2, c + 3] = -e3 * scale, -e2 * scale, e1 * scale, e0 * scale
+
+
+@njit
+def exp_so3_into(w: Array, out: Array) -> None:
+    """``out = exp(tilde(w))`` (Rodrigues), stable for small ``|w|``."""
+    th = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    if th < 1e-8:
+        a, b = 1.0 - th * th / 6.0, 0.5 - th * th / 24.0
+    else:
+        a, b = np.sin(th) / th, (1.0 - np.cos(th)) / (th * th)
+    x, y, z = w[0], w[1], w[2]
+    # I + a W + b W W, with W W = w w^T - th^2 I
+    out[0, 0] = 1.0 + b * (x * x - th * th)
+    out[1, 1] = 1.0 + b * (y * y - th * th)
+    out[2, 2] = 1.0 + b * (z * z - th * th)
+    out[0, 1], out[1, 0] = -a * z + b * x * y, a * z + b * x * y
+    out[0, 2], out[2, 0] = a * y + b * x * z, -a * y + b * x * z
+    out[1, 2], out[2, 1] = -a * x + b * y * z, a * x + b * y * z

@@ -6,7 +6,7 @@ import numpy as np
 from linkages import BENNETT_ALPHA, BENNETT_BETA, bennett_theta2, load_solved, wrap
 
 from kinprop.analysis.sweep import sweep
-from kinprop.propagation import assembly_for
+from kinprop.engine import compile as assembly_for
 
 
 def test_bennett_condition_holds_in_the_file():

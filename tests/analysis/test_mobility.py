@@ -8,7 +8,7 @@ from linkages import EXAMPLES, load_solved
 
 from kinprop import load_model
 from kinprop.analysis.mobility import RANK_RTOL, gruebler, mobility, row_names
-from kinprop.propagation import assembly_for
+from kinprop.engine import compile as assembly_for
 
 CASES = [
     # file, mobility, Gruebler, joints owning redundant rows

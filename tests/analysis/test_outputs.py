@@ -33,7 +33,7 @@ def test_hardpoints_closed_form(slider_crank):
 
 
 def test_named_point_is_body_frame(slider_crank):
-    from kinprop.propagation.propagate import assembly_for
+    from kinprop.engine import compile as assembly_for
 
     m = slider_crank
     kin = assembly_for(m.mechanism).kinematics(m.design, m.coordinates)

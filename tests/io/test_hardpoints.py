@@ -30,7 +30,7 @@ from kinprop.io.hardpoints import (
     rotation_change,
 )
 from kinprop.model import Model, as_coordinates
-from kinprop.propagation.propagate import assembly_for
+from kinprop.engine import compile as assembly_for
 from kinprop.spatial import is_rotation, rot_z
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"

@@ -31,12 +31,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from kinprop.kinematics import Assembly, forward_kinematics
-from kinprop.kinematics.layout import column_labels, retract
-from kinprop.kinematics.transforms import tree_joint_twists
+from kinprop.engine import Engine as Assembly
+from kinprop.kinematics.layout import column_labels
 from kinprop.model import Body, Design, Joint, Mechanism, as_coordinates
 from kinprop.spatial import euler_E, exp_so3, tilde
 from kinprop.topology import WORLD
+from oracle.forward import forward_kinematics, retract
+from oracle.transforms import tree_joint_twists
 from random_mechanisms import CUT_TYPES, LOOP_KINDS, TREE_TYPES, random_mechanism, suite_mechanisms
 
 EPS = 1e-6

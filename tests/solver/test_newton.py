@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from kinprop import ConvergenceError, propagate
-from kinprop.kinematics import Assembly
+from kinprop.engine import Engine as Assembly
 from kinprop.kinematics.layout import read
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates
 from kinprop.solver import SolveOptions, min_norm_step, newton

@@ -29,9 +29,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
-from kinprop.kinematics.assembly import Assembly
+from kinprop.engine import Engine
 from kinprop.model import Model
-from kinprop.propagation.propagate import assembly_for
+from kinprop.engine import compile as compile_engine
 from kinprop.solver.newton import RANK_RTOL
 
 #: a row is "dependent" when its component in the left null space exceeds this (unit vectors)
@@ -67,8 +67,8 @@ class MobilityReport:
         return self.mobility > self.gruebler
 
 
-def row_names(asm: Assembly) -> list[str]:
-    """``JOINT:constraint`` per row of Phi, unique (``Assembly.row_labels``): ``B:dot1[3]``."""
+def row_names(asm: Engine) -> list[str]:
+    """``JOINT:constraint`` per row of Phi, unique (``Engine.row_labels``): ``B:dot1[3]``."""
     return asm.row_labels
 
 
@@ -82,7 +82,7 @@ def joint_freedom(jtype, is_tree: bool) -> int:
 def gruebler(model: Model) -> int:
     """Spatial Gruebler-Kutzbach count ``6 (n_moving) - sum (6 - f_joint)``."""
     mech = model.mechanism
-    asm = assembly_for(mech)
+    asm = compile_engine(mech)
     tree = set(asm.topology.tree_joints)
     moving = sum(1 for b in mech.bodies if not b.fixed)
     return 6 * moving - sum(6 - joint_freedom(j.jtype, j.name in tree) for j in mech.joints)
@@ -99,7 +99,7 @@ def mobility(model: Model, rtol: float = RANK_RTOL, free: Sequence[str] = ("q",)
     ``free`` selects the Jacobian columns that may move (groups or addresses, as in
     :func:`kinprop.propagation.propagate`); the default is every joint coordinate.
     """
-    asm = assembly_for(model.mechanism)
+    asm = compile_engine(model.mechanism)
     Phi, J = asm.evaluate(model.design, model.coordinates)
     cols = asm.layout.columns(list(free))
     Jq = J[:, cols]

@@ -26,10 +26,10 @@ import numpy as np
 
 from kinprop.analysis.metrics import WheelSpec, metric_names, resolve_metric, wheel_metrics
 from kinprop.errors import AddressError
-from kinprop.kinematics.forward import Kinematics, joint_frames
+from kinprop.engine import Engine, Kinematics
 from kinprop.model import Model
 from kinprop.model.design import Address, parse_address
-from kinprop.propagation.propagate import assembly_for
+from kinprop.engine import compile as compile_engine
 from kinprop.spatial import Array
 
 AXES = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
@@ -50,11 +50,15 @@ class OutputContext:
 
     @classmethod
     def of(
-        cls, model: Model, reference: Model | None = None, wheels: Mapping[str, WheelSpec] | None = None
+        cls,
+        model: Model,
+        reference: Model | None = None,
+        wheels: Mapping[str, WheelSpec] | None = None,
+        engine: Engine | None = None,
     ) -> OutputContext:
         """Forward kinematics of ``model`` at its current state."""
-        asm = assembly_for(model.mechanism)
-        return cls(model, asm.kinematics(model.design, model.coordinates), reference, wheels)
+        eng = engine or compile_engine(model.mechanism)
+        return cls(model, eng.kinematics(model.design, model.coordinates), reference, wheels)
 
     def body_point(self, body: str, point: str) -> Array:
         """Global position of the named point ``point`` of ``body``."""
@@ -72,7 +76,7 @@ class OutputContext:
         mech = self.model.mechanism
         if joint not in mech.joint_names:
             raise AddressError(f"unknown joint {joint!r}; joints are {', '.join(mech.joint_names)}")
-        f = joint_frames(mech, self.model.design, self.kin, joint)
+        f = self.kin.frames[joint]
         return f.P_i if side == "i" else f.P_j
 
     def point(self, spec: str) -> Array:
@@ -122,7 +126,7 @@ def _parse_variable(model: Model, name: str) -> Address:
         ) from None
     if addr.field in ("C_i", "C_j"):
         raise AddressError(f"output {name!r}: orientations are not scalar outputs; use points or metrics")
-    layout = assembly_for(model.mechanism).layout
+    layout = compile_engine(model.mechanism).layout
     if addr.key not in layout:
         known = ", ".join(v.key for v in layout.variables if v.group != "C")
         raise AddressError(f"output {name!r} is not a variable of this model; known: {known}")
@@ -132,7 +136,7 @@ def _parse_variable(model: Model, name: str) -> Address:
 
 
 def _variable_size(model: Model, key: str) -> int:
-    return assembly_for(model.mechanism).layout[key].size
+    return compile_engine(model.mechanism).layout[key].size
 
 
 def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, float]]) -> float:
@@ -186,12 +190,14 @@ def output_function(
     *,
     reference: Model | None = None,
     wheels: Mapping[str, WheelSpec] | None = None,
+    engine: Engine | None = None,
 ) -> tuple[Callable[[Model], Array], list[str]]:
     """``(f, expanded)``: ``f(model) -> array`` of the expanded outputs (names checked once)."""
     expanded = expand_outputs(model, names)
+    eng = engine or compile_engine(model.mechanism)
 
     def f(m: Model) -> Array:
-        ctx = OutputContext.of(m, reference, wheels)
+        ctx = OutputContext.of(m, reference, wheels, eng)
         cache: dict[str, dict[str, float]] = {}
         return np.array([_scalar(ctx, n, cache) for n in expanded])
 
@@ -202,7 +208,7 @@ def output_names(model: Model) -> list[str]:
     """Every scalar output the model defines: coordinates, design variables (not C), named
     points, joint hardpoints and the suspension metrics of its wheel bodies."""
     mech = model.mechanism
-    layout = assembly_for(mech).layout
+    layout = compile_engine(mech).layout
     names: list[str] = []
     for v in layout.variables:
         if v.group == "C":

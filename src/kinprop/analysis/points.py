@@ -16,9 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from kinprop.kinematics.forward import JointFrames, Kinematics, joint_frames
+from kinprop.engine import Engine, JointFrames, Kinematics
 from kinprop.model import Model
-from kinprop.propagation.propagate import assembly_for
+from kinprop.engine import compile as compile_engine
 from kinprop.spatial import Array
 
 
@@ -46,18 +46,16 @@ class Snapshot:
         rack end); ``P_i`` for joints without own coordinates and for tree joints."""
         j = self.model.mechanism.joint(joint)
         f = self.frames[joint]
-        if joint in self.kin.frames or not j.jtype.n_cut_coordinates:
+        if not j.jtype.n_cut_coordinates:  # only cut-only joints (T-D) have own coordinates
             return f.P_i
         u, _ = j.jtype.cut_offset(np.asarray(self.model.coordinates[joint], dtype=float))
         return f.P_i + f.R_i @ u
 
 
-def snapshot(model: Model) -> Snapshot:
+def snapshot(model: Model, engine: Engine | None = None) -> Snapshot:
     """Forward kinematics of ``model`` and the global frames of all its joints."""
-    mech = model.mechanism
-    kin = assembly_for(mech).kinematics(model.design, model.coordinates)
-    frames = {j.name: joint_frames(mech, model.design, kin, j.name) for j in mech.joints}
-    return Snapshot(model, kin, frames)
+    kin = (engine or compile_engine(model.mechanism)).kinematics(model.design, model.coordinates)
+    return Snapshot(model, kin, kin.frames)
 
 
 def _xyz(v: Array) -> list[float]:

@@ -26,9 +26,10 @@ import numpy as np
 from kinprop.analysis.metrics import WheelSpec
 from kinprop.analysis.outputs import output_function
 from kinprop.errors import AddressError
-from kinprop.kinematics.layout import column_labels, read, retract
+from kinprop.engine import Engine
+from kinprop.kinematics.layout import column_labels
 from kinprop.model import Model
-from kinprop.propagation.propagate import assembly_for
+from kinprop.propagation.propagate import engine_for
 from kinprop.spatial import Array
 
 if TYPE_CHECKING:  # pandas (the 'data' extra) is imported only when a frame is built
@@ -55,9 +56,9 @@ class Sensitivity:
         return pd.DataFrame(self.matrix, index=self.rows, columns=self.columns)
 
 
-def weight_vector(model: Model, weights: Mapping[str, float] | None) -> Array:
+def weight_vector(model: Model, weights: Mapping[str, float] | None, engine: Engine | None = None) -> Array:
     """Per-column weights over the whole layout (1 where not given); must be positive."""
-    layout = assembly_for(model.mechanism).layout
+    layout = engine_for(model, engine).layout
     wfull = np.ones(layout.n)
     for sel, w in (weights or {}).items():
         if not float(w) > 0:
@@ -71,29 +72,30 @@ def design_sensitivity(
     wrt: Sequence[str],
     free: Sequence[str] = ("q",),
     weights: Mapping[str, float] | None = None,
+    *,
+    engine: Engine | None = None,
 ) -> Sensitivity:
     """``d x_free / d p`` for the design variables selected by ``wrt`` (groups or addresses)."""
-    asm = assembly_for(model.mechanism)
-    layout = asm.layout
-    _, J = asm.evaluate(model.design, model.coordinates)
+    engine = engine_for(model, engine)
+    layout = engine.layout
+    _, J = engine.evaluate(engine.state_of(model))
     pc = layout.columns(list(wrt))
     if pc.size == 0:
         raise AddressError(f"--wrt {' '.join(wrt)!r} selects no variable of this model")
     wrt_keys = {v.key for v in layout.variables if set(range(v.start, v.start + v.size)) & set(pc.tolist())}
     fc = layout.columns(list(free), exclude=wrt_keys)
-    sw = np.sqrt(weight_vector(model, weights)[fc])
+    sw = np.sqrt(weight_vector(model, weights, engine)[fc])
     S = -sw[:, None] * (np.linalg.pinv(J[:, fc] * sw) @ J[:, pc])
     labels = column_labels(layout)
     return Sensitivity(S, [labels[i] for i in fc], [labels[i] for i in pc], fc, pc)
 
 
-def _step(model: Model, column: int) -> float:
+def _step(engine: Engine, model: Model, column: int) -> float:
     """Central-difference step for one design column: relative to the variable's size."""
-    layout = assembly_for(model.mechanism).layout
-    v = next(v for v in layout.variables if v.start <= column < v.start + v.size)
+    v = next(v for v in engine.layout.variables if v.start <= column < v.start + v.size)
     if v.group == "C":
         return FD_STEP
-    value = read(layout, model.design, model.coordinates, v.key)[column - v.start]
+    value = engine.get(engine.state_of(model), v.key)[column - v.start]
     return FD_STEP * max(1.0, abs(float(value)))
 
 
@@ -106,6 +108,7 @@ def output_sensitivity(
     *,
     reference: Model | None = None,
     wheels: Mapping[str, WheelSpec] | None = None,
+    engine: Engine | None = None,
 ) -> pd.DataFrame:
     """``d(output)/d(p)``: rows the (expanded) outputs ``of``, columns the design columns ``wrt``.
 
@@ -114,25 +117,26 @@ def output_sensitivity(
     ``weights``. Units: output unit per design-variable unit (coordinates in radians or
     length, metric angles in degrees, C columns per radian of body-frame rotation).
     """
-    asm = assembly_for(model.mechanism)
-    layout = asm.layout
-    residual = float(np.linalg.norm(asm.residual(model.design, model.coordinates)))
+    engine = engine_for(model, engine)
+    layout = engine.layout
+    state = engine.state_of(model)
+    residual = float(np.linalg.norm(engine.residual(state)))
     if residual > RESIDUAL_WARN:
         warnings.warn(
             f"sensitivities at a configuration that is not assembled: ||Phi|| = {residual:.3g}",
             RuntimeWarning,
             stacklevel=2,
         )
-    sens = design_sensitivity(model, wrt, free, weights)
-    f, names = output_function(model, of, reference=reference, wheels=wheels)
+    sens = design_sensitivity(model, wrt, free, weights, engine=engine)
+    f, names = output_function(model, of, reference=reference, wheels=wheels, engine=engine)
     D = np.zeros((len(names), sens.wrt_columns.size))
     for k, col in enumerate(sens.wrt_columns):
         direction = np.zeros(layout.n)
         direction[col] = 1.0
         direction[sens.free_columns] = sens.matrix[:, k]
-        h = _step(model, int(col))
-        plus = model.with_state(*retract(layout, model.design, model.coordinates, h * direction))
-        minus = model.with_state(*retract(layout, model.design, model.coordinates, -h * direction))
+        h = _step(engine, model, int(col))
+        plus = engine.model_of(engine.retract(state, h * direction), model)
+        minus = engine.model_of(engine.retract(state, -h * direction), model)
         D[:, k] = (f(plus) - f(minus)) / (2.0 * h)
     import pandas as pd
 

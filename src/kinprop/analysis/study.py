@@ -36,10 +36,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.model import Design, Model
 from kinprop.model.design import as_coordinates, parse_address
-from kinprop.propagation.propagate import apply_changes, assembly_for, propagate, roundoff_floor
+from kinprop.propagation.propagate import apply_changes, propagate, roundoff_floor
 from kinprop.spatial import Array
 
 METHODS = ("grid", "lhs", "mc")
@@ -175,7 +176,7 @@ def _outputs_for(model: Model, names: list[str]) -> dict[str, float]:
 def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, start: int) -> pd.DataFrame:
     """Rows of variants ``start .. start + len(values) - 1`` (runs on a Dask worker too)."""
     model = _model_from_payload(payload)
-    asm = assembly_for(model.mechanism)
+    asm = compile_engine(model.mechanism)
     from kinprop.kinematics.layout import column_labels
 
     labels = column_labels(asm.layout)
@@ -195,78 +196,33 @@ def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, s
     rows: dict[str, Any] = {"variant": np.arange(start, start + n, dtype=np.int64)}
     for k, a in enumerate(spec.addresses):
         rows[a] = values[:, k]
-    comp = None
-    if spec.engine != "reference":
+    eng = compile_engine(model)
+    base = eng.reference
+    if spec.sets:
+        base, _, _ = eng.apply(base, spec.sets)
+    st = eng.stack([base] * n) if n else base
+    ok = np.ones(n, dtype=bool)
+    for i in range(n):
         try:
-            from kinprop.fast import NotCompilableError, compile_model
-
-            comp = compile_model(model.mechanism)
-        except (ImportError, NotCompilableError):
-            if spec.engine == "fast":
-                raise
-    Q = np.full((n, nq), np.nan)
+            for k, a in enumerate(spec.addresses):
+                eng.set(st[i], a, values[i, k])
+        except AddressError:
+            ok[i] = False
+    changed = {parse_address(a).key for a in spec.addresses} | {parse_address(a).key for a in spec.sets}
+    res = eng.solve_batch(st, tuple(spec.free), exclude=changed, tol=spec.tol, max_iter=spec.max_iter)
+    conv = res.converged & ok
+    iters, resid = res.iterations.copy(), res.residual.copy()
+    status = np.array([res.status(i).value if o else "invalid" for i, o in enumerate(ok)], dtype=object)
+    Q = res.state.Q.copy()
     P = np.full((n, len(points), 3), np.nan)
-    status = np.empty(n, dtype=object)
-    conv = np.zeros(n, dtype=bool)
-    iters = np.zeros(n, dtype=np.int64)
-    resid = np.full(n, np.nan)
-    outs: dict[str, Array] = {}
     states: list[tuple[Design, Mapping[str, Array]] | None] = [None] * n
-    if comp is not None:
-        from kinprop.fast import Solver, pack
-        from kinprop.fast.compiled import STATUS
-        from kinprop.fast.solve import body_poses
-
-        st = pack(comp, model.design, model.coordinates)
-        st = type(st)(*(np.repeat(a, n, axis=0) for a in (st.Q, st.S, st.C, st.L)))
-        ok = np.ones(n, dtype=bool)
-        for k, a in enumerate(spec.addresses):
-            c = comp.column(a)
-            kind, j, side, x = comp.colinfo[c]
-            v = values[:, k]
-            if kind == 0:
-                st.Q[:, c] = v
-            elif kind == 1:
-                st.S[:, j, side, x] = v
-            elif kind == 3:
-                st.L[:, j] = v
-                ok &= v > 0
-        changed = {parse_address(a).key for a in spec.addresses} | {parse_address(a).key for a in spec.sets}
-        tol = max(spec.tol, roundoff_floor(model))  # the reference's stopping rule
-        res = Solver(comp, spec.free, exclude=changed, tol=tol, max_iter=spec.max_iter).solve(st, copy=False)
-        conv = res.converged & ok
-        iters, resid = res.iterations.copy(), res.residual.copy()
-        status = np.array(
-            [STATUS[int(s)] if o else "invalid" for s, o in zip(res.status, ok, strict=True)], dtype=object
-        )
-        Q = res.state.Q.copy()
-        r, A = body_poses(comp, res.state)
+    outs: dict[str, Array] = {}
+    for i in np.flatnonzero(conv):
+        r, A, _, _ = eng.poses(res.state[i])
         for k, (b, p, _) in enumerate(points):
-            P[:, k] = r[:, b] + A[:, b] @ p
+            P[i, k] = r[b] + A[b] @ p
         if out_names:
-            from kinprop.fast import unpack
-
-            for i in np.flatnonzero(conv):
-                states[i] = unpack(comp, res.state, int(i))
-    else:
-        for i in range(n):
-            changes: dict[str, object] = {**spec.sets, **{a: values[i, k] for k, a in enumerate(spec.addresses)}}
-            try:
-                prop = propagate(model, changes, tuple(spec.free), tol=spec.tol, max_iter=spec.max_iter)
-            except AddressError:
-                status[i] = "invalid"
-                continue
-            rr = prop.result
-            conv[i], iters[i], resid[i] = rr.converged, rr.iterations, rr.residual_norm
-            status[i] = rr.status
-            Q[i] = (
-                np.concatenate([np.asarray(prop.after.coordinates[v.joint], dtype=float) for v in qcols]) if nq else []
-            )
-            kin = asm.kinematics(prop.after.design, prop.after.coordinates)
-            body_names = [b.name for b in model.mechanism.bodies]
-            for k, (b, p, _) in enumerate(points):
-                P[i, k] = kin.r[body_names[b]] + kin.A[body_names[b]] @ p
-            states[i] = (prop.after.design, prop.after.coordinates)
+            states[i] = eng.unpack(res.state[i])
     Q[~conv] = np.nan
     P[~conv] = np.nan
     for i in range(n):
@@ -358,7 +314,7 @@ def run_study(
     # validate every address once (component, group, existence) with the reference code path
     for a in addrs:
         addr = parse_address(a)
-        lay = assembly_for(model.mechanism).layout
+        lay = compile_engine(model.mechanism).layout
         if addr.key in lay and lay[addr.key].group == "C":
             raise AddressError(f"--vary {a!r}: orientations cannot be varied component by component")
         if addr.key in lay and lay[addr.key].size > 1 and addr.index is None:

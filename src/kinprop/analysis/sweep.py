@@ -36,12 +36,13 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from kinprop.engine import Engine
+from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, SingularityWarning
 from kinprop.model import Model
 from kinprop.propagation.propagate import (
     SINGULAR_RTOL,
     Propagation,
-    assembly_for,
     propagate,
 )
 from kinprop.spatial import Array
@@ -74,7 +75,7 @@ class Drive:
 
 def _coordinate_info(model: Model, joint: str) -> tuple[int, tuple[int, ...]]:
     """(number of coordinates, indices that are angles in model units) of a joint."""
-    asm = assembly_for(model.mechanism)
+    asm = compile_engine(model.mechanism)
     if joint not in model.mechanism.joint_names:
         raise AddressError(f"--drive: unknown joint {joint!r}; joints are {', '.join(model.mechanism.joint_names)}")
     key = f"{joint}.q"
@@ -113,7 +114,7 @@ def parse_drive(model: Model, text: str) -> Drive:
 
 def coordinate_columns(model: Model) -> list[tuple[str, str, int, bool]]:
     """``(column, joint, index, is_angle_in_degrees)`` for every coordinate of the layout."""
-    asm = assembly_for(model.mechanism)
+    asm = compile_engine(model.mechanism)
     out = []
     for v in asm.layout.group("q"):
         _, angles = _coordinate_info(model, v.joint)
@@ -282,7 +283,8 @@ def sweep(
     if any(c.startswith(tuple(f"{d.joint}.q" for d in dr)) for c in (changes or {})):
         raise AddressError("--set: a driven coordinate cannot also be set")
     names = list(default_outputs(model) if outputs is None else outputs)
-    fout, expanded = output_function(model, names)
+    engine = compile_engine(model.mechanism)
+    fout, expanded = output_function(model, names, engine=engine)
     coord_cols = coordinate_columns(model)
     drive_cols = [d.label for d in dr]
     # an output naming a coordinate is already a column (in model units, not radians)
@@ -303,7 +305,7 @@ def sweep(
                 cur[d.index] = math.radians(v) if d.angle else v
                 step_changes[key] = cur
             mode = "continuation" if k == 0 else "fallback" if continuation else "newton"
-            prop, note = _solve_step(good, step_changes, free, tol, max_iter, mode)
+            prop, note = _solve_step(engine, good, step_changes, free, tol, max_iter, mode)
             r = prop.result
             row: dict[str, Any] = dict.fromkeys(columns, float("nan"))
             row.update({"step": k, **{d.label: float(d.values[k]) for d in dr}})
@@ -344,19 +346,27 @@ def sweep(
 
 
 def _solve_step(
-    good: Model, changes: Mapping[str, object], free: Sequence[str], tol: float, max_iter: int, mode: str
+    engine: Engine,
+    good: Model,
+    changes: Mapping[str, object],
+    free: Sequence[str],
+    tol: float,
+    max_iter: int,
+    mode: str,
 ) -> tuple[Propagation, str]:
     """``mode``: "newton" (plain), "fallback" (continuation when Newton fails) or
     "continuation". Returns the propagation and a note (the continuation's message) or ``""``."""
     if mode != "continuation":
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", SingularityWarning)
-            prop = propagate(good, changes, free, tol=tol, max_iter=max_iter)
+            prop = propagate(good, changes, free, tol=tol, max_iter=max_iter, engine=engine)
         if prop.converged or mode == "newton":
             return prop, ""
     from kinprop.propagation.continuation import propagate_continuation
 
-    cont = propagate_continuation(good, changes, free, tol=tol, max_iter=min(max_iter, 20), min_step=1e-4)
+    cont = propagate_continuation(
+        good, changes, free, tol=tol, max_iter=min(max_iter, 20), min_step=1e-4, engine=engine
+    )
     if cont.converged:
         return cont.propagation, f"continuation: {cont.message}"
     failed = replace(cont.propagation.result, converged=False, message=cont.message)

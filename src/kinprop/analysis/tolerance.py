@@ -23,10 +23,10 @@ import numpy as np
 
 from kinprop.analysis.sensitivity import design_sensitivity
 from kinprop.errors import AddressError
-from kinprop.kinematics.layout import column_labels, retract
+from kinprop.kinematics.layout import column_labels
 from kinprop.model import Model
 from kinprop.model.design import parse_address
-from kinprop.propagation.propagate import assembly_for
+from kinprop.engine import compile as compile_engine
 from kinprop.spatial import Array
 
 
@@ -42,7 +42,7 @@ class ToleranceResult:
 
 
 def _inputs(model: Model, tolerances: Mapping[str, float]) -> tuple[list[int], Array]:
-    layout = assembly_for(model.mechanism).layout
+    layout = compile_engine(model.mechanism).layout
     cols: dict[int, float] = {}
     for text, sigma in tolerances.items():
         if not sigma > 0:
@@ -61,12 +61,10 @@ def _inputs(model: Model, tolerances: Mapping[str, float]) -> tuple[list[int], A
 def _output_value(model: Model, name: str, labels: list[str]) -> float:
     if name in labels:
         col = labels.index(name)
-        layout = assembly_for(model.mechanism).layout
-        for v in layout.variables:
+        eng = compile_engine(model.mechanism)
+        for v in eng.layout.variables:
             if v.start <= col < v.start + v.size:
-                from kinprop.kinematics.layout import read
-
-                return float(read(layout, model.design, model.coordinates, v.key)[col - v.start])
+                return float(eng.get(eng.state_of(model), v.key)[col - v.start])
     from kinprop.analysis.outputs import evaluate_outputs
 
     return float(evaluate_outputs(model, [name])[name])
@@ -74,7 +72,7 @@ def _output_value(model: Model, name: str, labels: list[str]) -> float:
 
 def expand_names(model: Model, names: Sequence[str]) -> list[str]:
     """Scalar output names: ``J.q`` of a multi-coordinate joint becomes ``J.q[0]``, ...; others via outputs."""
-    labels = column_labels(assembly_for(model.mechanism).layout)
+    labels = column_labels(compile_engine(model.mechanism).layout)
     out: list[str] = []
     for n in names:
         if n in labels:
@@ -102,12 +100,12 @@ def tolerance_analysis(
     ``tolerances``: address -> standard deviation; ``free``: what absorbs the variations
     (as in a propagation); ``fixed``: addresses that are never free (e.g. set drives).
     """
-    asm = assembly_for(model.mechanism)
+    asm = compile_engine(model.mechanism)
     layout = asm.layout
     labels = column_labels(layout)
     pcols, sigma = _inputs(model, tolerances)
     wrt = [labels[c] for c in pcols]
-    sens = design_sensitivity(model, wrt, free=[*free])
+    sens = design_sensitivity(model, wrt, free=[*free], engine=asm)
     # design_sensitivity frees everything in `free` except the wrt keys; drop `fixed` addresses too
     fixed_cols = set(layout.columns(list(fixed)).tolist()) if fixed else set()
     if fixed_cols & set(sens.free_columns.tolist()):
@@ -140,8 +138,8 @@ def tolerance_analysis(
                 dx = np.zeros(layout.n)
                 dx[free_cols] = sgn * h * S[:, k]
                 dx[c] += sgn * h
-                design, coords = retract(layout, model.design, model.coordinates, dx)
-                vals.append(_output_value(model.with_state(design, coords), name, labels))
+                moved = asm.model_of(asm.retract(asm.state_of(model), dx), model)
+                vals.append(_output_value(moved, name, labels))
             G[i, k] = (vals[0] - vals[1]) / (2 * h)
     cov = G @ np.diag(sigma**2) @ G.T
     return ToleranceResult(names, nominal, np.sqrt(np.diag(cov)), cov, G, wrt, sigma)
@@ -160,7 +158,7 @@ def monte_carlo(
     (a design study with an explicit plan; failed variants are dropped)."""
     from kinprop.analysis.study import run_study
 
-    layout = assembly_for(model.mechanism).layout
+    layout = compile_engine(model.mechanism).layout
     labels = column_labels(layout)
     pcols, sigma = _inputs(model, tolerances)
     addrs = [labels[c] for c in pcols]

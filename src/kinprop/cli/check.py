@@ -12,10 +12,10 @@ from rich.table import Table
 from kinprop.analysis.mobility import MobilityReport, mobility, row_names
 from kinprop.cli.app import EXIT_NOT_CONVERGED, app, fail, handles_user_errors, out, print_json
 from kinprop.io import load_model
-from kinprop.kinematics.assembly import Assembly
+from kinprop.engine import Engine
 from kinprop.model import Model
 from kinprop.propagation import assemble
-from kinprop.propagation.propagate import assembly_for
+from kinprop.engine import compile as compile_engine
 
 #: ||Phi|| below which the configuration counts as assembled (the rank is then reliable)
 ASSEMBLED_TOL = 1e-8
@@ -26,7 +26,7 @@ CASES = {
 }
 
 
-def joint_rows(asm: Assembly) -> dict[str, list[str]]:
+def joint_rows(asm: Engine) -> dict[str, list[str]]:
     """Constraint-row labels of Phi per joint (cut-joint rows, Euler normalisation rows)."""
     labels = row_names(asm)
     rows: dict[str, list[str]] = {}
@@ -38,7 +38,7 @@ def joint_rows(asm: Assembly) -> dict[str, list[str]]:
 def check_json(model: Model, rep: MobilityReport, evaluated_at: str) -> dict[str, Any]:
     """The report as one JSON object (see ``kinprop check --help``)."""
     mech = model.mechanism
-    asm = assembly_for(mech)
+    asm = compile_engine(mech)
     topo = asm.topology
     tree = set(topo.tree_joints)
     rows = joint_rows(asm)

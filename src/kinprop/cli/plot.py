@@ -12,7 +12,7 @@ from rich.markup import escape
 from kinprop.cli.app import app, err, handles_user_errors, out
 from kinprop.io import load_model
 from kinprop.model import Model
-from kinprop.propagation.propagate import assembly_for
+from kinprop.engine import compile as compile_engine
 
 #: ||Phi|| above which a drawn model is flagged as not assembled
 DRAW_NOTE_TOL = 1e-6
@@ -30,7 +30,7 @@ def parse_view(text: str) -> tuple[float, float]:
 
 def note_if_unassembled(model: Model, path: Path | str) -> None:
     """A stderr note when a model is drawn away from an assembled configuration."""
-    res = float(np.linalg.norm(assembly_for(model.mechanism).residual(model.design, model.coordinates)))
+    res = float(np.linalg.norm(compile_engine(model.mechanism).residual(model.design, model.coordinates)))
     if res > DRAW_NOTE_TOL:
         err.print(
             escape(

@@ -1,4 +1,4 @@
-"""The four basic constraints of section 2 (eqs. 1, 8, 15, 17).
+"""The four basic constraints of section 2 (eqs. 1, 8, 15, 17), written once (compiled).
 
 Each is evaluated on the joint-frame geometry of a cut joint:
 
@@ -6,10 +6,12 @@ Each is evaluated on the joint-frame geometry of a cut joint:
 * ``R_i``, ``R_j`` = ``A_i C_ij``, ``A_j C_ji``: joint-frame orientations, global;
 * ``l``   = the joint's length.
 
-and returns its value with partials with respect to ``d``, to the virtual rotations ``w_i``,
-``w_j`` of the two joint frames (global), and to ``l``. The body-level partials of Table 1
-(``Phi_r``, ``Phi_pi``, ``Phi_s'``, ``Phi_xi'``) follow by the chain rule in
-:mod:`kinprop.kinematics.assembly`; ``tests/constraints`` checks them against Table 1.
+and writes its rows' values with partials with respect to ``d``, to the virtual rotations
+``w_i``, ``w_j`` of the two joint frames (global), and to ``l``. The body-level partials of
+Table 1 (``Phi_r``, ``Phi_pi``, ``Phi_s'``, ``Phi_xi'``) follow by the chain rule in
+:mod:`kinprop.kinematics.kernels`; ``tests/constraints`` checks them against Table 1.
+The classes at the end describe a joint's cut form (kind, axes) and evaluate one constraint
+from Python through the same compiled rows.
 """
 
 from __future__ import annotations
@@ -19,7 +21,62 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 
-from kinprop.spatial import EZ, Array, tilde
+from kinprop.jit import njit
+from kinprop.spatial import EZ, Array, cross_into
+
+DOT1, DOT2, SPHERICAL, DISTANCE = 0, 1, 2, 3
+#: rows per kind
+ROWS = (1, 1, 3, 1)
+
+
+@njit
+def _axis(R, axes, off, out):
+    for x in range(3):
+        out[x] = R[x, 0] * axes[off] + R[x, 1] * axes[off + 1] + R[x, 2] * axes[off + 2]
+
+
+@njit
+def basic_rows(kind, on_j, axes, d, R_i, R_j, l, r, Phi, Phi_d, Phi_wi, Phi_wj, Phi_l):
+    """Rows ``r, r+1, ...`` of one basic constraint into ``Phi[r]`` and the partial rows
+    (which the caller has zeroed); returns the number of rows written.
+
+    * dot-1 (eq. 1): ``a_i . a_j``, ``a_i = R_i a''_i``, ``a_j = R_j a''_j`` (``axes = [a''_i, a''_j]``);
+      ``Phi_wi = a_i x a_j``, ``Phi_wj = a_j x a_i``;
+    * dot-2 (eq. 8): ``a . d`` with ``a = R a''`` on frame i (or j when ``on_j``);
+      ``Phi_d = a``, ``Phi_w = a x d``;
+    * spherical (eq. 15): ``d`` (3 rows), ``Phi_d = I``;
+    * distance (eq. 17): ``d . d - l^2``, ``Phi_d = 2 d``, ``Phi_l = -2 l``.
+    """
+    a = np.empty(3)
+    b = np.empty(3)
+    if kind == DOT1:
+        _axis(R_i, axes, 0, a)
+        _axis(R_j, axes, 3, b)
+        Phi[r] = a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+        cross_into(a, b, Phi_wi[r])
+        cross_into(b, a, Phi_wj[r])
+        return 1
+    if kind == DOT2:
+        if on_j:
+            _axis(R_j, axes, 0, a)
+            cross_into(a, d, Phi_wj[r])
+        else:
+            _axis(R_i, axes, 0, a)
+            cross_into(a, d, Phi_wi[r])
+        Phi[r] = a[0] * d[0] + a[1] * d[1] + a[2] * d[2]
+        for x in range(3):
+            Phi_d[r, x] = a[x]
+        return 1
+    if kind == SPHERICAL:
+        for x in range(3):
+            Phi[r + x] = d[x]
+            Phi_d[r + x, x] = 1.0
+        return 3
+    Phi[r] = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - l * l
+    for x in range(3):
+        Phi_d[r, x] = 2.0 * d[x]
+    Phi_l[r] = -2.0 * l
+    return 1
 
 
 class BasicValue(NamedTuple):
@@ -33,40 +90,51 @@ class BasicValue(NamedTuple):
 @dataclass(frozen=True)
 class BasicConstraint:
     rows: ClassVar[int] = 1
+    kind: ClassVar[int] = -1
+
+    def axes(self) -> tuple[Array, Array]:
+        """``(a''_i, a''_j)`` for the kernel's axis table (zeros when unused)."""
+        return np.zeros(3), np.zeros(3)
+
+    @property
+    def on_j(self) -> bool:
+        return False
 
     def evaluate(self, d: Array, R_i: Array, R_j: Array, l: float) -> BasicValue:
-        raise NotImplementedError
-
-
-def _zeros(m: int) -> tuple[Array, Array, Array, Array]:
-    return np.zeros((m, 3)), np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m)
+        m = self.rows
+        Phi, Pd, Wi, Wj, Pl = np.zeros(m), np.zeros((m, 3)), np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m)
+        axes = np.concatenate(self.axes()).astype(float)
+        basic_rows(self.kind, self.on_j, axes, np.asarray(d, float), np.asarray(R_i, float),
+                   np.asarray(R_j, float), float(l), 0, Phi, Pd, Wi, Wj, Pl)  # fmt: skip
+        return BasicValue(Phi, Pd, Wi, Wj, Pl)
 
 
 @dataclass(frozen=True)
 class Dot1(BasicConstraint):
     """Dot-1 (eq. 1): ``a_i . a_j = 0`` for body-fixed axes ``a_i = R_i a''_i``, ``a_j = R_j a''_j``."""
 
+    kind: ClassVar[int] = DOT1
     a_i: Array = field(default_factory=lambda: EZ)
     a_j: Array = field(default_factory=lambda: EZ)
 
-    def evaluate(self, d, R_i, R_j, l):
-        a, b = R_i @ self.a_i, R_j @ self.a_j
-        Phi_d, _, _, Phi_l = _zeros(1)
-        return BasicValue(np.array([a @ b]), Phi_d, (-b @ tilde(a))[None], (-a @ tilde(b))[None], Phi_l)
+    def axes(self):
+        return np.asarray(self.a_i, float), np.asarray(self.a_j, float)
 
 
 @dataclass(frozen=True)
 class Dot2(BasicConstraint):
     """Dot-2 (eq. 8): ``a . d_ij = 0`` with ``a`` fixed in joint frame i (or j with ``on="j"``)."""
 
+    kind: ClassVar[int] = DOT2
     a: Array = field(default_factory=lambda: EZ)
     on: str = "i"
 
-    def evaluate(self, d, R_i, R_j, l):
-        a = (R_i if self.on == "i" else R_j) @ self.a
-        _, Phi_wi, Phi_wj, Phi_l = _zeros(1)
-        (Phi_wi if self.on == "i" else Phi_wj)[0] = -d @ tilde(a)
-        return BasicValue(np.array([a @ d]), a[None].copy(), Phi_wi, Phi_wj, Phi_l)
+    def axes(self):
+        return np.asarray(self.a, float), np.zeros(3)
+
+    @property
+    def on_j(self) -> bool:
+        return self.on == "j"
 
 
 @dataclass(frozen=True)
@@ -74,16 +142,11 @@ class Spherical(BasicConstraint):
     """Spherical (eq. 15): ``d_ij = 0``; three rows."""
 
     rows: ClassVar[int] = 3
-
-    def evaluate(self, d, R_i, R_j, l):
-        _, Phi_wi, Phi_wj, Phi_l = _zeros(3)
-        return BasicValue(d.copy(), np.eye(3), Phi_wi, Phi_wj, Phi_l)
+    kind: ClassVar[int] = SPHERICAL
 
 
 @dataclass(frozen=True)
 class Distance(BasicConstraint):
     """Distance (eq. 17): ``d . d - l^2 = 0``."""
 
-    def evaluate(self, d, R_i, R_j, l):
-        _, Phi_wi, Phi_wj, _ = _zeros(1)
-        return BasicValue(np.array([d @ d - l * l]), 2.0 * d[None], Phi_wi, Phi_wj, np.array([-2.0 * l]))
+    kind: ClassVar[int] = DISTANCE

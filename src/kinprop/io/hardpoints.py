@@ -38,10 +38,10 @@ from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.loader import build_or_report
 from kinprop.io.schema import HardpointFile, HardpointJointSpec
 from kinprop.joints import joint_type
-from kinprop.kinematics.forward import JointFrames
+from kinprop.engine import JointFrames
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates, parse_address
 from kinprop.model.mechanism import validate_structure
-from kinprop.propagation.propagate import assembly_for
+from kinprop.engine import compile as compile_engine
 from kinprop.spatial import EY, EZ, Array, is_rotation, log_so3
 from kinprop.topology import WORLD, build_topology
 
@@ -373,7 +373,7 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
     """
     mech = model.mechanism
     frames = joint_frames(model)
-    kin = assembly_for(mech).kinematics(model.design, model.coordinates)
+    kin = compile_engine(mech).kinematics(model.design, model.coordinates)
     bodies: dict[str, Any] = {}
     for b in mech.bodies:
         spec: dict[str, Any] = {}
@@ -417,7 +417,7 @@ def joint_mismatch(model: Model) -> dict[str, float]:
     Zero (to rounding) for an assembled model. A hardpoint file has one point (or axis) where
     the two sides of a joint meet, so :func:`model_to_hardpoints` drops these gaps.
     """
-    asm = assembly_for(model.mechanism)
+    asm = compile_engine(model.mechanism)
     phi = asm.residual(model.design, model.coordinates)
     return {b.joint: float(np.linalg.norm(phi[b.rows])) for b in asm.row_blocks if b.kind == "cut"}
 
@@ -426,7 +426,7 @@ def joint_mismatch(model: Model) -> dict[str, float]:
 
 
 def _body_pose(model: Model, body: str) -> tuple[Array, Array]:
-    kin = assembly_for(model.mechanism).kinematics(model.design, model.coordinates)
+    kin = compile_engine(model.mechanism).kinematics(model.design, model.coordinates)
     return kin.r[body], kin.A[body]
 
 

@@ -6,9 +6,9 @@ from typing import Any
 
 import numpy as np
 
+from kinprop.engine import compile as compile_engine
 from kinprop.analysis.points import joint_hardpoints, named_points
-from kinprop.kinematics.layout import read
-from kinprop.propagation.propagate import Propagation, assembly_for
+from kinprop.propagation.propagate import Propagation
 from kinprop.spatial import log_so3
 
 
@@ -58,8 +58,9 @@ def variable_rows(prop: Propagation) -> list[dict[str, Any]]:
 
     ``C`` variables report the rotation angle [deg] of after relative to before.
     """
-    asm = assembly_for(prop.before.mechanism)
+    asm = prop.engine or compile_engine(prop.before.mechanism)
     layout = asm.layout
+    st_before, st_after = asm.state_of(prop.before), asm.state_of(prop.after)
     changed = set(prop.changed_variables())
     set_keys = {k.split("[")[0] for k in prop.changes}
     rows: list[dict[str, Any]] = []
@@ -72,8 +73,8 @@ def variable_rows(prop: Propagation) -> list[dict[str, Any]]:
                 {"variable": v.key, "unit": "deg", "before": [0.0], "after": [ang], "change": ang, "role": role}
             )
             continue
-        b = read(layout, prop.before.design, prop.before.coordinates, v.key).copy()
-        a = read(layout, prop.after.design, prop.after.coordinates, v.key).copy()
+        b = asm.get(st_before, v.key)
+        a = asm.get(st_after, v.key)
         unit = ""
         if v.group == "q" and v.joint in asm.topology.tree_joints:
             idx = list(prop.before.mechanism.joint(v.joint).jtype.angle_indices)

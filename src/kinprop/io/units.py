@@ -7,12 +7,12 @@ from collections.abc import Mapping
 import numpy as np
 
 from kinprop.model import Model, parse_address
-from kinprop.propagation.propagate import assembly_for
+from kinprop.engine import compile as compile_engine
 
 
 def angle_indices(model: Model, joint: str) -> list[int]:
     """Indices of a joint's coordinates that are angles (tree joints only)."""
-    if joint not in assembly_for(model.mechanism).topology.tree_joints:
+    if joint not in compile_engine(model.mechanism).topology.tree_joints:
         return []
     return list(model.mechanism.joint(joint).jtype.angle_indices)
 

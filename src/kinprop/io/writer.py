@@ -12,7 +12,7 @@ import numpy as np
 import yaml
 
 from kinprop.model import Model
-from kinprop.propagation.propagate import assembly_for
+from kinprop.engine import compile as compile_engine
 
 
 def atomic_write(path: str | Path, data: str | bytes) -> None:
@@ -42,7 +42,7 @@ def _floats(a: Any) -> Any:
 def model_to_data(model: Model) -> dict[str, Any]:
     """Frame-style file data at full precision (floats round-trip exactly)."""
     mech = model.mechanism
-    asm = assembly_for(mech)
+    asm = compile_engine(mech)
     tree = set(asm.topology.tree_joints)
     deg = model.units.get("angle") == "deg"
     bodies: dict[str, Any] = {}

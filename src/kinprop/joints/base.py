@@ -13,12 +13,28 @@ A joint connects joint frame i (on body i, placed by ``s_i``/``C_i``) to joint f
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from kinprop.constraints.basic import BasicConstraint
-from kinprop.spatial import Array
+from kinprop.jit import njit
+from kinprop.spatial import Array, eye_into
+
+
+@njit
+def no_placement(q: Array, A: Array, d: Array) -> None:
+    """Joints without tree coordinates: frame j coincides with frame i."""
+    eye_into(A)
+    d[:] = 0.0
+
+
+@njit
+def no_motion(q: Array, A: Array, d: Array, dd: Array, H: Array) -> None:
+    dd[:, :] = 0.0
+    H[:, :] = 0.0
 
 
 @dataclass(frozen=True)
@@ -39,6 +55,13 @@ class JointType:
     tree: bool = True
     cut: bool = True
 
+    #: the kernel's code for this type (:mod:`kinprop.joints.dispatch`)
+    code: ClassVar[int] = -1
+    #: compiled ``(q, A, d)``: writes ``A''(q)``, ``d''(q)`` (3x3, 3) in place
+    placement_kernel: ClassVar[Callable[..., None]] = no_placement
+    #: compiled ``(q, A, d, dd, H)``: writes ``dd''/dq``, ``H''`` (3 x n) given the placement
+    motion_kernel: ClassVar[Callable[..., None]] = no_motion
+
     @property
     def euler(self) -> slice | None:
         """Slice of the tree coordinates holding Euler parameters (normalisation row)."""
@@ -53,7 +76,9 @@ class JointType:
 
     def placement(self, q: Array) -> tuple[Array, Array]:
         """``(A''(q), d''(q))``: orientation and origin of frame j in frame i."""
-        return np.eye(3), np.zeros(3)
+        A, d = np.empty((3, 3)), np.empty(3)
+        type(self).placement_kernel(np.asarray(q, dtype=float), A, d)
+        return A, d
 
     def motion(self, q: Array) -> tuple[Array, Array]:
         """``(dd''/dq, H'')``, each 3 x n, in frame i.
@@ -61,8 +86,11 @@ class JointType:
         For Euler parameters these are the paper's tangent columns ``H'' = 2E(p)`` and
         ``dd''/dp = -tilde(d'') H''`` (eq. 39; PAPER-NOTES, S-T joint).
         """
-        n = self.n_coordinates
-        return np.zeros((3, n)), np.zeros((3, n))
+        q = np.asarray(q, dtype=float)
+        A, d = self.placement(q)
+        dd, H = np.zeros((3, self.n_coordinates)), np.zeros((3, self.n_coordinates))
+        type(self).motion_kernel(q, A, d, dd, H)
+        return dd, H
 
     # --- cut form ----------------------------------------------------------------------------
     def constraints(self) -> tuple[BasicConstraint, ...]:

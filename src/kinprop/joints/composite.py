@@ -1,15 +1,34 @@
-"""The paper's composite joints (section 5): S-T, R-S and T-D."""
+"""The paper's composite joints (section 5): S-T, R-S and T-D; and the free tree joint."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import numpy as np
+from typing import ClassVar
 
 from kinprop.constraints.basic import Distance, Dot2
+from kinprop.jit import njit
 from kinprop.joints.base import JointType
-from kinprop.spatial import EX, EY, EZ, euler_E, euler_to_matrix, tilde
+from kinprop.spatial import EX, EY, EZ, euler_A_into, euler_E_into
 
+ST_CODE, FREE_CODE, TD_CODE = 6, 7, 8
+
+@njit
+def st_placement(q, A, d):
+    euler_A_into(q[0:4], A)
+    for x in range(3):
+        d[x] = A[x, 2] * q[4]
+
+@njit
+def st_motion(q, A, d, dd, H):
+    H[:, :] = 0.0
+    euler_E_into(q[0:4], 2.0, H, 0)
+    # dd/dp = -tilde(d) H: the strut axis turns with the sphere (moment arm, PAPER-NOTES)
+    for y in range(4):
+        dd[0, y] = -(d[1] * H[2, y] - d[2] * H[1, y])
+        dd[1, y] = -(d[2] * H[0, y] - d[0] * H[2, y])
+        dd[2, y] = -(d[0] * H[1, y] - d[1] * H[0, y])
+    for x in range(3):
+        dd[x, 4] = A[x, 2]
 
 @dataclass(frozen=True)
 class SphericalTranslational(JointType):
@@ -23,22 +42,12 @@ class SphericalTranslational(JointType):
     description: str = "Euler parameters then translation along the rotated z'' (5 coordinates)"
     n_coordinates: int = 5
     euler_start: int | None = 0
-
-    def placement(self, q):
-        A = euler_to_matrix(q[0:4])
-        return A, A @ EZ * q[4]
-
-    def motion(self, q):
-        A, d = self.placement(q)
-        H = np.zeros((3, 5))
-        H[:, :4] = 2.0 * euler_E(q[0:4])
-        dd = -tilde(d) @ H  # the strut axis turns with the sphere (moment arm, PAPER-NOTES)
-        dd[:, 4] = A @ EZ
-        return dd, H
+    code: ClassVar[int] = ST_CODE
+    placement_kernel = st_placement
+    motion_kernel = st_motion
 
     def constraints(self):
         return (Dot2(EX, on="j"), Dot2(EY, on="j"))
-
 
 @dataclass(frozen=True)
 class RevoluteSpherical(JointType):
@@ -52,16 +61,20 @@ class RevoluteSpherical(JointType):
     def constraints(self):
         return (Dot2(EZ), Distance())
 
-
 @dataclass(frozen=True)
 class TranslationalDistance(JointType):
-    """T-D: a rack sliding q3 along z''_i on body i, a rod of length l to body j (eqs. 53-57)."""
+    """T-D: a rack sliding q3 along z''_i on body i, a rod of length l to body j (eqs. 53-57).
+
+    Its own coordinate slides the point on body i: ``u = e_z q3`` in joint frame i (the
+    kernel's cut offset for this code).
+    """
 
     name: str = "translational-distance"
     description: str = "rack along z''_i (1 own coordinate) and rod of length l (cut only)"
     n_cut_coordinates: int = 1
     has_length: bool = True
     tree: bool = False
+    code: ClassVar[int] = TD_CODE
 
     def constraints(self):
         return (Distance(),)
@@ -69,6 +82,17 @@ class TranslationalDistance(JointType):
     def cut_offset(self, qc):
         return EZ * qc[0], EZ[:, None].copy()
 
+@njit
+def free_placement(q, A, d):
+    euler_A_into(q[3:7], A)
+    d[0], d[1], d[2] = q[0], q[1], q[2]
+
+@njit
+def free_motion(q, A, d, dd, H):
+    dd[:, :] = 0.0
+    H[:, :] = 0.0
+    dd[0, 0], dd[1, 1], dd[2, 2] = 1.0, 1.0, 1.0
+    euler_E_into(q[3:7], 2.0, H, 3)
 
 @dataclass(frozen=True)
 class Free(JointType):
@@ -82,13 +106,8 @@ class Free(JointType):
     n_coordinates: int = 7
     euler_start: int | None = 3
     cut: bool = False
+    code: ClassVar[int] = FREE_CODE
+    placement_kernel = free_placement
+    motion_kernel = free_motion
 
-    def placement(self, q):
-        return euler_to_matrix(q[3:7]), np.array(q[0:3], dtype=float)
-
-    def motion(self, q):
-        dd = np.zeros((3, 7))
-        dd[:, :3] = np.eye(3)
-        H = np.zeros((3, 7))
-        H[:, 3:] = 2.0 * euler_E(q[3:7])
-        return dd, H
+__all__ = ["Free", "RevoluteSpherical", "SphericalTranslational", "TranslationalDistance"]

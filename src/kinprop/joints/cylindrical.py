@@ -3,12 +3,28 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import numpy as np
+from typing import ClassVar
 
 from kinprop.constraints.basic import Dot1, Dot2
+from kinprop.jit import njit
 from kinprop.joints.base import JointType
-from kinprop.spatial import EX, EY, EZ, rot_z
+from kinprop.spatial import EX, EY, EZ, rot_z_into
+
+CODE = 2
+
+
+@njit
+def placement(q, A, d):
+    rot_z_into(q[0], A)
+    d[0], d[1], d[2] = 0.0, 0.0, q[1]
+
+
+@njit
+def motion(q, A, d, dd, H):
+    dd[:, :] = 0.0
+    H[:, :] = 0.0
+    H[2, 0] = 1.0
+    dd[2, 1] = 1.0
 
 
 @dataclass(frozen=True)
@@ -17,16 +33,9 @@ class Cylindrical(JointType):
     description: str = "rotation about and translation along z'' (2 coordinates)"
     n_coordinates: int = 2
     angle_indices: tuple[int, ...] = (0,)
-
-    def placement(self, q):
-        return rot_z(q[0]), EZ * q[1]
-
-    def motion(self, q):
-        dd = np.zeros((3, 2))
-        dd[:, 1] = EZ
-        H = np.zeros((3, 2))
-        H[:, 0] = EZ
-        return dd, H
+    code: ClassVar[int] = CODE
+    placement_kernel = placement
+    motion_kernel = motion
 
     def constraints(self):
         return (Dot1(EX, EZ), Dot1(EY, EZ), Dot2(EX), Dot2(EY))

@@ -3,16 +3,20 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 from kinprop.constraints.basic import Dot1, Spherical
 from kinprop.joints.base import JointType
 from kinprop.spatial import EX, EY, EZ
+
+CODE = 5
 
 
 @dataclass(frozen=True)
 class Fixed(JointType):
     name: str = "fixed"
     description: str = "rigid connection (0 coordinates)"
+    code: ClassVar[int] = CODE
 
     def constraints(self):
         return (Spherical(), Dot1(EX, EZ), Dot1(EY, EZ), Dot1(EX, EY))

@@ -3,12 +3,27 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import numpy as np
+from typing import ClassVar
 
 from kinprop.constraints.basic import Dot1, Dot2
+from kinprop.jit import njit
 from kinprop.joints.base import JointType
-from kinprop.spatial import EX, EY, EZ
+from kinprop.spatial import EX, EY, EZ, eye_into
+
+CODE = 1
+
+
+@njit
+def placement(q, A, d):
+    eye_into(A)
+    d[0], d[1], d[2] = 0.0, 0.0, q[0]
+
+
+@njit
+def motion(q, A, d, dd, H):
+    dd[:, :] = 0.0
+    H[:, :] = 0.0
+    dd[2, 0] = 1.0
 
 
 @dataclass(frozen=True)
@@ -16,12 +31,9 @@ class Prismatic(JointType):
     name: str = "translational"
     description: str = "translation along z'' (1 coordinate)"
     n_coordinates: int = 1
-
-    def placement(self, q):
-        return np.eye(3), EZ * q[0]
-
-    def motion(self, q):
-        return EZ[:, None].copy(), np.zeros((3, 1))
+    code: ClassVar[int] = CODE
+    placement_kernel = placement
+    motion_kernel = motion
 
     def constraints(self):
         # axes parallel, the offset along z''_i only, no twist about the axis

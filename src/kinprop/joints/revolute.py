@@ -3,12 +3,27 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import numpy as np
+from typing import ClassVar
 
 from kinprop.constraints.basic import Dot1, Spherical
+from kinprop.jit import njit
 from kinprop.joints.base import JointType
-from kinprop.spatial import EX, EY, EZ, rot_z
+from kinprop.spatial import EX, EY, EZ, rot_z_into
+
+CODE = 0
+
+
+@njit
+def placement(q, A, d):
+    rot_z_into(q[0], A)
+    d[:] = 0.0
+
+
+@njit
+def motion(q, A, d, dd, H):
+    dd[:, :] = 0.0
+    H[:, :] = 0.0
+    H[2, 0] = 1.0
 
 
 @dataclass(frozen=True)
@@ -17,12 +32,9 @@ class Revolute(JointType):
     description: str = "rotation about z'' (1 coordinate)"
     n_coordinates: int = 1
     angle_indices: tuple[int, ...] = (0,)
-
-    def placement(self, q):
-        return rot_z(q[0]), np.zeros(3)
-
-    def motion(self, q):
-        return np.zeros((3, 1)), EZ[:, None].copy()
+    code: ClassVar[int] = CODE
+    placement_kernel = placement
+    motion_kernel = motion
 
     def constraints(self):
         return (Spherical(), Dot1(EX, EZ), Dot1(EY, EZ))

@@ -3,12 +3,26 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import numpy as np
+from typing import ClassVar
 
 from kinprop.constraints.basic import Spherical as SphericalConstraint
+from kinprop.jit import njit
 from kinprop.joints.base import JointType
-from kinprop.spatial import euler_E, euler_to_matrix
+from kinprop.spatial import euler_A_into, euler_E_into
+
+CODE = 4
+
+
+@njit
+def placement(q, A, d):
+    euler_A_into(q[0:4], A)
+    d[:] = 0.0
+
+
+@njit
+def motion(q, A, d, dd, H):
+    dd[:, :] = 0.0
+    euler_E_into(q[0:4], 2.0, H, 0)  # H'' = 2E(p) (eq. 39)
 
 
 @dataclass(frozen=True)
@@ -17,12 +31,9 @@ class Spherical(JointType):
     description: str = "three rotations as Euler parameters [e0, e1, e2, e3] (4 coordinates)"
     n_coordinates: int = 4
     euler_start: int | None = 0
-
-    def placement(self, q):
-        return euler_to_matrix(q[0:4]), np.zeros(3)
-
-    def motion(self, q):
-        return np.zeros((3, 4)), 2.0 * euler_E(q[0:4])
+    code: ClassVar[int] = CODE
+    placement_kernel = placement
+    motion_kernel = motion
 
     def constraints(self):
         return (SphericalConstraint(),)

@@ -7,12 +7,34 @@ plus dot-1 between z''_i and y''_j (4 constraints).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from kinprop.constraints.basic import Dot1, Spherical
+from kinprop.jit import njit
 from kinprop.joints.base import JointType
-from kinprop.spatial import EY, EZ, rot_y, rot_z
+from kinprop.spatial import EY, EZ
+
+CODE = 3
+
+
+@njit
+def placement(q, A, d):
+    c, s = np.cos(q[0]), np.sin(q[0])
+    c1, s1 = np.cos(q[1]), np.sin(q[1])
+    A[0, 0], A[0, 1], A[0, 2] = c * c1, -s, c * s1
+    A[1, 0], A[1, 1], A[1, 2] = s * c1, c, s * s1
+    A[2, 0], A[2, 1], A[2, 2] = -s1, 0.0, c1
+    d[:] = 0.0
+
+
+@njit
+def motion(q, A, d, dd, H):
+    dd[:, :] = 0.0
+    H[:, :] = 0.0
+    H[2, 0] = 1.0
+    H[0, 1], H[1, 1] = -np.sin(q[0]), np.cos(q[0])  # Rz(q0) e_y
 
 
 @dataclass(frozen=True)
@@ -21,15 +43,9 @@ class Universal(JointType):
     description: str = "rotations about z''_i then the rotated y'' (2 coordinates)"
     n_coordinates: int = 2
     angle_indices: tuple[int, ...] = (0, 1)
-
-    def placement(self, q):
-        return rot_z(q[0]) @ rot_y(q[1]), np.zeros(3)
-
-    def motion(self, q):
-        H = np.empty((3, 2))
-        H[:, 0] = EZ
-        H[:, 1] = rot_z(q[0]) @ EY
-        return np.zeros((3, 2)), H
+    code: ClassVar[int] = CODE
+    placement_kernel = placement
+    motion_kernel = motion
 
     def constraints(self):
         return (Spherical(), Dot1(EZ, EY))

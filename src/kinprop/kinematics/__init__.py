@@ -1,17 +1,16 @@
-"""Kinematics: forward kinematics, B/M/N transforms, assembled Phi and Jacobians."""
+"""Kinematics: variable layout, flat tables, and the compiled kernels (forward kinematics,
+B/M/N transforms, assembled Phi and its Jacobian)."""
 
-from kinprop.kinematics.assembly import Assembly, RowBlock, build_assembly
-from kinprop.kinematics.forward import JointFrames, Kinematics, forward_kinematics
-from kinprop.kinematics.layout import Variable, VariableLayout, build_layout
+from kinprop.kinematics.layout import Variable, VariableLayout, build_layout, column_labels
+from kinprop.kinematics.tables import RowBlock, Tables, build_tables, row_blocks
 
 __all__ = [
-    "Assembly",
-    "JointFrames",
-    "Kinematics",
     "RowBlock",
+    "Tables",
     "Variable",
     "VariableLayout",
-    "build_assembly",
     "build_layout",
-    "forward_kinematics",
+    "build_tables",
+    "column_labels",
+    "row_blocks",
 ]

@@ -98,37 +98,6 @@ def build_layout(mech: Mechanism, topo: Topology) -> VariableLayout:
     return VariableLayout(tuple(variables), start)
 
 
-def retract(layout: VariableLayout, design, coords, dx: np.ndarray):
-    """``(design, coords) (+) dx``: additive for q, s', l (Euler parameters too, never
-    renormalised); ``C <- exp(tilde(dxi')) C`` for orientations (``dC = tilde(dxi') C``)."""
-    from kinprop.model.design import as_coordinates
-    from kinprop.spatial import exp_so3
-
-    new_q = dict(coords)
-    new_d: dict[str, np.ndarray] = {}
-    for v in layout.variables:
-        step = dx[v.columns]
-        if not np.any(step):
-            continue
-        if v.group == "q":
-            new_q[v.joint] = coords[v.joint] + step
-        elif v.group == "C":
-            new_d[v.key] = exp_so3(step) @ design[v.key]
-        elif v.group == "l":
-            new_d[v.key] = design[v.key] + step[0]
-        else:
-            new_d[v.key] = design[v.key] + step
-    return (design.replace(new_d) if new_d else design), as_coordinates(new_q)
-
-
-def read(layout: VariableLayout, design, coords, key: str) -> np.ndarray:
-    """Current value of a layout variable as a flat array (C as its 3x3 matrix, flattened)."""
-    v = layout[key]
-    if v.group == "q":
-        return np.asarray(coords[v.joint], dtype=float)
-    return np.atleast_1d(np.asarray(design[key], dtype=float)).ravel()
-
-
 def column_labels(layout: VariableLayout) -> list[str]:
     """One label per column: ``J01.q``, ``J32.q[1]``, ``J12.s_j[0]``, ``J01.C_i[2]`` (xi' component)."""
     out: list[str] = []

@@ -20,9 +20,11 @@ Near a four-bar toggle it vanishes like the square root of the distance to it.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
-from kinprop.kinematics.assembly import Assembly
+from kinprop.kinematics.tables import RowBlock
 from kinprop.solver.newton import RANK_RTOL
 from kinprop.spatial import Array
 
@@ -32,16 +34,16 @@ SINGULAR_RTOL = 1e-2
 ZERO_RTOL = 1e-9
 
 
-def row_groups(asm: Assembly) -> np.ndarray:
+def row_groups(blocks: Sequence[RowBlock]) -> np.ndarray:
     """Group index per row of Phi: one group per (joint, basic-constraint type)."""
-    labels = [(b.joint, lab.split("[")[0]) for b in asm.row_blocks for lab in b.labels]
+    labels = [(b.joint, lab.split("[")[0]) for b in blocks for lab in b.labels]
     index = {k: i for i, k in enumerate(dict.fromkeys(labels))}
     return np.array([index[k] for k in labels], dtype=int)
 
 
-def scaled_jacobian(asm: Assembly, J: Array) -> Array:
+def scaled_jacobian(blocks: Sequence[RowBlock], J: Array) -> Array:
     """``J`` (rows of Phi, any columns) with rows scaled per constraint and columns by norm."""
-    g = row_groups(asm)
+    g = row_groups(blocks)
     if J.size == 0:
         return J
     norms = np.sqrt(np.bincount(g, weights=np.sum(J * J, axis=1), minlength=g.max() + 1 if g.size else 0))
@@ -53,10 +55,10 @@ def scaled_jacobian(asm: Assembly, J: Array) -> Array:
     return np.where(keepc, Js / np.where(keepc, c, 1.0), 0.0)
 
 
-def conditioning(asm: Assembly, J: Array) -> float:
+def conditioning(blocks: Sequence[RowBlock], J: Array) -> float:
     """Unit-independent ``s_r / s_1`` of the free-variable Jacobian ``J``; NaN when it has no
     rows, no columns or rank 0 (nothing to be near-singular)."""
-    Js = scaled_jacobian(asm, J)
+    Js = scaled_jacobian(blocks, J)
     if Js.size == 0:
         return float("nan")
     sv = np.linalg.svd(Js, compute_uv=False)

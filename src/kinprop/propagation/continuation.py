@@ -33,17 +33,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from kinprop.engine import Engine
 from kinprop.errors import ConvergenceError, SingularityWarning
-from kinprop.kinematics.layout import retract
 from kinprop.model.design import parse_address
 from kinprop.model.model import Model
 from kinprop.propagation.conditioning import scaled_jacobian
-from kinprop.propagation.propagate import (
-    Propagation,
-    apply_changes,
-    assembly_for,
-    propagate,
-)
+from kinprop.propagation.propagate import Propagation, apply_changes, engine_for, propagate
 from kinprop.solver.newton import RANK_RTOL
 from kinprop.spatial import Array, exp_so3, log_so3
 
@@ -128,10 +123,10 @@ class _Path:
         return out
 
 
-def _build_path(model: Model, changes: Mapping[str, object]) -> _Path:
+def _build_path(engine: Engine, model: Model, changes: Mapping[str, object]) -> _Path:
     """Straight path from the model's values of the changed variables to their targets."""
-    target_model, _, keys = apply_changes(model, changes)  # validates (AddressError)
-    layout = assembly_for(model.mechanism).layout
+    target_model, _, keys = apply_changes(model, changes, engine)  # validates (AddressError)
+    layout = engine.layout
 
     def value(m: Model, key: str) -> Array:
         var = layout[key]
@@ -172,36 +167,30 @@ def _quiet_propagate(model: Model, changes, free, **kw) -> Propagation:
 
 
 def _conflict(
-    model: Model, free: Sequence[str], exclude: set[str], top: int
+    engine: Engine, model: Model, free: Sequence[str], exclude: set[str], top: int
 ) -> tuple[tuple[tuple[str, float], ...], float]:
     """Rows weighted by the left singular vector of the smallest retained singular value of the
     unit-scaled free-variable Jacobian (:func:`kinprop.propagation.conditioning.scaled_jacobian`)."""
-    from kinprop.analysis.mobility import row_names
-
-    asm = assembly_for(model.mechanism)
-    _, J = asm.evaluate(model.design, model.coordinates)
-    cols = asm.layout.columns(list(free), exclude=exclude)
-    if cols.size == 0 or J.shape[0] == 0:
+    _, J = engine.evaluate(engine.state_of(model))
+    cols = engine.columns(free, exclude)
+    if cols.size == 0 or J.shape[0] == 0 or not np.all(np.isfinite(J)):
         return (), float("nan")
-    U, sv, _ = np.linalg.svd(scaled_jacobian(asm, J[:, cols]))
+    U, sv, _ = np.linalg.svd(scaled_jacobian(engine.row_blocks, J[:, cols]))
     rank = int(np.sum(sv > RANK_RTOL * sv[0])) if sv[0] > 0 else 0
     if rank == 0:
         return (), 0.0
     u = U[:, rank - 1]
-    labels = row_names(asm)
+    labels = engine.row_labels
     order = [i for i in np.argsort(-np.abs(u)) if abs(u[i]) > 0.1][:top]
     return tuple((labels[i], float(u[i])) for i in order), float(sv[rank - 1] / sv[0])
 
 
-def _residual_rows(model: Model, top: int) -> tuple[tuple[str, float], ...]:
-    from kinprop.analysis.mobility import row_names
-
-    asm = assembly_for(model.mechanism)
-    Phi = asm.residual(model.design, model.coordinates)
+def _residual_rows(engine: Engine, model: Model, top: int) -> tuple[tuple[str, float], ...]:
+    Phi = engine.residual(engine.state_of(model))
     if not Phi.size or not np.all(np.isfinite(Phi)):
         return ()
     big = np.max(np.abs(Phi))
-    labels = row_names(asm)
+    labels = engine.row_labels
     order = [i for i in np.argsort(-np.abs(Phi)) if abs(Phi[i]) > 1e-3 * big and big > 0][:top]
     return tuple((labels[i], float(Phi[i])) for i in order)
 
@@ -221,6 +210,7 @@ def propagate_continuation(
     jump_atol: float = 1e-6,
     easy_iterations: int = 3,
     top: int = 6,
+    engine: Engine | None = None,
 ) -> ContinuationResult:
     """Apply a (large) design change by predictor-corrector continuation on one branch.
 
@@ -231,20 +221,20 @@ def propagate_continuation(
     """
     from kinprop.analysis.sensitivity import design_sensitivity
 
-    path = _build_path(model, changes)
-    asm = assembly_for(model.mechanism)
-    layout = asm.layout
+    engine = engine_for(model, engine)
+    path = _build_path(engine, model, changes)
+    layout = engine.layout
     keys = list(path.start)
     exclude = set(keys)
     free_cols = layout.columns(list(free), exclude=exclude)
     free_keys = [v.key for v in layout.variables if np.any((free_cols >= v.start) & (free_cols < v.start + v.size))]
-    kw = {"tol": tol, "max_iter": max_iter, "weights": weights}
+    kw = {"tol": tol, "max_iter": max_iter, "weights": weights, "engine": engine}
     steps: list[ContinuationStep] = []
 
     # t = 0: start from an assembled state (the branch to follow)
     start_prop = _quiet_propagate(model, path.at(0.0), free, **kw)
     if not start_prop.converged:
-        conflict, ratio = _conflict(start_prop.after, free, exclude, top)
+        conflict, ratio = _conflict(engine, start_prop.after, free, exclude, top)
         msg = (
             f"the model does not assemble before the change ({start_prop.result.message}); "
             "nothing of the change can be applied"
@@ -255,7 +245,7 @@ def propagate_continuation(
             )
         )
         return ContinuationResult(
-            False, 0.0, start_prop, tuple(steps), msg, conflict, _residual_rows(start_prop.after, top), ratio
+            False, 0.0, start_prop, tuple(steps), msg, conflict, _residual_rows(engine, start_prop.after, top), ratio
         )
     if not keys:  # nothing to change: the assembly is the answer
         msg = f"no change to follow: {start_prop.result.message}"
@@ -273,12 +263,12 @@ def propagate_continuation(
         for k in keys:
             v = layout[k]
             dx[v.columns] = _delta(v.group, p_old[k], p_new[k])
-        sens = design_sensitivity(current, keys, free, weights)
+        sens = design_sensitivity(current, keys, free, weights, engine=engine)
         dx[sens.free_columns] = sens.matrix @ dx[sens.wrt_columns]
         pred_norm = float(np.linalg.norm(dx[sens.free_columns]))
-        design, coords = retract(layout, current.design, current.coordinates, dx)
-        predicted = current.with_state(design, coords)
-        if not np.all(np.isfinite(dx)):
+        if np.all(np.isfinite(dx)):
+            predicted = engine.model_of(engine.retract(engine.state_of(current), dx), current)
+        else:
             predicted = current
         corr = _quiet_propagate(predicted, p_new, free, **kw)
         corr_norm = _distance(layout, free_keys, predicted, corr.after) if corr.converged else float("nan")
@@ -306,14 +296,14 @@ def propagate_continuation(
             break
 
     if t >= 1.0:
-        prop = Propagation(model, current, last.result, path.at(1.0), tuple(free), last.singularity_ratio)
+        prop = Propagation(model, current, last.result, path.at(1.0), tuple(free), last.singularity_ratio, engine)
         n_ok = sum(s.accepted for s in steps)
         msg = f"continuation reached the full change in {n_ok} sub-steps ({len(steps)} attempts): {last.result.message}"
         return ContinuationResult(True, 1.0, prop, tuple(steps), msg, (), (), last.singularity_ratio)
 
-    conflict, ratio = _conflict(current, free, exclude, top)
-    residual = _residual_rows(failed_state, top) if failed_state is not None else ()
-    prop = Propagation(model, current, last.result, path.at(t), tuple(free), last.singularity_ratio)
+    conflict, ratio = _conflict(engine, current, free, exclude, top)
+    residual = _residual_rows(engine, failed_state, top) if failed_state is not None else ()
+    prop = Propagation(model, current, last.result, path.at(t), tuple(free), last.singularity_ratio, engine)
     names = ", ".join(dict.fromkeys([r for r, _ in conflict] + [r for r, _ in residual])) or "none identified"
     why = "step limit reached" if len(steps) >= max_steps else f"sub-step below {min_step:g}"
     msg = (

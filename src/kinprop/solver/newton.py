@@ -1,125 +1,215 @@
-"""Generalized-inverse Newton-Raphson (eq. 5.2-5.3 and Fig. 3).
+"""The one generalized-inverse Newton-Raphson loop (eq. 5.2-5.3 and Fig. 3), compiled.
 
 Each step is the minimum-norm correction over the free variables only,
-``dx_free = -pinv(Phi_x[:, free]) Phi`` (optionally weighted), everything else frozen. The
-stopping test ``||Phi||_2 < tol`` is checked after each update (PAPER-NOTES 5-6). The solver
-never prints and never raises for non-convergence: it returns a :class:`SolveResult`.
+``dx_free = -pinv(Phi_x[:, free]) Phi`` (weighted: ``argmin sum(dx^2 / w)``), everything else
+frozen, split into the blocks of the free set's :class:`~kinprop.solver.plan.Plan`. The
+stopping test ``||Phi||_2 < tol`` is checked after each update (PAPER-NOTES 5-6); the caller
+passes ``tol = max(tol, round-off floor)``. Single solves, batches (serial or threaded) and
+sequences (sweeps) all run this loop; it never prints and never raises for non-convergence:
+it returns a :class:`Status` code, the iteration count and the residual history.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass, field
-from typing import Any
+from enum import StrEnum
 
 import numpy as np
 
-from kinprop.errors import ConvergenceError
-from kinprop.spatial import Array
+from kinprop.jit import get_num_threads, njit, prange
+from kinprop.kinematics.kernels import evaluate, retract, workspace
 
 #: relative singular-value threshold for the rank (``s_k > RANK_RTOL * s_max``)
 RANK_RTOL = 1e-9
 
 
-@dataclass(frozen=True)
-class SolveOptions:
-    tol: float = 1e-10
-    max_iter: int = 50
-    #: stop when the residual grows beyond this factor of the initial one (divergence)
-    divergence: float = 1e6
-    #: round-off floor of ||Phi|| for the model's length scale; converged when
-    #: ``||Phi|| < max(tol, floor)`` (0: the tolerance alone)
-    floor: float = 0.0
+class Status(StrEnum):
+    """Outcome of a solve; the compiled loop returns the index of one of these."""
 
-    @property
-    def target(self) -> float:
-        return max(self.tol, self.floor)
+    CONVERGED = "converged"
+    NOT_CONVERGED = "not_converged"
+    DIVERGED = "diverged"
+    NO_FREE = "no_free"
+    #: a change that cannot be followed (continuation found no assembly along the way)
+    INFEASIBLE = "infeasible"
 
 
-@dataclass
-class SolveResult:
-    converged: bool
-    iterations: int
-    residual_norm: float
-    residual_history: list[float]
-    rank: int
-    n_free: int
-    n_equations: int
-    singular_values: Array
-    message: str
-    state: Any = field(repr=False, default=None)
-    #: the full Jacobian at the final state (every column, not only the free ones)
-    jacobian: Array | None = field(repr=False, default=None)
-
-    @property
-    def status(self) -> str:
-        return "converged" if self.converged else "not_converged"
-
-    @property
-    def smallest_singular_value(self) -> float:
-        return float(self.singular_values[-1]) if self.singular_values.size else 0.0
-
-    @property
-    def condition_number(self) -> float:
-        s = self.singular_values
-        return float(s[0] / s[-1]) if s.size and s[-1] > 0 else float("inf")
-
-    def raise_for_status(self) -> SolveResult:
-        if not self.converged:
-            raise ConvergenceError(self.message)
-        return self
+STATUSES = tuple(Status)
+CONVERGED, NOT_CONVERGED, DIVERGED, NO_FREE = 0, 1, 2, 3
 
 
-def min_norm_step(J: Array, Phi: Array, weights: Array | None = None) -> Array:
-    """``-pinv(J) Phi``; with weights w, the weighted minimum-norm step
-    ``argmin sum(dx^2 / w)`` subject to ``J dx = -Phi`` (larger weight = moves more)."""
-    if weights is None:
-        return -np.linalg.lstsq(J, Phi, rcond=None)[0]
-    sw = np.sqrt(weights)
-    return -sw * np.linalg.lstsq(J * sw, Phi, rcond=None)[0]
+@njit
+def _lu_solve(M, b, x):
+    """``M x = b`` by Gaussian elimination with partial pivoting (destroys M, b); False if singular."""
+    n = M.shape[0]
+    scale = 0.0
+    for i in range(n):
+        for j in range(n):
+            scale = max(scale, abs(M[i, j]))
+    if scale == 0.0:
+        return False
+    for col in range(n):
+        piv, big = col, abs(M[col, col])
+        for i in range(col + 1, n):
+            if abs(M[i, col]) > big:
+                big, piv = abs(M[i, col]), i
+        if big <= 1e-13 * scale:
+            return False
+        if piv != col:
+            for j in range(n):
+                M[col, j], M[piv, j] = M[piv, j], M[col, j]
+            b[col], b[piv] = b[piv], b[col]
+        inv = 1.0 / M[col, col]
+        for i in range(col + 1, n):
+            f = M[i, col] * inv
+            if f != 0.0:
+                for j in range(col + 1, n):
+                    M[i, j] -= f * M[col, j]
+                b[i] -= f * b[col]
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for j in range(i + 1, n):
+            s -= M[i, j] * x[j]
+        x[i] = s / M[i, i]
+    return True
 
 
-def newton(
-    evaluate: Callable[[Any], tuple[Array, Array]],
-    retract: Callable[[Any, Array], Any],
-    state: Any,
-    free: Array,
-    n_columns: int,
-    options: SolveOptions = SolveOptions(),
-    weights: Array | None = None,
-) -> SolveResult:
-    """Iterate ``state <- retract(state, dx)`` with ``dx`` nonzero on the ``free`` columns."""
-    Phi, J = evaluate(state)
-    norm = float(np.linalg.norm(Phi))
-    history = [norm]
+@njit
+def min_norm_step(J, rhs, out):
+    """``out = -pinv(J) rhs``: pivoted LU when square and well conditioned, else SVD least squares."""
+    m, n = J.shape
+    if n == 0:
+        return
+    if m == n:
+        M, b = J.copy(), rhs.copy()
+        if _lu_solve(M, b, out):
+            ok = True
+            for i in range(n):
+                out[i] = -out[i]
+                ok = ok and np.isfinite(out[i])
+            if ok:
+                return
+    if m == 0:
+        out[:] = 0.0
+        return
+    x = np.linalg.lstsq(J, rhs, 2.220446049250313e-16 * max(m, n))[0]
+    for i in range(n):
+        out[i] = -x[i]
+
+
+@njit
+def buffers(tb, plan, nnz):
+    """Work arrays of one solve: Phi, entry values, block storage, step, and the kinematics workspace."""
+    m = plan.block_rows.shape[0]
+    return np.zeros(m), np.zeros(nnz), np.zeros(plan.store_ptr[-1]), np.zeros(plan.free.shape[0]), workspace(tb)
+
+
+@njit
+def newton_step(plan, Phi, vals, store, dx):
+    """The minimum-norm step over the free columns (block by block) into ``dx`` (free order)."""
+    store[:] = 0.0
+    slot = plan.entry_slot
+    for k in range(slot.shape[0]):
+        if slot[k] >= 0:
+            store[slot[k]] += vals[k]
+    for b in range(plan.row_ptr.shape[0] - 1):
+        r0, r1 = plan.row_ptr[b], plan.row_ptr[b + 1]
+        c0, c1 = plan.col_ptr[b], plan.col_ptr[b + 1]
+        mb, nb = r1 - r0, c1 - c0
+        if nb == 0:
+            continue
+        J = store[plan.store_ptr[b] : plan.store_ptr[b + 1]].reshape((mb, nb))
+        rhs = np.empty(mb)
+        for i in range(mb):
+            rhs[i] = Phi[plan.block_rows[r0 + i]]
+        for e in range(plan.coupling_ptr[b], plan.coupling_ptr[b + 1]):  # solved blocks -> right side
+            rhs[plan.coupling_row[e]] += vals[plan.coupling_entry[e]] * dx[plan.coupling_free[e]]
+        for y in range(nb):
+            w = plan.sqrt_weights[plan.block_cols[c0 + y]]
+            for i in range(mb):
+                J[i, y] *= w
+        out = np.empty(nb)
+        min_norm_step(J, rhs, out)
+        for y in range(nb):
+            f = plan.block_cols[c0 + y]
+            dx[f] = out[y] * plan.sqrt_weights[f]
+
+
+@njit
+def solve(tb, plan, Q, S, C, L, tol, max_iter, divergence, history, buf):
+    """Newton from the state ``Q, S, C, L`` (updated in place); returns (status, iterations, ||Phi||).
+
+    ``history[k]`` receives ``||Phi||`` after k updates (length ``max_iter + 1``, may be shorter).
+    """
+    Phi, vals, store, dx, ws = buf
+    free, need = plan.free, plan.need
+    dummy = np.zeros(0, np.int64)
+    evaluate(tb, Q, S, C, L, ws, Phi, vals, need, dummy, dummy, False)
+    norm = np.sqrt(Phi @ Phi)
+    if history.shape[0] > 0:
+        history[0] = norm
+    first = max(norm, 1e-300)
     it = 0
-    message = ""
-    target = options.target
-    while norm >= target and it < options.max_iter:
-        if free.size == 0:
-            message = "no free variables: nothing can move to satisfy the constraints"
+    status = NOT_CONVERGED
+    while norm >= tol and it < max_iter:
+        if free.shape[0] == 0:
+            status = NO_FREE
             break
-        dx = np.zeros(n_columns)
-        dx[free] = min_norm_step(J[:, free], Phi, weights)
-        state = retract(state, dx)
+        newton_step(plan, Phi, vals, store, dx)
+        retract(tb, free, dx, Q, S, C, L)
         it += 1
-        Phi, J = evaluate(state)
-        norm = float(np.linalg.norm(Phi))
-        history.append(norm)
-        if not np.isfinite(norm) or norm > options.divergence * max(history[0], 1e-300):
-            message = f"diverged at iteration {it}: ||Phi|| = {norm:.3g}"
+        evaluate(tb, Q, S, C, L, ws, Phi, vals, need, dummy, dummy, False)
+        norm = np.sqrt(Phi @ Phi)
+        if it < history.shape[0]:
+            history[it] = norm
+        if not np.isfinite(norm) or norm > divergence * first:
+            status = DIVERGED
             break
-    converged = bool(norm < target)
-    Jf = J[:, free] if free.size else np.zeros((J.shape[0], 0))
-    sv = np.linalg.svd(Jf, compute_uv=False) if Jf.size else np.zeros(0)
-    rank = int(np.sum(sv > RANK_RTOL * sv[0])) if sv.size and sv[0] > 0 else 0
-    bound = (
-        f"{target:.3g} (round-off floor at this model's length scale; tol {options.tol:g})"
-        if target > options.tol
-        else f"{options.tol:g}"
-    )
-    if converged:
-        message = f"converged in {it} iterations: ||Phi|| = {norm:.3g} < {bound}"
-    elif not message:
-        message = f"not converged after {it} iterations: ||Phi|| = {norm:.3g} >= {bound}"
-    return SolveResult(converged, it, norm, history, rank, int(free.size), int(J.shape[0]), sv, message, state, J)
+    if norm < tol:
+        status = CONVERGED
+    return status, it, norm
+
+
+@njit
+def solve_one(tb, plan, nnz, Q, S, C, L, tol, max_iter, divergence, history):
+    """:func:`solve` with its own buffers."""
+    return solve(tb, plan, Q, S, C, L, tol, max_iter, divergence, history, buffers(tb, plan, nnz))
+
+
+@njit
+def solve_batch(tb, plan, nnz, Q, S, C, L, tol, max_iter, divergence, status, iterations, residual):
+    """:func:`solve` on every variant of a leading batch axis (each converges on its own)."""
+    buf = buffers(tb, plan, nnz)
+    hist = np.zeros(0)
+    for v in range(Q.shape[0]):
+        st, it, nr = solve(tb, plan, Q[v], S[v], C[v], L[v], tol, max_iter, divergence, hist, buf)
+        status[v], iterations[v], residual[v] = st, it, nr
+
+
+@njit(parallel=True)
+def solve_batch_threaded(tb, plan, nnz, Q, S, C, L, tol, max_iter, divergence, status, iterations, residual):
+    """:func:`solve_batch` split into one contiguous chunk per thread."""
+    N = Q.shape[0]
+    nth = max(1, min(get_num_threads(), N))
+    for c in prange(nth):
+        buf = buffers(tb, plan, nnz)
+        hist = np.zeros(0)
+        for v in range(c * N // nth, (c + 1) * N // nth):
+            st, it, nr = solve(tb, plan, Q[v], S[v], C[v], L[v], tol, max_iter, divergence, hist, buf)
+            status[v], iterations[v], residual[v] = st, it, nr
+
+
+@njit
+def solve_sequence(tb, plan, nnz, Q, S, C, L, tol, max_iter, divergence, set_cols, values, Qout, status,
+                   iterations, residual):  # fmt: skip
+    """For each row of ``values``, set the q columns ``set_cols`` and solve from the previous step."""
+    buf = buffers(tb, plan, nnz)
+    hist = np.zeros(0)
+    for s in range(values.shape[0]):
+        for i in range(set_cols.shape[0]):
+            Q[set_cols[i]] = values[s, i]
+        st, it, nr = solve(tb, plan, Q, S, C, L, tol, max_iter, divergence, hist, buf)
+        Qout[s] = Q
+        status[s], iterations[s], residual[s] = st, it, nr
+
+
+__all__ = ["RANK_RTOL", "STATUSES", "Status", "min_norm_step", "solve", "solve_batch", "solve_one"]

@@ -85,3 +85,33 @@ def forward_kinematics(mech: Mechanism, topo: Topology, design: Design, coords: 
         r[t.child], A[t.child] = rc, Ac
         frames[t.joint] = JointFrames(P_i, R_i, P_j, R_j)
     return Kinematics(r, A, frames)
+
+
+def retract(layout, design, coords, dx):
+    """``(design, coords) (+) dx``: additive for q, s', l; ``C <- exp(tilde(dxi')) C``."""
+    from kinprop.model.design import as_coordinates
+    from kinprop.spatial import exp_so3
+
+    new_q = dict(coords)
+    new_d: dict[str, np.ndarray] = {}
+    for v in layout.variables:
+        step = dx[v.columns]
+        if not np.any(step):
+            continue
+        if v.group == "q":
+            new_q[v.joint] = coords[v.joint] + step
+        elif v.group == "C":
+            new_d[v.key] = exp_so3(step) @ design[v.key]
+        elif v.group == "l":
+            new_d[v.key] = design[v.key] + step[0]
+        else:
+            new_d[v.key] = design[v.key] + step
+    return (design.replace(new_d) if new_d else design), as_coordinates(new_q)
+
+
+def read(layout, design, coords, key):
+    """Current value of a layout variable as a flat array (C flattened)."""
+    v = layout[key]
+    if v.group == "q":
+        return np.asarray(coords[v.joint], dtype=float)
+    return np.atleast_1d(np.asarray(design[key], dtype=float)).ravel()

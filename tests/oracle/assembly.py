@@ -28,9 +28,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from kinprop.kinematics.forward import Kinematics, forward_kinematics, frames_on_bodies
+from oracle.forward import Kinematics, forward_kinematics, frames_on_bodies
 from kinprop.kinematics.layout import VariableLayout, build_layout
-from kinprop.kinematics.transforms import tree_joint_twists
+from oracle.transforms import tree_joint_twists
 from kinprop.model.design import Design
 from kinprop.model.mechanism import Mechanism
 from kinprop.spatial import Array, tilde

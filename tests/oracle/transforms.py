@@ -18,7 +18,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from kinprop.kinematics.forward import Kinematics
+from oracle.forward import Kinematics
 from kinprop.kinematics.layout import VariableLayout
 from kinprop.model.mechanism import Mechanism
 from kinprop.spatial import Array, tilde
