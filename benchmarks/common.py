@@ -173,8 +173,9 @@ class StewartBench:
 
 
 def stewart_bench() -> StewartBench:
-    from kinprop.builders import stewart, stewart_hardpoints
     from kinprop.fast import Solver, compile_model, pack
+
+    from kinprop.builders import stewart, stewart_hardpoints
 
     a, b = stewart_hardpoints()
     model = stewart()

@@ -14,10 +14,10 @@ import numpy as np
 
 sys.path.insert(0, __import__("os").path.dirname(__file__))
 from common import Row, compare, leg_lengths, stewart_bench, stewart_hand_newton, stewart_least_squares
+from kinprop.fast import Solver, compile_model, pack
 
 from kinprop import propagate
 from kinprop.builders import STEWART, stewart
-from kinprop.fast import Solver, compile_model, pack
 from kinprop.spatial import euler_to_matrix
 
 

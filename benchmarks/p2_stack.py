@@ -20,11 +20,11 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 from common import Row, compare, exp_so3, leg_lengths, stewart_hand_newton
+from kinprop.fast import compile_model, pack
+from kinprop.fast.sparse import SparseSolver
 
 from kinprop import propagate
 from kinprop.builders import STEWART, leg_addresses, stewart_hardpoints, stewart_stack
-from kinprop.fast import compile_model, pack
-from kinprop.fast.sparse import SparseSolver
 from kinprop.spatial import euler_to_matrix
 
 

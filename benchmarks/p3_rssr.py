@@ -15,10 +15,10 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 from common import Row, compare
+from kinprop.fast import Solver, compile_model, pack
 
 from kinprop import propagate
 from kinprop.builders import RSSR, rssr, rssr_crank_point, rssr_rocker_point
-from kinprop.fast import Solver, compile_model, pack
 
 THETA = np.radians(np.arange(1.0, 361.0, 1.0))
 

@@ -15,9 +15,9 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 from common import Row, compare, leg_lengths, stewart_bench, stewart_hand_newton, stewart_least_squares
+from kinprop.fast import State
 
 from kinprop.builders import STEWART
-from kinprop.fast import State
 from kinprop.spatial import euler_to_matrix
 
 

@@ -33,8 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from kinprop.joints import joint_type
 from kinprop.engine import Engine as Assembly
+from kinprop.joints import joint_type
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates
 from kinprop.spatial import exp_so3, rot_x, rot_z
 

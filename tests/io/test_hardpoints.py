@@ -18,6 +18,7 @@ import yaml
 from io_helpers import hardpoint_difference
 
 from kinprop import assemble, load_model, propagate
+from kinprop.engine import compile as assembly_for
 from kinprop.errors import AddressError
 from kinprop.io import dump_model, model_from_data
 from kinprop.io.hardpoints import (
@@ -30,7 +31,6 @@ from kinprop.io.hardpoints import (
     rotation_change,
 )
 from kinprop.model import Model, as_coordinates
-from kinprop.engine import compile as assembly_for
 from kinprop.spatial import is_rotation, rot_z
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"

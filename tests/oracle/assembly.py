@@ -28,13 +28,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from oracle.forward import Kinematics, forward_kinematics, frames_on_bodies
 from kinprop.kinematics.layout import VariableLayout, build_layout
-from oracle.transforms import tree_joint_twists
 from kinprop.model.design import Design
 from kinprop.model.mechanism import Mechanism
 from kinprop.spatial import Array, tilde
 from kinprop.topology import Topology, build_topology
+from oracle.forward import Kinematics, forward_kinematics, frames_on_bodies
+from oracle.transforms import tree_joint_twists
 
 
 @dataclass(frozen=True)

@@ -18,11 +18,11 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from oracle.forward import Kinematics
 from kinprop.kinematics.layout import VariableLayout
 from kinprop.model.mechanism import Mechanism
 from kinprop.spatial import Array, tilde
 from kinprop.topology import Topology
+from oracle.forward import Kinematics
 
 
 def twist(v: Array, w: Array) -> Array:

@@ -13,9 +13,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from kinprop import Design, Mechanism, Model, assemble, load_model
+from kinprop import Design, Mechanism, Model, assemble, compile, load_model
 from kinprop.analysis.points import joint_hardpoints
-from kinprop.propagation.propagate import ROUNDOFF, length_scale, roundoff_floor
+from kinprop.engine.engine import ROUNDOFF
+from kinprop.propagation.propagate import roundoff_floor
 
 
 def scaled(model: Model, s: float) -> Model:
@@ -50,4 +51,4 @@ def test_metre_scale_models_keep_the_plain_tolerance(examples) -> None:
     for name in ("slider_crank.yaml", "mcpherson.yaml", "stewart.yaml"):
         m = load_model(examples / name)
         assert roundoff_floor(m) < 1e-12
-        assert roundoff_floor(m) == pytest.approx(ROUNDOFF * np.finfo(float).eps * length_scale(m) ** 2)
+        assert roundoff_floor(m) == pytest.approx(ROUNDOFF * np.finfo(float).eps * compile(m).length_scale ** 2)

@@ -30,8 +30,8 @@ import numpy as np
 import scipy.linalg
 
 from kinprop.engine import Engine
-from kinprop.model import Model
 from kinprop.engine import compile as compile_engine
+from kinprop.model import Model
 from kinprop.solver.newton import RANK_RTOL
 
 #: a row is "dependent" when its component in the left null space exceeds this (unit vectors)

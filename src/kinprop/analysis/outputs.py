@@ -25,11 +25,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from kinprop.analysis.metrics import WheelSpec, metric_names, resolve_metric, wheel_metrics
-from kinprop.errors import AddressError
 from kinprop.engine import Engine, Kinematics
+from kinprop.engine import compile as compile_engine
+from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.design import Address, parse_address
-from kinprop.engine import compile as compile_engine
 from kinprop.spatial import Array
 
 AXES = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}

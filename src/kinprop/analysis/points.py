@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from kinprop.engine import Engine, JointFrames, Kinematics
-from kinprop.model import Model
 from kinprop.engine import compile as compile_engine
+from kinprop.model import Model
 from kinprop.spatial import Array
 
 

@@ -25,8 +25,8 @@ import numpy as np
 
 from kinprop.analysis.metrics import WheelSpec
 from kinprop.analysis.outputs import output_function
-from kinprop.errors import AddressError
 from kinprop.engine import Engine
+from kinprop.errors import AddressError
 from kinprop.kinematics.layout import column_labels
 from kinprop.model import Model
 from kinprop.propagation.propagate import engine_for

@@ -40,7 +40,7 @@ from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.model import Design, Model
 from kinprop.model.design import as_coordinates, parse_address
-from kinprop.propagation.propagate import apply_changes, propagate, roundoff_floor
+from kinprop.propagation.propagate import apply_changes
 from kinprop.spatial import Array
 
 METHODS = ("grid", "lhs", "mc")

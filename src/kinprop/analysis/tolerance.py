@@ -22,11 +22,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from kinprop.analysis.sensitivity import design_sensitivity
+from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.kinematics.layout import column_labels
 from kinprop.model import Model
 from kinprop.model.design import parse_address
-from kinprop.engine import compile as compile_engine
 from kinprop.spatial import Array
 
 

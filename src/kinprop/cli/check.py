@@ -11,11 +11,11 @@ from rich.table import Table
 
 from kinprop.analysis.mobility import MobilityReport, mobility, row_names
 from kinprop.cli.app import EXIT_NOT_CONVERGED, app, fail, handles_user_errors, out, print_json
-from kinprop.io import load_model
 from kinprop.engine import Engine
+from kinprop.engine import compile as compile_engine
+from kinprop.io import load_model
 from kinprop.model import Model
 from kinprop.propagation import assemble
-from kinprop.engine import compile as compile_engine
 
 #: ||Phi|| below which the configuration counts as assembled (the rank is then reliable)
 ASSEMBLED_TOL = 1e-8

@@ -10,9 +10,9 @@ import typer
 from rich.markup import escape
 
 from kinprop.cli.app import app, err, handles_user_errors, out
+from kinprop.engine import compile as compile_engine
 from kinprop.io import load_model
 from kinprop.model import Model
-from kinprop.engine import compile as compile_engine
 
 #: ||Phi|| above which a drawn model is flagged as not assembled
 DRAW_NOTE_TOL = 1e-6

@@ -24,7 +24,7 @@ import numpy as np
 from kinprop.errors import AddressError
 from kinprop.kinematics import kernels
 from kinprop.kinematics.layout import VariableLayout, build_layout, column_labels
-from kinprop.kinematics.tables import FIELDS, RowBlock, Tables, build_tables, row_blocks
+from kinprop.kinematics.tables import RowBlock, Tables, build_tables, row_blocks
 from kinprop.model.design import Design, as_coordinates, parse_address
 from kinprop.model.mechanism import Mechanism
 from kinprop.model.model import Model
@@ -84,6 +84,8 @@ class Kinematics:
     r: dict[str, Array]
     A: dict[str, Array]
     frames: dict[str, JointFrames]
+    #: names of the spanning tree's joints (the others are cut)
+    tree: frozenset[str] = frozenset()
 
 
 @dataclass(frozen=True)
@@ -113,6 +115,8 @@ class Solution:
     free: Array
     tol: float
     changes: Mapping[str, Array] = field(default_factory=dict)
+    #: the tolerance asked for; ``tol`` is ``max(requested_tol, round-off floor)``
+    requested_tol: float = 0.0
 
     @property
     def converged(self) -> bool:
@@ -120,13 +124,18 @@ class Solution:
 
     @property
     def message(self) -> str:
+        bound = (
+            f"{self.tol:.3g} (round-off floor at this model's length scale; tol {self.requested_tol:g})"
+            if self.tol > self.requested_tol
+            else f"{self.tol:g}"
+        )
         if self.status is Status.CONVERGED:
-            return f"converged in {self.iterations} iterations: ||Phi|| = {self.residual:.3g} < {self.tol:.3g}"
+            return f"converged in {self.iterations} iterations: ||Phi|| = {self.residual:.3g} < {bound}"
         if self.status is Status.NO_FREE:
             return "no free variables: nothing can move to satisfy the constraints"
         if self.status is Status.DIVERGED:
             return f"diverged at iteration {self.iterations}: ||Phi|| = {self.residual:.3g}"
-        return f"not converged after {self.iterations} iterations: ||Phi|| = {self.residual:.3g} >= {self.tol:.3g}"
+        return f"not converged after {self.iterations} iterations: ||Phi|| = {self.residual:.3g} >= {bound}"
 
     @cached_property
     def design(self) -> Design:
@@ -184,7 +193,9 @@ class Engine:
         self._targets: dict[str, Target] = {}
         self._free_cache: dict[tuple, Array] = {}
         self.model = reference
-        self.reference: State | None = self.pack(reference.design, reference.coordinates).frozen() if reference else None
+        self.reference: State | None = (
+            self.pack(reference.design, reference.coordinates).frozen() if reference else None
+        )
         self.length_scale = self._length_scale(self.reference) if reference else 1.0
 
     def __repr__(self) -> str:
@@ -231,7 +242,7 @@ class Engine:
         full = np.ones(self.n_columns)
         for sel, val in weights.items():
             if not (isinstance(val, int | float) and np.isfinite(val) and val > 0):
-                raise AddressError(f"weight for {sel!r} must be a positive number, found {val}")
+                raise AddressError(f"weight for {sel!r} must be positive, found {val}")
             full[self.columns([sel])] = float(val)
         return full[free]
 
@@ -388,10 +399,9 @@ class Engine:
         st = design if isinstance(design, State) else self.pack(design, coordinates or {})
         r, A, P, R = self.poses(st)
         names = self.mechanism.body_names
-        frames = {
-            j.name: JointFrames(P[k, 0], R[k, 0], P[k, 1], R[k, 1]) for k, j in enumerate(self.mechanism.joints)
-        }
-        return Kinematics(dict(zip(names, r, strict=True)), dict(zip(names, A, strict=True)), frames)
+        frames = {j.name: JointFrames(P[k, 0], R[k, 0], P[k, 1], R[k, 1]) for k, j in enumerate(self.mechanism.joints)}
+        return Kinematics(dict(zip(names, r, strict=True)), dict(zip(names, A, strict=True)), frames,
+                          frozenset(self.topology.tree_joints))  # fmt: skip
 
     def retract(self, state: State, dx: Array) -> State:
         """``state (+) dx`` for a step over every layout column (additive for q, s', l;
@@ -441,7 +451,7 @@ class Engine:
         code, it, norm = newton.solve_one(self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, target, max_iter,
                                           divergence, hist)  # fmt: skip
         return Solution(self, start, st, STATUSES[code], it, float(norm), hist[: it + 1], cols, target,
-                        dict(changes or {}))  # fmt: skip
+                        dict(changes or {}), tol)  # fmt: skip
 
     def apply(self, start: State, changes: Mapping[str, Any]) -> tuple[State, dict[str, Array], set[str]]:
         """A copy of ``start`` with ``changes`` (address -> value) written; returns it, the
@@ -534,7 +544,7 @@ class Engine:
         return Qout, BatchSolution(st, status, iters, res)
 
 
-def compile(model: Model | Mechanism) -> Engine:  # noqa: A001 - the public name (kinprop.compile)
+def compile(model: Model | Mechanism) -> Engine:
     """Compile a model (or a bare mechanism) into an :class:`Engine`.
 
     From a :class:`Model`, the engine also holds the model's design and coordinates as its

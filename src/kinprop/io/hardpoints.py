@@ -34,14 +34,14 @@ from typing import Any
 
 import numpy as np
 
+from kinprop.engine import JointFrames
+from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.loader import build_or_report
 from kinprop.io.schema import HardpointFile, HardpointJointSpec
 from kinprop.joints import joint_type
-from kinprop.engine import JointFrames
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates, parse_address
 from kinprop.model.mechanism import validate_structure
-from kinprop.engine import compile as compile_engine
 from kinprop.spatial import EY, EZ, Array, is_rotation, log_so3
 from kinprop.topology import WORLD, build_topology
 

@@ -6,8 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from kinprop.engine import compile as compile_engine
 from kinprop.analysis.points import joint_hardpoints, named_points
+from kinprop.engine import compile as compile_engine
 from kinprop.propagation.propagate import Propagation
 from kinprop.spatial import log_so3
 

@@ -6,8 +6,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from kinprop.model import Model, parse_address
 from kinprop.engine import compile as compile_engine
+from kinprop.model import Model, parse_address
 
 
 def angle_indices(model: Model, joint: str) -> list[int]:

@@ -11,8 +11,8 @@ from typing import Any
 import numpy as np
 import yaml
 
-from kinprop.model import Model
 from kinprop.engine import compile as compile_engine
+from kinprop.model import Model
 
 
 def atomic_write(path: str | Path, data: str | bytes) -> None:

@@ -12,11 +12,13 @@ from kinprop.spatial import EX, EY, EZ, euler_A_into, euler_E_into
 
 ST_CODE, FREE_CODE, TD_CODE = 6, 7, 8
 
+
 @njit
 def st_placement(q, A, d):
     euler_A_into(q[0:4], A)
     for x in range(3):
         d[x] = A[x, 2] * q[4]
+
 
 @njit
 def st_motion(q, A, d, dd, H):
@@ -29,6 +31,7 @@ def st_motion(q, A, d, dd, H):
         dd[2, y] = -(d[0] * H[1, y] - d[1] * H[0, y])
     for x in range(3):
         dd[x, 4] = A[x, 2]
+
 
 @dataclass(frozen=True)
 class SphericalTranslational(JointType):
@@ -49,6 +52,7 @@ class SphericalTranslational(JointType):
     def constraints(self):
         return (Dot2(EX, on="j"), Dot2(EY, on="j"))
 
+
 @dataclass(frozen=True)
 class RevoluteSpherical(JointType):
     """R-S: a link of length l, revolute about z''_i at body i, spherical at body j (eq. 52)."""
@@ -60,6 +64,7 @@ class RevoluteSpherical(JointType):
 
     def constraints(self):
         return (Dot2(EZ), Distance())
+
 
 @dataclass(frozen=True)
 class TranslationalDistance(JointType):
@@ -82,10 +87,12 @@ class TranslationalDistance(JointType):
     def cut_offset(self, qc):
         return EZ * qc[0], EZ[:, None].copy()
 
+
 @njit
 def free_placement(q, A, d):
     euler_A_into(q[3:7], A)
     d[0], d[1], d[2] = q[0], q[1], q[2]
+
 
 @njit
 def free_motion(q, A, d, dd, H):
@@ -93,6 +100,7 @@ def free_motion(q, A, d, dd, H):
     H[:, :] = 0.0
     dd[0, 0], dd[1, 1], dd[2, 2] = 1.0, 1.0, 1.0
     euler_E_into(q[3:7], 2.0, H, 3)
+
 
 @dataclass(frozen=True)
 class Free(JointType):
@@ -109,5 +117,6 @@ class Free(JointType):
     code: ClassVar[int] = FREE_CODE
     placement_kernel = free_placement
     motion_kernel = free_motion
+
 
 __all__ = ["Free", "RevoluteSpherical", "SphericalTranslational", "TranslationalDistance"]

@@ -88,6 +88,15 @@ class Design(Mapping[str, Array]):
     def __reduce__(self) -> tuple[type, tuple[dict[str, Array]]]:  # picklable (Dask, multiprocessing)
         return (type(self), (dict(self._values),))
 
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Design):
+            return NotImplemented
+        return self._values.keys() == other._values.keys() and all(
+            np.array_equal(v, other._values[k]) for k, v in self._values.items()
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
     def value(self, joint: str, field: str) -> Array:
         """The joint's field, or its default (zero vector / identity) when not a design variable."""
         v = self._values.get(f"{joint}.{field}")

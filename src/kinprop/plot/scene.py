@@ -100,7 +100,7 @@ def build_scene(model: Model) -> Scene:
     """The stick figure of ``model`` at its coordinates as given."""
     snap = snapshot(model)
     mech = model.mechanism
-    tree = set(snap.kin.frames)
+    tree = snap.kin.tree
     segments: list[Segment] = []
     markers: list[Marker] = []
     axes: list[Axis] = []

@@ -99,8 +99,13 @@ def min_norm_step(J, rhs, out):
 @njit
 def buffers(tb, plan, nnz):
     """Work arrays of one solve: Phi, entry values, block storage, step, and the kinematics workspace."""
-    m = plan.block_rows.shape[0]
-    return np.zeros(m), np.zeros(nnz), np.zeros(plan.store_ptr[-1]), np.zeros(plan.free.shape[0]), workspace(tb)
+    return (
+        np.zeros(plan.n_rows),
+        np.zeros(nnz),
+        np.zeros(plan.store_ptr[-1]),
+        np.zeros(plan.free.shape[0]),
+        workspace(tb),
+    )
 
 
 @njit

@@ -32,6 +32,7 @@ DENSE_MAX = 24
 class Plan(NamedTuple):
     """Arrays the compiled Newton loop reads (``kinprop.solver.newton``)."""
 
+    n_rows: int  # rows of Phi (every row, whether a free variable reaches it or not)
     free: Array  # (nf,) sorted layout columns that may move
     sqrt_weights: Array  # (nf,) sqrt of the weighted min-norm weights (ones: plain pinv)
     need: Array  # (n,) int8: 1 on every column of a variable that has a free column
@@ -144,6 +145,6 @@ def build_plan(
         return np.concatenate([[0], np.cumsum([p.size for p in parts])]).astype(np.int64)
 
     sw = np.ones(nf) if weights is None else np.sqrt(np.asarray(weights, dtype=float))
-    return Plan(free, sw, need, slot, cat([r for r, _ in blocks]), ptr([r for r, _ in blocks]),
+    return Plan(m, free, sw, need, slot, cat([r for r, _ in blocks]), ptr([r for r, _ in blocks]),
                 cat([c for _, c in blocks]), ptr([c for _, c in blocks]), store_ptr,
                 c_entry.astype(np.int64), c_row.astype(np.int64), c_free.astype(np.int64), c_ptr)  # fmt: skip
