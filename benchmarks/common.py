@@ -6,6 +6,7 @@ import statistics
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -156,33 +157,50 @@ def leg_lengths(a, b, x, R):
     return np.linalg.norm(x[..., None, :] + np.einsum("...ij,...kj->...ki", R, b) - a, axis=-1)
 
 
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
 @dataclass
 class StewartBench:
-    """The P1/P4 setup: the distance-leg Stewart model, compiled, with its leg columns."""
+    """The P1/P4 setup: ``examples/stewart.yaml`` (distance legs ``L1``..``L6`` on a free
+    joint ``P``), compiled, with its hardpoints read back from the engine's reference state."""
 
-    a: np.ndarray  # base hardpoints
-    b: np.ndarray  # platform hardpoints
+    a: np.ndarray  # base hardpoints (base frame)
+    b: np.ndarray  # platform hardpoints (platform frame)
     model: object
-    comp: object
-    legs: list[str]
-    lcol: list[int]  # leg-length columns of the state's L array
+    engine: object  # kinprop.Engine
+    legs: list[str]  # leg joint names
+    lidx: list[int]  # their joints' index in the state's L / S arrays
     fcol: int  # first column of the platform's free joint in Q
-    st: object  # packed nominal state
+    st: object  # the engine's reference State
     l0: np.ndarray  # nominal leg lengths
-    solver: object  # fast solver over q with the leg lengths locked
+    x0: np.ndarray  # nominal platform position
+    R0: np.ndarray  # nominal platform orientation
+    keys: set[str]  # the leg-length variable keys (locked, never free)
+    cols: np.ndarray  # free columns: q minus the locked legs (leg lengths are not q: all of q)
 
 
-def stewart_bench() -> StewartBench:
-    from kinprop.fast import Solver, compile_model, pack
+def stewart_bench(path: Path | str = EXAMPLES / "stewart.yaml", free_joint: str = "P") -> StewartBench:
+    import kinprop as kp
+    from kinprop.spatial import euler_to_matrix
 
-    from kinprop.builders import stewart, stewart_hardpoints
+    model = kp.load_model(path)
+    engine = kp.compile(model)
+    legs = [j.name for j in model.mechanism.joints if j.type == "distance"]
+    lidx = [engine.joint_index[j] for j in legs]
+    st = engine.reference
+    a, b = st.S[lidx, 0].copy(), st.S[lidx, 1].copy()
+    fcol = engine.target(f"{free_joint}.q").start
+    q = st.Q[fcol : fcol + 7]
+    keys = {f"{j}.length" for j in legs}
+    cols = engine.columns(("q",), keys)
+    return StewartBench(a, b, model, engine, legs, lidx, fcol, st, st.L[lidx].copy(), q[:3].copy(),
+                        euler_to_matrix(q[3:]), keys, cols)  # fmt: skip
 
-    a, b = stewart_hardpoints()
-    model = stewart()
-    comp = compile_model(model.mechanism)
-    legs = [f"M1_L{k}" for k in range(1, 7)]
-    lcol = [comp.joint_index[j] for j in legs]
-    st = pack(comp, model.design, model.coordinates)
-    solver = Solver(comp, ("q",), exclude={f"{j}.length" for j in legs})
-    fcol = comp.assembly.layout["M1_F.q"].start
-    return StewartBench(a, b, model, comp, legs, lcol, fcol, st, st.L[0, lcol].copy(), solver)
+
+def platform_pose(Q: np.ndarray, col: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(x, R)`` of a free joint's coordinates (position, Euler parameters) at ``Q[..., col:col+7]``."""
+    from kinprop.spatial import euler_to_matrix
+
+    q = np.asarray(Q)[..., col : col + 7]
+    return q[..., :3], euler_to_matrix(q[..., 3:])

@@ -1,8 +1,10 @@
 """P3: spatial RSSR four-bar driven through 360 degrees in 1-degree steps, each solved from the previous.
 
-Methods: kinprop fast continuation (one compiled call for the whole sweep), kinprop fast one
-call per step (Python loop), the reference ``propagate`` per step, a hand-written numpy scalar
-Newton on the input-output equation, and ``least_squares`` (finite differences) per step.
+Methods: ``engine.solve_sequence`` (one compiled call for the whole sweep: the issue's number),
+``engine.propagate`` by address one call per step (Python loop, each step from the previous
+Solution), the model-level ``kp.propagate`` per step (with the engine passed; timed on the first
+steps only), a hand-written numpy scalar Newton on the input-output equation, and
+``least_squares`` (finite differences) per step.
 Check: the input-output equation ``|P(theta) - Q(phi)| - l`` over the whole sweep.
 """
 
@@ -15,9 +17,8 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 from common import Row, compare
-from kinprop.fast import Solver, compile_model, pack
 
-from kinprop import propagate
+import kinprop as kp
 from kinprop.builders import RSSR, rssr, rssr_crank_point, rssr_rocker_point
 
 THETA = np.radians(np.arange(1.0, 361.0, 1.0))
@@ -25,10 +26,9 @@ THETA = np.radians(np.arange(1.0, 361.0, 1.0))
 
 def run(trials: int = 20, reference_steps: int = 36) -> list[Row]:
     model = rssr()
-    comp = compile_model(model.mechanism)
-    st0 = pack(comp, model.design, model.coordinates)
-    solver = Solver(comp, ("q",), exclude={"crank.q"})
-    cc, rc = comp.column("crank.q[0]"), comp.column("rocker.q[0]")
+    eng = kp.compile(model)
+    st0 = eng.reference
+    rc = eng.target("rocker.q").start
     pivot, a, r = np.asarray(RSSR["pivot"], float), float(RSSR["crank"]), float(RSSR["rocker"])
     length = float(model.design["coupler.length"])
     phi0 = float(model.coordinates["rocker"][0])
@@ -37,23 +37,25 @@ def run(trials: int = 20, reference_steps: int = 36) -> list[Row]:
         gap = np.linalg.norm(rssr_crank_point(theta, a) - rssr_rocker_point(phi, pivot, r), axis=-1)
         return np.abs(gap - length).max()
 
-    def fast_seq(_):
-        Q, _res = solver.sequence(st0, cc, THETA)
+    values = THETA[:, None]
+
+    def sequence(_):
+        Q, res = eng.solve_sequence(st0, ["crank.q"], values, free=("q",))
+        assert res.converged.all()
         return THETA, Q[:, rc]
 
-    def fast_loop(_):
-        Q, S, C, L = st0.Q[0].copy(), st0.S[0], st0.C[0], st0.L[0]
+    def per_step(_):
+        sol = eng.reference
         out = np.empty(THETA.size)
         for k, th in enumerate(THETA):
-            Q[cc] = th
-            solver.solve_one(Q, S, C, L)
-            out[k] = Q[rc]
+            sol = eng.propagate({"crank.q": th}, start=sol)
+            out[k] = sol.state.Q[rc]
         return THETA, out
 
     def reference(_):
         m, out = model, []
         for th in THETA[:reference_steps]:
-            m = propagate(m, {"crank.q": [th]}).after
+            m = kp.propagate(m, {"crank.q": [th]}, engine=eng).after
             out.append(m.coordinates["rocker"][0])
         return THETA[:reference_steps], np.array(out)
 
@@ -92,11 +94,11 @@ def run(trials: int = 20, reference_steps: int = 36) -> list[Row]:
     def check(_, res):
         return io_error(*res)
 
-    methods = {"kinprop fast (sequence kernel)": fast_seq, "kinprop fast (call per step)": fast_loop,
-               "kinprop reference": reference, "hand numpy Newton": hand, "scipy least_squares (FD)": lsq}  # fmt: skip
+    methods = {"engine.solve_sequence": sequence, "engine.propagate per step": per_step,
+               "kp.propagate per step (engine=)": reference, "hand numpy Newton": hand, "scipy least_squares (FD)": lsq}  # fmt: skip
     rows = compare("P3 RSSR 360 x 1 deg", list(range(trials)), methods, check, per=THETA.size)
     for row in rows:
-        if row.method == "kinprop reference":  # timed on fewer steps: scale to per step
+        if row.method == "kp.propagate per step (engine=)":  # timed on fewer steps: scale to per step
             row.times = [t * THETA.size / reference_steps for t in row.times]
             row.ratios = [x * THETA.size / reference_steps for x in row.ratios]
             row.note = f"first {reference_steps} steps only"

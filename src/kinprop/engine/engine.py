@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from kinprop.errors import AddressError
+from kinprop.jit import get_num_threads
 from kinprop.kinematics import kernels
 from kinprop.kinematics.layout import VariableLayout, build_layout, column_labels
 from kinprop.kinematics.tables import RowBlock, Tables, build_tables, row_blocks
@@ -93,6 +94,7 @@ class Target:
     """Where an address lives in a :class:`State`."""
 
     address: str
+    key: str  # the variable's key (``J.s_i`` of ``J.s_i[2]``)
     group: str
     joint: int
     side: int
@@ -196,7 +198,8 @@ class Engine:
         self.reference: State | None = (
             self.pack(reference.design, reference.coordinates).frozen() if reference else None
         )
-        self.length_scale = self._length_scale(self.reference) if reference else 1.0
+        #: characteristic length L of the compiled model (largest body position, s' or length, >= 1)
+        self.length_scale = self._length_scale(self.reference) if reference else None
 
     def __repr__(self) -> str:
         return (f"<Engine {self.mechanism.name!r}: {len(self.mechanism.bodies)} bodies, {len(self.mechanism.joints)} "
@@ -209,8 +212,10 @@ class Engine:
         st = self.default_state()
         rows, cols = np.zeros(self.nnz, np.int64), np.zeros(self.nnz, np.int64)
         need = np.ones(self.n_columns, np.int8)
-        kernels.evaluate(self.tables, st.Q, st.S, st.C, st.L, kernels.workspace(self.tables), np.zeros(self.n_rows),
-                         np.zeros(self.nnz), need, rows, cols, True)  # fmt: skip
+        k = kernels.evaluate(self.tables, st.Q, st.S, st.C, st.L, kernels.workspace(self.tables),
+                             np.zeros(self.n_rows), np.zeros(self.nnz), need, rows, cols, True)  # fmt: skip
+        if k != self.nnz:  # pragma: no cover - the count and the kernel's emission must agree
+            raise AssertionError(f"the kernel emitted {k} Jacobian entries, the count says {self.nnz}")
         return rows, cols
 
     @property
@@ -308,7 +313,7 @@ class Engine:
             v = self.layout[addr.key]
             if addr.index is not None and addr.index >= (9 if v.group == "C" else v.size):
                 raise AddressError(f"{address!r}: index out of range for a variable of size {v.size}")
-            t = Target(address, v.group, self.joint_index[v.joint], _FIELD_SIDE.get(v.field, 0), v.start, v.size,
+            t = Target(address, v.key, v.group, self.joint_index[v.joint], _FIELD_SIDE.get(v.field, 0), v.start, v.size,
                        addr.index)  # fmt: skip
             self._targets[address] = t
         return t
@@ -422,10 +427,15 @@ class Engine:
                 vals.append(abs(float(state.L[k])))
         return max(vals)
 
+    def _floor(self, state: State | None) -> float:
+        """The stopping floor: at the compiled model's length scale (a design change does not
+        loosen it: an absurd length must not make a non-assembly "converge"), else the state's."""
+        return self.roundoff_floor(None if self.length_scale is not None else state)
+
     def roundoff_floor(self, state: State | None = None) -> float:
         """``ROUNDOFF * eps * L^2``: below this ||Phi|| is round-off (about 1e-13 for the paper's
         metre-scale examples, 1e-8 for a vehicle suspension in mm)."""
-        L = self.length_scale if state is None else self._length_scale(state)
+        L = self._length_scale(state) if state is not None or self.length_scale is None else self.length_scale
         return ROUNDOFF * float(np.finfo(float).eps) * L**2
 
     # --- solving -----------------------------------------------------------------------------
@@ -447,7 +457,7 @@ class Engine:
         plan = self.plan(cols, self.weights_for(cols, weights))
         st = start.copy()
         hist = np.zeros(max_iter + 1)
-        target = max(tol, self.roundoff_floor(start))
+        target = max(tol, self._floor(start))
         code, it, norm = newton.solve_one(self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, target, max_iter,
                                           divergence, hist)  # fmt: skip
         return Solution(self, start, st, STATUSES[code], it, float(norm), hist[: it + 1], cols, target,
@@ -462,7 +472,7 @@ class Engine:
         for address, value in changes.items():
             self.set(st, address, value)
             done[address] = np.asarray(value, dtype=float)
-            keys.add(parse_address(address).key)
+            keys.add(self.target(address).key)
         return st, done, keys
 
     def propagate(
@@ -508,10 +518,13 @@ class Engine:
         st = states.copy()
         N = st.Q.shape[0]
         status, iters, res = np.zeros(N, np.int64), np.zeros(N, np.int64), np.zeros(N)
-        target = max(tol, self.roundoff_floor())
+        target = max(tol, self._floor(st[0] if N else None))
         threaded = N >= 256 if threads is None else threads
-        kernel = newton.solve_batch_threaded if threaded else newton.solve_batch
-        kernel(self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, target, max_iter, divergence, status, iters, res)
+        args = (self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, target, max_iter, divergence, status, iters, res)
+        if threaded:
+            newton.solve_batch_threaded(*args, max(1, min(get_num_threads(), N)))
+        else:
+            newton.solve_batch(*args)
         return BatchSolution(st, status, iters, res)
 
     def solve_sequence(
@@ -538,7 +551,7 @@ class Engine:
         n = values.shape[0]
         Qout = np.zeros((n, self.n_coordinates))
         status, iters, res = np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n)
-        target = max(tol, self.roundoff_floor(start))
+        target = max(tol, self._floor(start))
         newton.solve_sequence(self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, target, max_iter, divergence,
                               set_cols, values, Qout, status, iters, res)  # fmt: skip
         return Qout, BatchSolution(st, status, iters, res)

@@ -289,21 +289,15 @@ def evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols, record):
     return k
 
 
-@njit
-def count_entries(tb):
-    """Number of Jacobian entries :func:`evaluate` emits (structure only)."""
-    k = 0
-    for c in range(tb.cut.shape[0]):
-        j, m = tb.cut[c, K_JOINT], tb.cut[c, K_NROWS]
-        for f in range(4):
-            k += 3 * m * (tb.joint[j, J_COL_S_I + f] >= 0)
-        k += m * (tb.joint[j, J_COL_L] >= 0) + m * (tb.joint[j, J_NQ] > 0)
-        for pe in range(tb.cut[c, K_PATH0], tb.cut[c, K_PATH1]):
-            tj = tb.tree[tb.path[pe, P_TREE], T_JOINT]
-            k += m * tb.joint[tj, J_NQ]
-            for f in range(4):
-                k += 3 * m * (tb.joint[tj, J_COL_S_I + f] >= 0)
-    return k + 4 * tb.euler.shape[0]
+def count_entries(tb) -> int:
+    """Number of Jacobian entries :func:`evaluate` emits (structure only; plain numpy)."""
+    joint = tb.joint
+    own = 3 * (joint[:, J_COL_S_I : J_COL_S_I + 4] >= 0).sum(axis=1) + (joint[:, J_COL_L] >= 0) + (joint[:, J_NQ] > 0)
+    moved = np.maximum(joint[:, J_NQ], 0) + 3 * (joint[:, J_COL_S_I : J_COL_S_I + 4] >= 0).sum(axis=1)
+    m = tb.cut[:, K_NROWS]
+    per_path = moved[tb.tree[tb.path[:, P_TREE], T_JOINT]] if tb.path.size else np.zeros(0, np.int64)
+    path_sum = np.array([per_path[a:b].sum() for a, b in tb.cut[:, [K_PATH0, K_PATH1]]], dtype=np.int64)
+    return int(np.sum(m * (own[tb.cut[:, K_JOINT]] + path_sum)) + 4 * tb.euler.shape[0])
 
 
 @njit

@@ -15,7 +15,7 @@ from enum import StrEnum
 
 import numpy as np
 
-from kinprop.jit import get_num_threads, njit, prange
+from kinprop.jit import njit, prange
 from kinprop.kinematics.kernels import evaluate, retract, workspace
 
 #: relative singular-value threshold for the rank (``s_k > RANK_RTOL * s_max``)
@@ -75,7 +75,8 @@ def _lu_solve(M, b, x):
 
 @njit
 def min_norm_step(J, rhs, out):
-    """``out = -pinv(J) rhs``: pivoted LU when square and well conditioned, else SVD least squares."""
+    """``out = -pinv(J) rhs``: pivoted LU when square and well conditioned, else the SVD
+    pseudo-inverse (singular values below ``eps max(m, n) s_max`` dropped, as ``lstsq``)."""
     m, n = J.shape
     if n == 0:
         return
@@ -91,9 +92,17 @@ def min_norm_step(J, rhs, out):
     if m == 0:
         out[:] = 0.0
         return
-    x = np.linalg.lstsq(J, rhs, 2.220446049250313e-16 * max(m, n))[0]
-    for i in range(n):
-        out[i] = -x[i]
+    U, s, Vt = np.linalg.svd(J, full_matrices=False)
+    cut = 2.220446049250313e-16 * max(m, n) * (s[0] if s.shape[0] else 0.0)
+    out[:] = 0.0
+    for k in range(s.shape[0]):
+        if s[k] > cut:
+            c = 0.0
+            for i in range(m):
+                c += U[i, k] * rhs[i]
+            c /= s[k]
+            for i in range(n):
+                out[i] -= c * Vt[k, i]
 
 
 @njit
@@ -191,10 +200,9 @@ def solve_batch(tb, plan, nnz, Q, S, C, L, tol, max_iter, divergence, status, it
 
 
 @njit(parallel=True)
-def solve_batch_threaded(tb, plan, nnz, Q, S, C, L, tol, max_iter, divergence, status, iterations, residual):
-    """:func:`solve_batch` split into one contiguous chunk per thread."""
+def solve_batch_threaded(tb, plan, nnz, Q, S, C, L, tol, max_iter, divergence, status, iterations, residual, nth):
+    """:func:`solve_batch` split into ``nth`` contiguous chunks, one per thread."""
     N = Q.shape[0]
-    nth = max(1, min(get_num_threads(), N))
     for c in prange(nth):
         buf = buffers(tb, plan, nnz)
         hist = np.zeros(0)
