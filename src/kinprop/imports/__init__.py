@@ -10,13 +10,15 @@ from kinprop.model import Model
 SUFFIXES = {".xml": "mjcf", ".mjcf": "mjcf"}
 
 
-def import_model(path: str | Path, keyframe: str | None = None) -> tuple[Model, list[str]]:
+def import_model(
+    path: str | Path, keyframe: str | None = None, tire_radius: float | None = None
+) -> tuple[Model, list[str]]:
     """A model from an MJCF (``.xml``) or Chrono suspension (``.json``) file, with the importer's notes."""
     path = Path(path)
     if path.suffix.lower() == ".json":
         from kinprop.imports.chrono import read_chrono
 
-        return read_chrono(path)
+        return read_chrono(path, tire_radius)
     from kinprop.imports.mjcf import document_to_model, read_mjcf
 
     doc = read_mjcf(path)
