@@ -10,9 +10,9 @@ the left side and builds, per template (topology as in Chrono::Vehicle's ``ChDou
   the upright, tie rod ``TIEROD`` a distance joint from the rack point (on the chassis) to the
   upright; spring and shock between the chassis and the lower arm.
 * ``MacPhersonStrut``: lower arm ``lca`` revolute to the chassis and ball-jointed to the
-  upright; the strut universal-jointed to the chassis at the spring's chassis point
-  (``STRUT_TOP``) and cylindrical to the upright along the spring axis (``STRUT``); tie rod
-  as above; spring and shock between the chassis and the upright.
+  upright (``LCA_U``, the cut joint); the strut universal-jointed to the chassis at the
+  spring's chassis point (``STRUT_TOP``) and cylindrical to the upright along the spring axis
+  (``STRUT``); tie rod as above; spring and shock between the chassis and the upright.
 * ``MultiLink``: upper arm ``upper_arm`` revolute to the chassis, ball-jointed to the
   upright; lateral and trailing links universal-jointed to the chassis (axes as given in the
   file: ``Universal Joint Axis Chassis`` on the chassis, ``... Link`` on the link) and
@@ -195,7 +195,7 @@ def _macpherson(r: _Reader, tire_radius: float | None) -> tuple[dict[str, Any], 
     }
     joints = {
         "LCA": _revolute("lca", lca_f, lca_b),
-        "LCA_U": _ball("lca", "upright", lca_u),
+        "LCA_U": _ball("lca", "upright", lca_u, cut=True),
         "STRUT_TOP": {
             "type": "universal",
             "bodies": ["chassis", "strut"],
@@ -206,7 +206,6 @@ def _macpherson(r: _Reader, tire_radius: float | None) -> tuple[dict[str, Any], 
         "STRUT": {
             "type": "cylindrical",
             "bodies": ["strut", "upright"],
-            "cut": True,
             "point": _l(spring_u),
             "axis": _l(w),
         },
