@@ -4,7 +4,8 @@ The body tree is kinprop's spanning tree; each body's ``pos``/``quat`` is its po
 to its tree parent at the model's current coordinates, which become MuJoCo's reference
 configuration (``qpos0``; all joint ``ref`` are 0). Tree joints: revolute -> ``hinge``,
 translational -> ``slide``, cylindrical -> ``hinge`` + ``slide``, universal -> two ``hinge``
-(the second about the rotated axis, so MuJoCo's sequential joints reproduce ``Rz(q0) Ry(q1)``),
+(about axes chosen so that MuJoCo's sequential joints reproduce ``Rz(q0) Ry(q1)``); a joint
+with two coordinates becomes MuJoCo joints ``NAME__q0`` and ``NAME__q1`` (qpos = q - q_now),
 spherical -> ``ball``, free -> ``freejoint``, fixed -> none (the body is welded). Cut joints:
 spherical -> ``<connect>``, fixed -> ``<weld relpose>``, revolute -> two ``<connect>`` on its
 axis, distance -> a massless rod body (ball-jointed on body i, pointing at body j) with a
@@ -119,15 +120,16 @@ def model_to_mjcf(model: Model) -> tuple[str, list[str]]:
         elif jt == "translational":
             ET.SubElement(el, "joint", name=name, type="slide", pos=_vec(anchor), axis=_vec(axis))
         elif jt == "cylindrical":
-            ET.SubElement(el, "joint", name=f"{name}__rotation", type="hinge", pos=_vec(anchor), axis=_vec(axis))
-            ET.SubElement(el, "joint", name=f"{name}__slide", type="slide", pos=_vec(anchor), axis=_vec(axis))
+            ET.SubElement(el, "joint", name=f"{name}__q0", type="hinge", pos=_vec(anchor), axis=_vec(axis))
+            ET.SubElement(el, "joint", name=f"{name}__q1", type="slide", pos=_vec(anchor), axis=_vec(axis))
         elif jt == "universal":
-            if t.reversed:
-                a1, a2 = -(C @ rot_z(q[0]) @ EY), -(C @ EZ)
+            # MuJoCo applies a body's joints in order, each about its axis in the body frame
+            if t.reversed:  # body i moves: Ry(-q1) first, then Rz(-q0)
+                hinges = [("q1", -(C @ rot_z(q[0]) @ EY)), ("q0", -(C @ EZ))]
             else:
-                a1, a2 = C @ rot_y(-q[1]) @ EZ, C @ EY
-            ET.SubElement(el, "joint", name=f"{name}__1", type="hinge", pos=_vec(anchor), axis=_vec(a1))
-            ET.SubElement(el, "joint", name=f"{name}__2", type="hinge", pos=_vec(anchor), axis=_vec(a2))
+                hinges = [("q0", C @ rot_y(-q[1]) @ EZ), ("q1", C @ EY)]
+            for suffix, a in hinges:
+                ET.SubElement(el, "joint", name=f"{name}__{suffix}", type="hinge", pos=_vec(anchor), axis=_vec(a))
         elif jt == "spherical":
             ET.SubElement(el, "joint", name=name, type="ball", pos=_vec(anchor))
         elif jt == "free":
