@@ -159,6 +159,8 @@ def test_two_commands_plot_and_sensitivity_table(tmp_path) -> None:
             "toe",
             "--out",
             "wheel_centre_dz",
+            "--x",
+            "wheel_centre_dz",
             "--plot",
             str(png),
             "--tol",
