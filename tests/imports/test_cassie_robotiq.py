@@ -129,3 +129,18 @@ def test_robotiq_without_the_coupling_has_mujocos_mobility() -> None:
     assert kp.mobility(prop.after).mobility == m.nv - np.linalg.matrix_rank(J, 1e-9) == 4
     mj = mujoco_poses(mujoco, m, d)
     assert set(mj) <= set(model.mechanism.body_names)
+
+
+def test_imported_yaml_loads_back_with_the_same_poses(tmp_path) -> None:
+    from imports_helpers import body_poses
+
+    out = tmp_path / "cassie.yaml"
+    r = runner.invoke(app, ["import", str(CASSIE), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "note:" in r.output and "<inertial>" in r.output and "2 cut" in r.output
+    r = runner.invoke(app, ["check", str(out), "--assemble", "--json"])
+    assert r.exit_code == 0 and json.loads(r.stdout)["mobility"] == 8
+    direct, back = kp.load_model(CASSIE), kp.load_model(out)
+    names = direct.mechanism.body_names
+    a, b = body_poses(direct, names), body_poses(back, names)
+    assert max(np.abs(a[n][0] - b[n][0]).max() + np.abs(a[n][1] - b[n][1]).max() for n in names) == 0.0
