@@ -8,12 +8,15 @@ translational -> ``slide``, cylindrical -> ``hinge`` + ``slide``, universal -> t
 with two coordinates becomes MuJoCo joints ``NAME__q0`` and ``NAME__q1`` (qpos = q - q_now),
 spherical -> ``ball``, free -> ``freejoint``, fixed -> none (the body is welded). Cut joints:
 spherical -> ``<connect>``, fixed -> ``<weld relpose>``, revolute -> two ``<connect>`` on its
-axis, distance -> a massless rod body (ball-jointed on body i, pointing at body j) with a
-``<connect>`` at its tip. MuJoCo places a connect's point on body2 from the reference
-configuration, so export an assembled model (``kinprop assemble -o`` first). Fixed bodies
-other than a world at the origin are bodies welded to ``<worldbody>``. Named body points are
-written as sites. Moving bodies get a placeholder ``<inertial>`` (MuJoCo needs mass to
-compile); no geoms are written.
+axis; distance, R-S and T-D -> a rod body of the joint's length on body i (ball-jointed;
+hinged about z''_i for R-S; on a slider along z''_i for T-D) with a ``<connect>`` at its tip
+to body j; S-T -> a slider on body j's axis connected to body i's point; translational,
+cylindrical and universal -> a copy of body j carried from body i by the joint's MuJoCo
+joints (``NAME__copy``) and welded to body j. Dot-1 and dot-2 joints have no MJCF form.
+MuJoCo places a connect's point on body2 from the reference configuration, so export an
+assembled model (``kinprop assemble -o`` first). Fixed bodies other than a world at the
+origin are bodies welded to ``<worldbody>``. Named body points are written as sites. Moving
+bodies get a placeholder ``<inertial>`` (MuJoCo needs mass to compile); no geoms are written.
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from kinprop.errors import ModelError, Problem
 from kinprop.imports.rotations import matrix_to_quat
 from kinprop.model import Model
 from kinprop.propagation.propagate import assembly_for
-from kinprop.spatial import EY, EZ, Array, rot_y, rot_z
+from kinprop.spatial import EY, EZ, Array, euler_to_matrix, rot_y, rot_z
 
 #: placeholder inertia of moving bodies (MuJoCo refuses massless moving bodies)
 MASS = "1"
@@ -49,6 +52,53 @@ def _vec(v: Array) -> str:
 
 def _unit(v: Array) -> Array:
     return np.asarray(v, dtype=float) / np.linalg.norm(v)
+
+
+def joint_elements(el: ET.Element, name: str, jt: str, design, reversed_: bool, q: Array) -> bool:
+    """MuJoCo joints in body ``el`` (the joint's child body) reproducing kinprop joint ``name``.
+
+    MuJoCo applies a body's joints in order, each about its axis in the body frame, from the
+    reference pose (the current ``q``); False when the type has no MJCF form.
+    """
+    if reversed_:  # the child is body i
+        anchor, C = design.value(name, "s_i"), design.value(name, "C_i")
+    else:
+        anchor, C = design.value(name, "s_j"), design.value(name, "C_j")
+    axis = (-1.0 if reversed_ else 1.0) * (C @ EZ)
+
+    def add(suffix: str, kind: str, pos: Array, a: Array | None = None) -> None:
+        attrs = {"name": f"{name}{suffix}", "type": kind, "pos": _vec(pos)}
+        if a is not None:
+            attrs["axis"] = _vec(a)
+        ET.SubElement(el, "joint", attrs)
+
+    if jt == "revolute":
+        add("", "hinge", anchor, axis)
+    elif jt == "translational":
+        add("", "slide", anchor, axis)
+    elif jt == "cylindrical":
+        add("__q0", "hinge", anchor, axis)
+        add("__q1", "slide", anchor, axis)
+    elif jt == "universal":
+        if reversed_:  # body i moves: Ry(-q1) first, then Rz(-q0)
+            add("__q1", "hinge", anchor, -(C @ rot_z(q[0]) @ EY))
+            add("__q0", "hinge", anchor, -(C @ EZ))
+        else:
+            add("__q0", "hinge", anchor, C @ rot_y(-q[1]) @ EZ)
+            add("__q1", "hinge", anchor, C @ EY)
+    elif jt == "spherical":
+        add("", "ball", anchor)
+    elif jt == "spherical-translational":
+        A, t = euler_to_matrix(q[0:4]), q[4]
+        if reversed_:  # body i slides along body j's (parent-fixed) strut axis, then turns about its point
+            add("__slide", "slide", anchor, -(C @ A @ EZ))
+            add("__ball", "ball", anchor)
+        else:  # body j turns about the sphere centre, then slides along its own axis
+            add("__ball", "ball", anchor - (C @ EZ) * t)
+            add("__slide", "slide", anchor, C @ EZ)
+    elif jt != "fixed":
+        return False
+    return True
 
 
 def model_to_mjcf(model: Model) -> tuple[str, list[str]]:
@@ -108,33 +158,10 @@ def model_to_mjcf(model: Model) -> tuple[str, list[str]]:
         r_c, A_c = kin.r[t.child], kin.A[t.child]
         el = body_element(parent_el, t.child, A_p.T @ (r_c - r_p), A_p.T @ A_c, moving=True)
         elements[t.child] = el
-        if t.reversed:
-            anchor, C, sign = design.value(j.name, "s_i"), design.value(j.name, "C_i"), -1.0
-        else:
-            anchor, C, sign = design.value(j.name, "s_j"), design.value(j.name, "C_j"), 1.0
         q = np.asarray(model.coordinates.get(j.name, np.zeros(0)), dtype=float)
-        axis = sign * (C @ EZ)
-        name = j.name
-        if jt == "revolute":
-            ET.SubElement(el, "joint", name=name, type="hinge", pos=_vec(anchor), axis=_vec(axis))
-        elif jt == "translational":
-            ET.SubElement(el, "joint", name=name, type="slide", pos=_vec(anchor), axis=_vec(axis))
-        elif jt == "cylindrical":
-            ET.SubElement(el, "joint", name=f"{name}__q0", type="hinge", pos=_vec(anchor), axis=_vec(axis))
-            ET.SubElement(el, "joint", name=f"{name}__q1", type="slide", pos=_vec(anchor), axis=_vec(axis))
-        elif jt == "universal":
-            # MuJoCo applies a body's joints in order, each about its axis in the body frame
-            if t.reversed:  # body i moves: Ry(-q1) first, then Rz(-q0)
-                hinges = [("q1", -(C @ rot_z(q[0]) @ EY)), ("q0", -(C @ EZ))]
-            else:
-                hinges = [("q0", C @ rot_y(-q[1]) @ EZ), ("q1", C @ EY)]
-            for suffix, a in hinges:
-                ET.SubElement(el, "joint", name=f"{name}__{suffix}", type="hinge", pos=_vec(anchor), axis=_vec(a))
-        elif jt == "spherical":
-            ET.SubElement(el, "joint", name=name, type="ball", pos=_vec(anchor))
-        elif jt == "free":
-            ET.SubElement(el, "freejoint", name=name)
-        elif jt != "fixed":
+        if jt == "free":
+            ET.SubElement(el, "freejoint", name=j.name)
+        elif not joint_elements(el, j.name, jt, design, t.reversed, q):
             problems.append(Problem(f"joints.{j.name}", f"a tree joint of type {jt!r} has no MJCF form yet"))
         sites(el, t.child)
 
@@ -161,29 +188,76 @@ def model_to_mjcf(model: Model) -> tuple[str, list[str]]:
             rel = np.concatenate([s_i - R @ s_j, matrix_to_quat(R)])
             ET.SubElement(equality, "weld", name=name, body1=b1, body2=b2, relpose=_vec(rel))
             gap = float(np.linalg.norm(P_i - P_j) + np.linalg.norm(kin.A[j.body_i] @ C_i - kin.A[j.body_j] @ C_j))
-        elif jt == "distance":
+        elif jt in ("distance", "revolute-spherical", "translational-distance"):
+            # a rod of the joint's length from body i's point (slid along the rack for T-D,
+            # turning about z''_i for R-S, free to turn for a distance joint) to body j's point
             length = float(design[f"{name}.length"])
-            d = P_j - P_i
+            A_i, R_i = kin.A[j.body_i], kin.A[j.body_i] @ C_i
+            holder, base = elements[j.body_i], s_i
+            if jt == "translational-distance":
+                qc = float(np.asarray(model.coordinates[name])[0])
+                base = s_i + C_i @ EZ * qc
+                holder = ET.SubElement(holder, "body", name=f"{name}__rack", pos=_vec(base), quat="1 0 0 0")
+                ET.SubElement(holder, "inertial", pos="0 0 0", mass=MASS, diaginertia=INERTIA)
+                ET.SubElement(holder, "joint", name=f"{name}__slide", type="slide", pos="0 0 0", axis=_vec(C_i @ EZ))
+                base = np.zeros(3)
+            P_base = kin.r[j.body_i] + A_i @ (s_i if jt != "translational-distance" else s_i + C_i @ EZ * qc)
+            d = P_j - P_base
             gap = abs(float(np.linalg.norm(d)) - length)
+            if jt == "revolute-spherical":
+                gap += abs(float(d @ (R_i @ EZ)))
+                d = d - (d @ (R_i @ EZ)) * (R_i @ EZ)
             if np.linalg.norm(d) < 1e-12:
-                problems.append(Problem(f"joints.{name}", "the two points coincide: no rod direction for MJCF"))
+                problems.append(Problem(f"joints.{name}", "the rod has no direction (its ends coincide) for MJCF"))
                 continue
-            A_i = kin.A[j.body_i]
             x = _unit(A_i.T @ d)
-            helper = EZ if abs(x[2]) < 0.9 else EY
-            y = _unit(np.cross(helper, x))
+            z = C_i @ EZ if jt == "revolute-spherical" else (EZ if abs(x[2]) < 0.9 else EY)
+            y = _unit(np.cross(z, x))
             rod = ET.SubElement(
-                elements[j.body_i],
+                holder,
                 "body",
                 name=f"{name}__rod",
-                pos=_vec(s_i),
+                pos=_vec(base),
                 quat=_vec(matrix_to_quat(np.column_stack([x, y, np.cross(x, y)]))),
             )
             ET.SubElement(rod, "inertial", pos="0 0 0", mass=MASS, diaginertia=INERTIA)
-            ET.SubElement(rod, "joint", name=f"{name}__ball", type="ball", pos="0 0 0")
+            if jt == "revolute-spherical":  # the rod's z is the revolute axis
+                ET.SubElement(rod, "joint", name=f"{name}__hinge", type="hinge", pos="0 0 0", axis="0 0 1")
+            else:
+                ET.SubElement(rod, "joint", name=f"{name}__rod_ball", type="ball", pos="0 0 0")
             ET.SubElement(
                 equality, "connect", name=name, body1=f"{name}__rod", body2=b2, anchor=_vec([length, 0.0, 0.0])
             )
+        elif jt == "spherical-translational":
+            # body i's point slides on body j's axis: a slider on body j, connected to the point
+            z_j = kin.A[j.body_j] @ C_j @ EZ
+            t = float((P_i - P_j) @ z_j)
+            gap = float(np.linalg.norm(P_i - P_j - t * z_j))
+            slider = ET.SubElement(
+                elements[j.body_j], "body", name=f"{name}__slider", pos=_vec(s_j + C_j @ EZ * t), quat="1 0 0 0"
+            )
+            ET.SubElement(slider, "inertial", pos="0 0 0", mass=MASS, diaginertia=INERTIA)
+            ET.SubElement(slider, "joint", name=f"{name}__slide", type="slide", pos="0 0 0", axis=_vec(C_j @ EZ))
+            ET.SubElement(equality, "connect", name=name, body1=f"{name}__slider", body2=b1, anchor="0 0 0")
+        elif jt in ("translational", "cylindrical", "universal"):
+            # a copy of body j carried by the joint's tree form from body i, welded to body j
+            R_i, R_j = kin.A[j.body_i] @ C_i, kin.A[j.body_j] @ C_j
+            A_rel, d_rel = R_i.T @ R_j, R_i.T @ (P_j - P_i)
+            if jt == "translational":
+                q = np.array([d_rel[2]])
+            elif jt == "cylindrical":
+                q = np.array([np.arctan2(A_rel[1, 0], A_rel[0, 0]), d_rel[2]])
+            else:
+                q = np.array([np.arctan2(-A_rel[0, 1], A_rel[1, 1]), np.arctan2(-A_rel[2, 0], A_rel[2, 2])])
+            A2, d2 = j.jtype.placement(q)
+            R_rel = C_i @ A2 @ C_j.T
+            p_rel = s_i + C_i @ d2 - R_rel @ s_j
+            ghost = body_element(elements[j.body_i], f"{name}__copy", p_rel, R_rel, moving=True)
+            joint_elements(ghost, name, jt, design, False, q)
+            ET.SubElement(equality, "weld", name=name, body1=f"{name}__copy", body2=b2, relpose="0 0 0 1 0 0 0")
+            A_pred = kin.A[j.body_i] @ R_rel
+            r_pred = kin.r[j.body_i] + kin.A[j.body_i] @ p_rel
+            gap = float(np.linalg.norm(r_pred - kin.r[j.body_j]) + np.linalg.norm(A_pred - kin.A[j.body_j]))
         else:
             problems.append(Problem(f"joints.{name}", f"a cut joint of type {jt!r} has no MJCF form yet"))
             continue
