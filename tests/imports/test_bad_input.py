@@ -164,3 +164,50 @@ def test_other_commands_read_imports_with_the_same_errors(tmp_path) -> None:
     assert r.exit_code == 0 and json.loads(r.stdout)["mobility"] == 1
     r = runner.invoke(app, ["import", str(CHRONO / "README.md")])
     assert r.exit_code == 2 and "expected an MJCF (.xml) or Project Chrono suspension (.json) file" in r.output
+
+
+def test_mutated_files_are_models_or_located_errors() -> None:
+    """Seeded mutations of the example files: every outcome is a model or a ModelError."""
+    import random
+    import re
+    import warnings
+
+    import kinprop as kp
+    from kinprop.errors import ModelError
+    from kinprop.imports.chrono import chrono_hardpoints
+    from kinprop.imports.mjcf import document_to_model, read_mjcf_text
+    from kinprop.io.hardpoints import model_from_hardpoints
+
+    rng = random.Random(7)
+    texts = [p.read_text() for p in sorted(MJCF.glob("*.xml"))]
+    junk = ["nan", "abc", "1e999", "1e300", "", "0 0 0 0", "1 2", "0 0 0", "-1e308 1e308 1"]
+    outcomes = {"model": 0, "error": 0}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for _ in range(150):
+            t = rng.choice(texts)
+            for _ in range(rng.randint(1, 3)):
+                m = rng.choice(list(re.finditer(r'="([^"]*)"', t)))
+                t = t[: m.start(1)] + rng.choice([*junk, m.group(1)[::-1]]) + t[m.end(1) :]
+            try:
+                kp.mobility(document_to_model(read_mjcf_text(t, "f.xml")))
+                outcomes["model"] += 1
+            except ModelError:
+                outcomes["error"] += 1
+        datas = [json.loads(p.read_text()) for p in sorted(CHRONO.glob("*.json"))]
+        bad = [1e300, 0, None, "x", [1, 2], [0, 0, 0], True, {"a": 1}]
+        for _ in range(150):
+            d = json.loads(json.dumps(rng.choice(datas)))
+            sec = rng.choice(list(d))
+            if isinstance(d[sec], dict) and d[sec]:
+                d[sec][rng.choice(list(d[sec]))] = rng.choice(bad)
+            else:
+                d[sec] = rng.choice(bad)
+            try:
+                model = model_from_hardpoints(chrono_hardpoints(d, "f.json")[0], "f.json")
+                kp.mobility(model)
+                kp.assemble(model)
+                outcomes["model"] += 1
+            except ModelError:
+                outcomes["error"] += 1
+    assert outcomes["model"] > 20 and outcomes["error"] > 20

@@ -46,6 +46,8 @@ from kinprop.io.hardpoints import model_from_hardpoints
 from kinprop.model import Model
 from kinprop.spatial import Array, rot_x, rot_z
 
+#: larger coordinates would overflow in the kinematics (products of coordinates)
+MAX_NUMBER = 1e100
 #: the spin axis point is this far along the unit spin axis from the wheel centre
 SPIN_AXIS_LENGTH = 1.0
 
@@ -67,11 +69,20 @@ class _Reader:
         ok = (
             isinstance(v, list)
             and len(v) == 3
-            and all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in v)
+            and all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and abs(x) <= MAX_NUMBER
+                for x in v
+            )
         )
         if not ok:
             found = "missing" if v is None else repr(v)[:60]
-            self.problems.append(Problem(f"{section}.{key}", f"expected [x, y, z] in metres, found {found}", self.file))
+            self.problems.append(
+                Problem(
+                    f"{section}.{key}",
+                    f"expected [x, y, z] in metres (finite, below {MAX_NUMBER:g}), found {found}",
+                    self.file,
+                )
+            )
             return np.zeros(3)
         return np.array(v, dtype=float)
 
@@ -280,7 +291,7 @@ def chrono_hardpoints(
     if not isinstance(data, dict):
         raise ModelError([Problem("file", f"expected a JSON object, found {type(data).__name__}", file)])
     template = data.get("Template")
-    if template not in TEMPLATES:
+    if not isinstance(template, str) or template not in TEMPLATES:
         raise ModelError([Problem("Template", f"expected one of {', '.join(TEMPLATES)}, found {template!r}", file)])
     if data.get("Type", "Suspension") != "Suspension":
         raise ModelError([Problem("Type", f"expected 'Suspension', found {data.get('Type')!r}", file)])

@@ -49,6 +49,8 @@ from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates
 from kinprop.spatial import Array
 
 WORLD_BODY = "world"
+#: larger numbers would overflow in the kinematics (products of coordinates)
+MAX_NUMBER = 1e100
 COUPLING_ISSUE = "coupling constraints: issue 12"
 
 #: top-level sections that do not change the kinematics (one note each when present)
@@ -197,8 +199,8 @@ class _Reader:
             want = " or ".join(str(s) for s in sizes)
             self.problem(node, f"{key}={text!r}: expected {want} numbers, found {values.size}")
             return None
-        if not np.all(np.isfinite(values)):
-            self.problem(node, f"{key}={text!r}: expected finite numbers")
+        if not np.all(np.isfinite(values)) or np.any(np.abs(values) > MAX_NUMBER):
+            self.problem(node, f"{key}={text!r}: expected finite numbers of magnitude below {MAX_NUMBER:g}")
             return None
         return values
 
