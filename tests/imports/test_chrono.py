@@ -210,3 +210,20 @@ def test_two_commands_plot_and_sensitivity_table(tmp_path) -> None:
             vals.append(np.array(list(kp.evaluate_outputs(p.after, ["camber", "toe"]).values())))
         fd = (vals[0] - vals[1]) / (2 * h)
         assert np.allclose(S[:, k], fd, rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.parametrize("name", list(TEMPLATES))
+def test_cli_import_assemble_and_sweep(tmp_path, name: str) -> None:
+    out = tmp_path / "s.yaml"
+    r = runner.invoke(app, ["import", str(CHRONO / f"{name}.json"), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(app, ["assemble", str(out), "-o", str(tmp_path / "a.yaml")])
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(
+        app, ["sweep", str(out), "--drive", f"{TEMPLATES[name]}=-5:5:4", "--out", "camber", "--out", "toe", "--json"]
+    )
+    assert r.exit_code == 0, r.output
+    obj = json.loads(r.stdout)
+    rows = obj["rows"]
+    assert len(rows) == 5 and all(row["status"] == "converged" for row in rows)
+    assert abs(rows[2]["camber"]) < 1e-9 and abs(rows[0]["camber"] - rows[-1]["camber"]) > 0.1
