@@ -25,11 +25,12 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from kinprop.analysis.points import snapshot
 from kinprop.errors import ModelError, Problem
 from kinprop.imports.rotations import matrix_to_quat
 from kinprop.model import Model
-from kinprop.propagation.propagate import assembly_for
 from kinprop.spatial import EY, EZ, Array, euler_to_matrix, rot_y, rot_z
+from kinprop.topology import build_topology
 
 #: placeholder inertia of moving bodies (MuJoCo refuses massless moving bodies)
 MASS = "1"
@@ -104,9 +105,8 @@ def joint_elements(el: ET.Element, name: str, jt: str, design, reversed_: bool, 
 def model_to_mjcf(model: Model) -> tuple[str, list[str]]:
     """MJCF text of ``model`` at its current coordinates, and warnings (one line each)."""
     mech = model.mechanism
-    asm = assembly_for(mech)
-    topo = asm.topology
-    kin = asm.kinematics(model.design, model.coordinates)
+    topo = build_topology(mech)
+    kin = snapshot(model)  # body poses r, A at the model's coordinates
     design = model.design
     warnings: list[str] = []
     problems: list[Problem] = []
