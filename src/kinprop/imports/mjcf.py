@@ -109,7 +109,13 @@ class MjcfBody:
 
 @dataclass
 class Coupling:
-    """An MJCF ``<equality><joint>``: ``q2 -> polycoef`` polynomial of ``q1`` (not in models yet)."""
+    """An MJCF ``<equality><joint>`` (not in models yet: :func:`document_to_model` refuses it).
+
+    MuJoCo's constraint is ``y - y0 = a0 + a1 (x - x0) + ... + a4 (x - x0)^4`` with ``x``, ``y``
+    the positions of ``joint1``, ``joint2`` and ``x0``, ``y0`` their ``qpos0`` (= ``ref``). The
+    kinprop joints carry the MJCF names and coordinates ``q = qpos - ref``, so in kinprop terms
+    the row is ``q[joint2] - sum(a_k q[joint1]^k) = 0``; without ``joint2``, ``q[joint1] = a0``.
+    """
 
     name: str
     joint1: str
