@@ -111,10 +111,11 @@ class MjcfBody:
 class Coupling:
     """An MJCF ``<equality><joint>`` (not in models yet: :func:`document_to_model` refuses it).
 
-    MuJoCo's constraint is ``y - y0 = a0 + a1 (x - x0) + ... + a4 (x - x0)^4`` with ``x``, ``y``
-    the positions of ``joint1``, ``joint2`` and ``x0``, ``y0`` their ``qpos0`` (= ``ref``). The
-    kinprop joints carry the MJCF names and coordinates ``q = qpos - ref``, so in kinprop terms
-    the row is ``q[joint2] - sum(a_k q[joint1]^k) = 0``; without ``joint2``, ``q[joint1] = a0``.
+    MuJoCo's constraint is ``y - y0 = a0 + a1 (x - x0) + ... + a4 (x - x0)^4`` with ``y`` the
+    position of ``joint1``, ``x`` that of ``joint2`` and ``y0``, ``x0`` their ``qpos0`` (= ``ref``)
+    — checked against MuJoCo's ``efc_pos``. The kinprop joints carry the MJCF names and
+    coordinates ``q = qpos - ref``, so in kinprop terms the row is
+    ``q[joint1] - sum(a_k q[joint2]^k) = 0``; without ``joint2``, ``q[joint1] = a0``.
     """
 
     name: str
