@@ -144,3 +144,24 @@ def test_imported_yaml_loads_back_with_the_same_poses(tmp_path) -> None:
     names = direct.mechanism.body_names
     a, b = body_poses(direct, names), body_poses(back, names)
     assert max(np.abs(a[n][0] - b[n][0]).max() + np.abs(a[n][1] - b[n][1]).max() for n in names) == 0.0
+
+
+def test_coupling_record_matches_mujocos_residual() -> None:
+    """For the coupling-constraint work: the recorded coupling, in kinprop coordinates
+    (q = qpos - ref), is MuJoCo's residual q[joint1] - poly(q[joint2])."""
+    mujoco = pytest.importorskip("mujoco")
+    xml = """<mujoco><compiler angle="radian"/><worldbody>
+      <body><inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/><joint name="a" axis="0 1 0" ref="0.3"/></body>
+      <body><inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/><joint name="b" axis="0 1 0" ref="-0.2"/></body>
+      </worldbody><equality><joint joint1="b" joint2="a" polycoef="0.1 2 0.5 -0.3 0.2"/></equality></mujoco>"""
+    doc = read_mjcf_text(xml, "c.xml")
+    [c] = doc.couplings
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    for qpos in ([0.3, -0.2], [0.5, 0.1], [1.0, -1.0]):
+        d.qpos[:] = qpos
+        mujoco.mj_forward(m, d)
+        q = doc.coordinates(np.array(qpos))
+        x = float(q[c.joint2][0])
+        ours = float(q[c.joint1][0]) - sum(a * x**k for k, a in enumerate(c.polycoef))
+        assert ours == pytest.approx(float(d.efc_pos[0]), abs=1e-14)
