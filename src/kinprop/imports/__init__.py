@@ -6,9 +6,6 @@ from pathlib import Path
 
 from kinprop.model import Model
 
-#: file suffixes each importer reads
-SUFFIXES = {".xml": "mjcf", ".mjcf": "mjcf"}
-
 
 def import_model(
     path: str | Path, keyframe: str | None = None, tire_radius: float | None = None
@@ -25,4 +22,4 @@ def import_model(
     return document_to_model(doc, keyframe), doc.notes
 
 
-__all__ = ["SUFFIXES", "import_model"]
+__all__ = ["import_model"]

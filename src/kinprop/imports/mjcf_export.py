@@ -28,7 +28,7 @@ import numpy as np
 from kinprop.analysis.points import snapshot
 from kinprop.errors import ModelError, Problem
 from kinprop.imports.rotations import matrix_to_quat
-from kinprop.model import Model
+from kinprop.model import Design, Model
 from kinprop.spatial import EY, EZ, Array, euler_to_matrix, rot_y, rot_z
 from kinprop.topology import build_topology
 
@@ -55,7 +55,7 @@ def _unit(v: Array) -> Array:
     return np.asarray(v, dtype=float) / np.linalg.norm(v)
 
 
-def joint_elements(el: ET.Element, name: str, jt: str, design, reversed_: bool, q: Array) -> bool:
+def joint_elements(el: ET.Element, name: str, jt: str, design: Design, reversed_: bool, q: Array) -> bool:
     """MuJoCo joints in body ``el`` (the joint's child body) reproducing kinprop joint ``name``.
 
     MuJoCo applies a body's joints in order, each about its axis in the body frame, from the
