@@ -246,3 +246,17 @@ def test_hmmwv_json_agrees_with_the_hand_written_example() -> None:
         theirs = np.interp(x, a["wheel_centre_dz"], a[k])
         assert np.abs(ours - theirs).max() < 0.06
         assert np.ptp(theirs) > 0.5  # the curves are not flat: the agreement means something
+
+
+def test_distance_output_ends_and_errors() -> None:
+    model = kp.load_model(CHRONO / "DoubleWishbone.json")
+    data = json.loads((CHRONO / "DoubleWishbone.json").read_text())
+    out = kp.evaluate_outputs(model, ["distance:chassis.spring_chassis,hardpoint:TIEROD.j"])
+    expected = np.linalg.norm(np.subtract(data["Spring"]["Location Chassis"], data["Tierod"]["Location Upright"]))
+    assert out["distance:chassis.spring_chassis,hardpoint:TIEROD.j"] == pytest.approx(expected, abs=1e-15)
+    for bad, msg in (
+        ("distance:chassis.nope,lca.spring_lca", "has no named point 'nope'"),
+        ("distance:chassis.spring_chassis", "expected distance:BODY.NAME,BODY.NAME"),
+    ):
+        with pytest.raises(kp.AddressError, match=msg):
+            kp.evaluate_outputs(model, [bad])
