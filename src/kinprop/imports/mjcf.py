@@ -368,6 +368,9 @@ class _Reader:
             if tag == "body":
                 self.body(ch, body.name, pose, childclass)
             elif tag == "frame":
+                own = ch.get("childclass")
+                if own is not None and own not in self.defaults:
+                    self.problem(ch, f"childclass={own!r}: no such default class; classes are {sorted(self.defaults)}")
                 fp, fR = pose
                 sub = (fp + fR @ self.position(ch), fR @ self.orientation(ch))
                 self.children(ch, body, sub, ch.get("childclass") or childclass, in_frame=True)
