@@ -9,6 +9,8 @@ its components, e.g. ``point:wheel.wheel_centre`` into ``...[x]``, ``...[y]``, `
   ``point:BODY.NAME[x|y|z]``;
 * joint hardpoints, the global origin of the joint frame on the joint's first (``i``) or
   second (``j``) body: ``hardpoint:JOINT.i[x]``, ``hardpoint:JOINT.j[z]``;
+* the distance between two points (e.g. a spring's length), each ``BODY.NAME`` (a named
+  point) or ``hardpoint:JOINT.i|j``: ``distance:chassis.spring_chassis,lca.spring_lca``;
 * suspension metrics of a wheel body (:mod:`kinprop.analysis.metrics`):
   ``metric:WHEEL.camber`` (``camber`` alone when the model has one wheel); angles in degrees.
 
@@ -37,6 +39,15 @@ _XYZ = "xyz"
 
 _POINT = re.compile(r"^point:(?P<body>[^.\s\[\]]+)\.(?P<name>[^\s\[\]]+?)(\[(?P<c>[xyz012])\])?$")
 _HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[ij])(\[(?P<c>[xyz012])\])?$")
+_DIST = re.compile(r"^distance:(?P<a>[^,\s]+),(?P<b>[^,\s]+)$")
+
+
+def _distance_ends(name: str) -> tuple[str, str]:
+    """The two point specs of ``distance:A,B`` (``BODY.NAME`` means ``point:BODY.NAME``)."""
+    m = _DIST.match(name)
+    if not m:
+        raise AddressError(f"bad output {name!r}: expected distance:BODY.NAME,BODY.NAME (or hardpoint:JOINT.i|j ends)")
+    return tuple(x if x.startswith(("point:", "hardpoint:")) else f"point:{x}" for x in (m["a"], m["b"]))  # type: ignore[return-value]
 
 
 @dataclass
@@ -99,7 +110,12 @@ def expand_outputs(model: Model, names: Sequence[str]) -> list[str]:
     out: list[str] = []
     for name in names:
         name = name.strip()
-        if name.startswith(("point:", "hardpoint:")):
+        if name.startswith("distance:"):
+            ctx = OutputContext.of(model)
+            for end in _distance_ends(name):
+                ctx.point(end)  # both ends exist
+            out.append(name)
+        elif name.startswith(("point:", "hardpoint:")):
             m = _POINT.match(name) or _HARD.match(name)
             if not m:
                 raise AddressError(
@@ -140,6 +156,9 @@ def _variable_size(model: Model, key: str) -> int:
 
 
 def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, float]]) -> float:
+    if name.startswith("distance:"):
+        a, b = _distance_ends(name)
+        return float(np.linalg.norm(ctx.point(a) - ctx.point(b)))
     m = _POINT.match(name)
     if name.startswith("point:") and m:
         return float(ctx.body_point(m.group("body"), m.group("name"))[AXES[m.group("c")]])

@@ -23,6 +23,7 @@ MISMATCH_TOL = 1e-9
 class Style(StrEnum):
     hardpoints = "hardpoints"
     frames = "frames"
+    mjcf = "mjcf"
 
 
 class BodyFrames(StrEnum):
@@ -47,13 +48,26 @@ def convert(
         BodyFrames, typer.Option("--body-frames", help="hardpoints: body-frame rule written into the file")
     ] = BodyFrames.global_,
 ) -> None:
-    """Convert a model between frame style (s', C, q) and hardpoint style (global points and axes).
+    """Convert a model between frame style (s', C, q) and hardpoint style (global points and axes),
+    or write it as a kinematic MuJoCo MJCF file (--to mjcf; at the model's coordinates).
 
     To hardpoints, the joints' global points and axes are evaluated at the model's current
     coordinates (run ``kinprop assemble -o`` first if the model is not assembled). To frames,
     body frames, s', C and zero coordinates are derived from the hardpoints.
     """
     m = load_model(model)
+    if to is Style.mjcf:
+        from kinprop.imports.mjcf_export import model_to_mjcf
+
+        text, warnings = model_to_mjcf(m)
+        for w in warnings:
+            err.print(f"warning: {model}: {w}", soft_wrap=True, markup=False)
+        if output is None:
+            sys.stdout.write(text)
+            return
+        atomic_write(output, text)
+        out.print(f"wrote {output} (kinematic MJCF)")
+        return
     if to is Style.hardpoints:
         gaps = {k: v for k, v in joint_mismatch(m).items() if v > MISMATCH_TOL}
         for joint, gap in gaps.items():

@@ -82,7 +82,7 @@ def _summary(res, base, output: Path | None, plot: Path | None) -> dict:
 
 
 def _plot_before_after(base, res, path: Path, x: str | None, title: str) -> None:
-    """The swept outputs before (the design without --set) and after, on one figure."""
+    """The swept outputs against ``x``: before (the design without --set) and after, or one sweep."""
     from kinprop.plot.curves import plot_curves
 
     x = x or res.drives[0].label
@@ -101,7 +101,8 @@ def _plot_before_after(base, res, path: Path, x: str | None, title: str) -> None
         short = c.rsplit(".", 1)[-1]
         if c not in units and short in METRICS:
             units[c] = metric_unit(short, length)
-    ok = {k: f[f["status"] == "converged"] for k, f in (("before", base.frame), ("after", res.frame))}
+    frames = (("before", base.frame), ("after", res.frame)) if base is not None else (("sweep", res.frame),)
+    ok = {k: f[f["status"] == "converged"] for k, f in frames}
     plot_curves(ok, x, ys, units=units, title=title, path=path)
 
 
@@ -135,7 +136,7 @@ def sweep_cmd(
         typer.Option("--baseline", help="also sweep the design without --set; --plot draws before and after together"),
     ] = False,
     x: Annotated[
-        str | None, typer.Option("--x", help="abscissa of the --baseline plot (an output, e.g. wheel_centre_dz)")
+        str | None, typer.Option("--x", help="abscissa of the --plot curves (an output, e.g. wheel_centre_dz)")
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print one JSON object (summary and every row)")] = False,
     tol: Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL")] = 1e-10,
@@ -215,8 +216,10 @@ def sweep_cmd(
     if output is not None:
         say(f"wrote {output}")
     if plot is not None:
-        if base is None:
+        if base is None and x is None:
             plot_sweep(res, plot, title=f"sweep {model.name}")
+        elif base is None:  # the outputs against another output, e.g. camber and toe against travel
+            _plot_before_after(None, res, plot, x, title=f"sweep {model.name}")
         else:
             _plot_before_after(base, res, plot, x, title=f"sweep {model.name}: before and after {', '.join(changes)}")
         say(f"wrote {plot}")

@@ -271,9 +271,14 @@ def build_or_report(data: dict[str, Any], schema: type[T], build: Any, file: str
 
 
 def load_model(path: str | Path) -> Model:
-    """Read and validate a model file (YAML or JSON)."""
+    """Read and validate a model file (YAML or JSON); MJCF (``.xml``) and Project Chrono
+    suspension files (``.json`` with a ``Template``) are imported (:mod:`kinprop.imports`)."""
     path = Path(path)
     file = str(path)
+    if path.suffix.lower() in (".xml", ".mjcf"):
+        from kinprop.imports import import_model
+
+        return import_model(path)[0]
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
@@ -281,6 +286,11 @@ def load_model(path: str | Path) -> Model:
     except UnicodeDecodeError as exc:
         raise ModelError([Problem("file", f"not UTF-8 text (byte {exc.start})", file)]) from None
     data, dups = _parse(text, file)
+    if file.endswith(".json") and isinstance(data, dict) and "Template" in data and "kinprop" not in data:
+        from kinprop.imports.chrono import chrono_hardpoints
+        from kinprop.io.hardpoints import model_from_hardpoints
+
+        return model_from_hardpoints(chrono_hardpoints(data, file)[0], file)
     if not dups:
         return model_from_data(data, file)
     try:
