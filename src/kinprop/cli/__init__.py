@@ -1,6 +1,7 @@
 """Command-line interface. Each command lives in its own module and registers on ``app``."""
 
 from kinprop.cli import check, convert, paper, plot, sensitivity, solve, sweep  # noqa: F401  (registers commands)
+from kinprop.cli import serve as _serve  # noqa: F401  (kinprop serve)
 from kinprop.cli import study as _study  # noqa: F401  (kinprop study, kinprop tolerance)
 from kinprop.cli.app import app
 
