@@ -1,69 +1,20 @@
-"""Fixtures for the workbench tests: the app for an example model, the CLI runner."""
+"""Fixtures of the workbench tests: a TestClient or a live server for an example model."""
 
 from __future__ import annotations
 
-import json
-import socket
-import threading
-import time
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from typer.testing import CliRunner
 
 pytest.importorskip("fastapi")
 pytest.importorskip("uvicorn")
 
+from workbench import Server
+
 from kinprop import load_model
-from kinprop.cli import app as cli_app
 from kinprop.serve import create_app
-
-runner = CliRunner()
-
-
-def cli(*args: object) -> tuple[int, str, str]:
-    """``kinprop ARGS``: (exit code, stdout, stderr)."""
-    r = runner.invoke(cli_app, [str(a) for a in args])
-    return r.exit_code, r.stdout, r.stderr
-
-
-def cli_json(*args: object) -> dict:
-    code, out, err = cli(*args)
-    assert out.strip(), f"exit {code}, no JSON on stdout; stderr: {err}"
-    return json.loads(out)
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class Server:
-    """uvicorn serving ``app`` in a thread on 127.0.0.1 (a free port)."""
-
-    def __init__(self, app) -> None:
-        import uvicorn
-
-        self.port = free_port()
-        self.url = f"http://127.0.0.1:{self.port}/"
-        self.server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=self.port, log_level="warning"))
-        self.thread = threading.Thread(target=self.server.run, daemon=True)
-
-    def __enter__(self) -> Server:
-        self.thread.start()
-        deadline = time.monotonic() + 30
-        while not self.server.started:
-            if time.monotonic() > deadline or not self.thread.is_alive():
-                raise RuntimeError("uvicorn did not start")
-            time.sleep(0.02)
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.server.should_exit = True
-        self.thread.join(timeout=10)
 
 
 @pytest.fixture
@@ -81,11 +32,11 @@ def make_client(examples: Path):
 
 
 @pytest.fixture
-def live_server(examples: Path) -> Iterator:
+def live_server(examples: Path) -> Callable[[str], Server]:
     """``live_server(name)``: a running server (context manager) for ``examples/NAME``."""
 
     def start(name: str) -> Server:
         path = examples / name
-        return Server(create_app(load_model(path), str(path)))
+        return Server(create_app(load_model(path), f"examples/{name}"))
 
     return start

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.serve.conftest import cli, cli_json
+from workbench import cli, cli_json
 
 MC = "mcpherson.yaml"
 DW = "double_wishbone.yaml"

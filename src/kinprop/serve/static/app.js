@@ -135,7 +135,7 @@ function renderDesign() {
           "aria-label": v.value.length > 1 ? `${v.address}[${k}]` : v.address });
         inp.addEventListener("change", () => editDesign(v, k, inp));
         td.append(inp);
-        if (v.before) td.append(el("div", { class: "before", text: fmt(v.before[k]) }));
+        if (v.before && v.before[k] !== x) td.append(el("div", { class: "before", title: "before", text: fmt(v.before[k]) }));
         tr.append(td);
       });
       for (let k = v.value.length; k < 3; k++) tr.append(el("td"));
@@ -154,6 +154,7 @@ function editDesign(v, k, inp) {
   }
   const value = v.value.slice();
   value[k] = x;
+  $("wrt").value = v.address;  // the sensitivity table follows the variable being edited
   run(() => propagate({ [v.address]: value.length === 1 ? value[0] : value }, freeSet(), true, inp));
 }
 
@@ -205,6 +206,7 @@ async function refresh(designChanged) {
 
 function sceneTraces(sc, faded, alpha) {
   const traces = [];
+  const legend = (t) => { if (faded) { t.showlegend = traces.length === 0; t.name = "before"; } return t; };
   const opacity = faded ? alpha : 1.0;
   const tag = faded ? " (before)" : "";
   const width = { body: 6, ground: 3, link: 7, slide: 4, gap: 3 };
@@ -212,21 +214,21 @@ function sceneTraces(sc, faded, alpha) {
   for (const g of sc.segments) {
     const x = [], y = [], z = [];
     for (const [a, b] of g.lines) { x.push(a[0], b[0], null); y.push(a[1], b[1], null); z.push(a[2], b[2], null); }
-    traces.push({ type: "scatter3d", mode: "lines", x, y, z, opacity, hoverinfo: "name",
+    traces.push(legend({ type: "scatter3d", mode: "lines", x, y, z, opacity, hoverinfo: "name",
       name: (g.kind === "body" ? "body " + g.owner : g.kind) + tag, legendgroup: faded ? "before" : "after",
-      line: { color: g.colour, width: width[g.kind] || 4, dash: faded && g.kind === "body" ? "dash" : dash[g.kind] || "solid" } });
+      line: { color: g.colour, width: width[g.kind] || 4, dash: faded && g.kind === "body" ? "dash" : dash[g.kind] || "solid" } }));
   }
   const byKind = {};
   const labelled = new Set();
   for (const m of sc.markers) (byKind[m.kind] = byKind[m.kind] || []).push(m);
   for (const ms of Object.values(byKind)) {
-    traces.push({ type: "scatter3d", mode: faded ? "markers" : "markers+text", opacity,
+    traces.push(legend({ type: "scatter3d", mode: faded ? "markers" : "markers+text", opacity,
       x: ms.map((m) => m.at[0]), y: ms.map((m) => m.at[1]), z: ms.map((m) => m.at[2]),
       text: ms.map((m) => (labelled.has(m.joint) ? "" : (labelled.add(m.joint), m.joint))),
       textposition: "top right", textfont: { size: 10 },
       hovertext: ms.map((m) => `${m.joint} (${m.kind})`), hoverinfo: "text",
       name: ms[0].label + tag, legendgroup: faded ? "before" : "after",
-      marker: { symbol: ms[0].symbol, size: 5, color: "white", line: { color: "black", width: 2 } } });
+      marker: { symbol: ms[0].symbol, size: 5, color: "white", line: { color: "black", width: 2 } } }));
   }
   const L = 0.12 * sc.scale;
   const axes = sc.axes;
@@ -237,16 +239,16 @@ function sceneTraces(sc, faded, alpha) {
       y.push(a.origin[1], a.origin[1] + L * a.direction[1], null);
       z.push(a.origin[2], a.origin[2] + L * a.direction[2], null);
     }
-    traces.push({ type: "scatter3d", mode: "lines", x, y, z, opacity, hoverinfo: "name", name: "joint axes" + tag,
-      legendgroup: faded ? "before" : "after", line: { color: axes[0].colour, width: 4 } });
+    traces.push(legend({ type: "scatter3d", mode: "lines", x, y, z, opacity, hoverinfo: "name", name: "joint axes" + tag,
+      legendgroup: faded ? "before" : "after", line: { color: axes[0].colour, width: 4 } }));
   }
   const names = Object.keys(sc.points);
   if (names.length) {
     const p = names.map((n) => sc.points[n]);
-    traces.push({ type: "scatter3d", mode: faded ? "markers" : "markers+text", opacity, name: "named points" + tag,
+    traces.push(legend({ type: "scatter3d", mode: faded ? "markers" : "markers+text", opacity, name: "named points" + tag,
       legendgroup: faded ? "before" : "after", x: p.map((v) => v[0]), y: p.map((v) => v[1]), z: p.map((v) => v[2]),
       text: names.map((n) => n.split(".").slice(1).join(".")), textfont: { size: 9 }, hovertext: names, hoverinfo: "text",
-      marker: { symbol: "diamond", size: 3, color: sc.point_colour } });
+      marker: { symbol: "diamond", size: 3, color: sc.point_colour } }));
   }
   return traces;
 }
