@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import tempfile
+import time
 import warnings
 from collections.abc import Callable
 from importlib import resources
@@ -155,6 +156,14 @@ def create_app(model: Model, label: str | None = None, *, assemble_first: bool =
     sessions = Sessions(model)
     app = FastAPI(title="kinprop workbench", docs_url="/api/docs", openapi_url="/api/openapi.json", redoc_url=None)
     app.state.sessions = sessions
+
+    @app.middleware("http")
+    async def server_timing(request: Request, call_next: Callable[[Request], Any]) -> Response:
+        """``Server-Timing: app;dur=MS``: the time spent in the application (benchmarks, devtools)."""
+        t0 = time.perf_counter()
+        response = await call_next(request)
+        response.headers["Server-Timing"] = f"app;dur={(time.perf_counter() - t0) * 1e3:.3f}"
+        return response
 
     def session(sid: str | None, q: str | None) -> Session:
         s = sessions.get(sid or q or "default")
