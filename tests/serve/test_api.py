@@ -4,6 +4,7 @@ exit-2 messages with HTTP 4xx, and the session keeps an undo/redo history of mod
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -186,7 +187,7 @@ def test_malformed_requests(make_client) -> None:
 def test_undo_redo_reset_and_downloads(make_client, examples: Path, tmp_path: Path) -> None:
     c = make_client(MC, assemble_first=False)
     start = c.get("/api/model.yaml").text
-    assert yaml_numbers(start) == yaml_numbers((examples / MC).read_text(), loaded=True)
+    assert yaml_numbers(start) == yaml_numbers((examples / MC).read_text())
     c.post("/api/propagate", json={"set": {"ST.s_i": [0.5, 1.0, 0.0]}, "free": ["q"]})
     one = c.get("/api/model.yaml").text
     # the downloads are what `kinprop propagate -o/--csv` write and what --json prints
@@ -214,8 +215,8 @@ def test_undo_redo_reset_and_downloads(make_client, examples: Path, tmp_path: Pa
     assert c.get("/api/model.yaml").text == two
 
 
-def yaml_numbers(text: str, loaded: bool = False) -> dict:
-    """The joints' numbers of a model file (the original is read through the loader)."""
+def yaml_numbers(text: str) -> dict:
+    """The joints' s_i, s_j and lengths in a model file."""
     import yaml
 
     data = yaml.safe_load(text)
@@ -262,6 +263,9 @@ def test_state_describes_the_model(make_client) -> None:
     rows = {v["address"]: v for v in st["variables"]}
     assert rows["TR.length"]["value"] == [pytest.approx(386.5370606)] and rows["TR.length"]["unit"] == "mm"
     assert rows["UBJ.s_j"]["body"] == "upright" and rows["UBJ.s_j"]["group"] == "s"
+    # the chassis frame is the global one: a chassis point's s is its global hardpoint
+    assert rows["TR.s_i"]["global"] == pytest.approx(rows["TR.s_i"]["value"], abs=1e-9)
+    assert rows["TR.s_i"]["global"] == pytest.approx([-250.317, 448.437, 54.229], abs=1e-9)
     # the scene: the tie rod is drawn as a link of its length between its two hardpoints
     tr = next(g for g in st["scene"]["segments"] if g["kind"] == "link")["lines"][0]
     assert np.linalg.norm(np.subtract(tr[1], tr[0])) == pytest.approx(386.5370606, rel=1e-9)
@@ -292,3 +296,36 @@ def test_serve_command_errors(examples: Path, tmp_path: Path) -> None:
     assert cli_errors("serve", tmp_path / "missing.yaml") == cli_errors("check", tmp_path / "missing.yaml")
     code, _, err = cli("serve", examples / MC, "--port", "0")
     assert code == 2 and "--port 0" in err
+
+
+def test_serve_command_serves(examples: Path) -> None:
+    """`kinprop serve MODEL --port P` prints its URL (localhost by default) and answers there."""
+    import subprocess
+    import sys
+    import time
+    import urllib.request
+
+    from workbench import free_port
+
+    port = free_port()
+    code = "from kinprop.cli import main; import sys; sys.argv = ['kinprop', *sys.argv[1:]]; main()"
+    args = ["serve", str(examples / MC), "--port", str(port)]
+    proc = subprocess.Popen([sys.executable, "-c", code, *args], stdout=subprocess.PIPE, text=True)
+    try:
+        line = proc.stdout.readline()
+        url = f"http://127.0.0.1:{port}/"
+        assert url in line and "mcpherson.yaml" in line
+        deadline = time.monotonic() + 60
+        while True:
+            try:
+                with urllib.request.urlopen(url + "api/check", timeout=5) as r:
+                    obj = json.loads(r.read())
+                break
+            except OSError:
+                if time.monotonic() > deadline or proc.poll() is not None:
+                    raise
+                time.sleep(0.1)
+        assert obj["model"] == str(examples / MC) and obj["assembled"] and obj["mobility"] == 2
+    finally:
+        proc.terminate()
+        proc.wait(timeout=30)

@@ -125,11 +125,12 @@ def default_curve_outputs(model: Model) -> list[str]:
 
 def variables_json(model: Model, session: Session) -> list[dict[str, Any]]:
     """One row per design variable: address, group, body, unit, value (before, when the last
-    change moved it)."""
+    change moved it) and, for a joint point ``s``, where it is in global coordinates."""
     length = model.units.get("length", "")
     last = session.last
     changed = set(last.changed_variables()) if last is not None else set()
     set_keys = {k.split("[")[0] for k in last.changes} if last is not None else set()
+    hardpoints = joint_hardpoints(model)
     rows = []
     for key, v in model.design.items():
         joint, _, fld = key.partition(".")
@@ -149,6 +150,7 @@ def variables_json(model: Model, session: Session) -> list[dict[str, Any]]:
                 "value": _xyz(v),
                 "before": before,
                 "role": "set" if key in set_keys else ("moved" if key in changed else ""),
+                "global": hardpoints.get(f"{joint}.{fld[-1]}") if group == "s" else None,
             }
         )
     return rows

@@ -120,7 +120,8 @@ function renderDesign() {
   const body = $("design").querySelector("tbody");
   const rows = [];
   for (const v of state.variables) {
-    const tr = el("tr", { "data-address": v.address, class: v.role ? "role-" + v.role : "" });
+    const tr = el("tr", { "data-address": v.address, class: v.role ? "role-" + v.role : "",
+      title: v.global ? `global: [${v.global.map((x) => fmt(x, 6)).join(", ")}] ${v.unit}` : undefined });
     tr.append(el("td", { class: "addr", text: v.address }), el("td", { text: v.body }), el("td", { text: v.unit }));
     if (v.group === "C") {
       const c = v.value;  // row-major 3x3: show the joint axis z'' = third column
@@ -286,6 +287,16 @@ function renderSliders() {
   const box = $("sliders");
   if (!state.sliders.length) {
     box.replaceChildren(el("div", { class: "muted", text: "no single-coordinate (revolute or translational) tree joints to drive" }));
+    return;
+  }
+  const current = [...box.querySelectorAll("input[type=range]")].map((i) => i.dataset.address).join(" ");
+  if (current === state.sliders.map((s) => s.address).join(" ")) {
+    // same inputs: update the values in place (never the one being dragged), keep the ranges
+    for (const s of state.sliders) {
+      const inp = box.querySelector(`input[data-address="${s.address}"]`);
+      if (!(inp === document.activeElement && sliderPending)) inp.value = s.value;
+      inp.parentElement.querySelector(".value").textContent = `${fmt(s.value, 5)} ${s.unit}`;
+    }
     return;
   }
   const rows = state.sliders.map((s) => {
