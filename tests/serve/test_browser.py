@@ -142,18 +142,25 @@ def test_workbench_in_chromium(live_server, examples: Path, tmp_path: Path) -> N
             assert "failed" in page.locator("#status").get_attribute("class")
             assert page.request.get(srv.url + "api/model.yaml?session=" + sid(page)).text() == yaml_before
 
-            # --- an input slider moves the mechanism along its branch ---------------------
-            rev = page.evaluate("document.body.dataset.revision")
-            page.evaluate(
-                """() => { const s = document.querySelector('#sliders input[data-address="LCA.q"]');
-                           s.value = String(Number(s.value) + 5); s.dispatchEvent(new Event('input')); }"""
+            # --- drag an input slider: the mechanism follows along its branch ---------------
+            slider = page.locator('#sliders input[data-address="LCA.q"]')
+            box = slider.bounding_box()
+            y = box["y"] + box["height"] / 2
+            page.mouse.move(box["x"] + box["width"] / 2, y)
+            page.mouse.down()
+            for k in range(1, 11):  # to the right, about 0.9 degrees per move
+                page.mouse.move(box["x"] + box["width"] * (0.5 + 0.01 * k), y)
+                page.wait_for_timeout(30)
+            page.mouse.up()
+            page.wait_for_function(
+                "document.body.dataset.state === 'ready' && !sliderBusy && !sliderPending", timeout=TIMEOUT
             )
-            wait_ready(page, rev)
-            page.wait_for_function("document.body.dataset.state === 'ready'", timeout=TIMEOUT)
             moved = api(page, "/api/results.json")
-            assert moved["status"] == "converged" and moved["changes"]["LCA.q"] == pytest.approx(
-                np.radians(float(page.input_value('#sliders input[data-address="LCA.q"]'))), rel=1e-12
-            )
+            deg = float(slider.input_value())
+            assert deg > 5  # the drag moved the slider (the edit left LCA.q at about 0.9 degrees)
+            assert moved["status"] == "converged"
+            assert moved["coordinates"]["LCA"][0] == pytest.approx(np.radians(deg), rel=1e-12)  # the last position
+            assert api(page, "/api/state")["history"]["undo"] == 2  # the drag is one undo step
             assert page.locator("#error").is_hidden()
 
             # --- undo twice: the slider move, then the hardpoint edit -----------------------
