@@ -181,8 +181,8 @@ async function propagate(set, free, design, input) {
     return false;
   }
   showError([]);
-  await refresh(design);
   showStatus(res);
+  await refresh(design);
   return true;
 }
 
