@@ -277,6 +277,18 @@ def test_state_describes_the_model(make_client) -> None:
     assert st["before_scene"] is not None and "LCA.q" in st["changed"]
 
 
+def test_curve_defaults_without_a_wheel(make_client) -> None:
+    """A four-bar's default curve: the rocker (and coupler) angle over the crank angle; the
+    McPherson's drive is the rack (the strut's slide is one coordinate of a 5-coordinate joint)."""
+    st = make_client("fourbar.yaml").get("/api/state").json()
+    assert st["drives"][0]["spec"] == "O2" and st["default_outputs"] == ["A.q", "O4.q"]
+    o2 = st["drives"][0]
+    assert o2["unit"] == "deg" and o2["curve"] == pytest.approx([o2["value"] - 10, o2["value"] + 10])
+    st = make_client(MC).get("/api/state").json()
+    assert [d["spec"] for d in st["drives"]] == ["TD", "ST[4]"] and st["sliders"] == []
+    assert st["drives"][0]["unit"] == "m"
+
+
 def test_page_and_static_files(make_client) -> None:
     c = make_client(MC)
     page = c.get("/")

@@ -112,11 +112,15 @@ def _coordinate_components(model: Model) -> list[dict[str, Any]]:
     return sorted(out, key=lambda c: (not c["slider_ok"], c["size"] > 1))
 
 
-def default_curve_outputs(model: Model) -> list[str]:
-    """Camber and toe of the first wheel body, else a named point's or a hardpoint's z."""
+def default_curve_outputs(model: Model, drives: list[dict[str, Any]]) -> list[str]:
+    """Camber and toe of the first wheel body; else the other single coordinates (a four-bar's
+    rocker angle over its crank's), else a named point's or a hardpoint's z."""
     metrics = [m for m in metric_names(model) if m.endswith((".camber", ".toe"))]
     if metrics:
         return metrics[:2]
+    others = [d["address"] for d in drives[1:] if d["size"] == 1]
+    if others:
+        return others[:2]
     pts = [f"point:{b.name}.{p}[z]" for b in model.mechanism.bodies if not b.fixed for p, _ in b.points]
     if pts:
         return pts[:1]
@@ -177,7 +181,7 @@ def state_json(session: Session, label: str) -> dict[str, Any]:
         "sliders": [c for c in comps if c["slider_ok"]],
         "drives": comps,
         "outputs": output_names(model),
-        "default_outputs": default_curve_outputs(model),
+        "default_outputs": default_curve_outputs(model, comps),
         "scene": scene_json(scenes[0]),
         "before_scene": scene_json(scenes[1]) if last is not None else None,
         "bounds": [_xyz(lo), _xyz(hi)],

@@ -358,7 +358,9 @@ async function sweepCurve(designChanged) {
   const r = await api("POST", "/api/sweep", req);
   if (!r.ok) { $("curve-status").textContent = "sweep: " + (r.data.errors || []).join("; "); return; }
   const before = curve && curve.key === key && designChanged ? curve.rows : null;
-  curve = { key, rows: r.data.rows, before, drive: r.data.drives[0], outputs: r.data.outputs };
+  // outputs naming a coordinate are the sweep's coordinate columns (model units)
+  const outputs = req.out.length ? req.out.filter((o) => o in r.data.rows[0] || r.data.outputs.includes(o)) : r.data.outputs;
+  curve = { key, rows: r.data.rows, before, drive: r.data.drives[0], outputs: [...new Set([...outputs, ...r.data.outputs])] };
   const failed = r.data.failed.length;
   $("curve-status").textContent = `${r.data.steps} steps, ${r.data.converged} converged` +
     (failed ? `, ${failed} failed (first: ${r.data.rows[r.data.failed[0]].message})` : "") +
