@@ -2,6 +2,7 @@
 
 from kinprop.cli import check, convert, paper, plot, sensitivity, solve, sweep  # noqa: F401  (registers commands)
 from kinprop.cli import importer as _importer  # noqa: F401  (kinprop import)
+from kinprop.cli import serve as _serve  # noqa: F401  (kinprop serve)
 from kinprop.cli import study as _study  # noqa: F401  (kinprop study, kinprop tolerance)
 from kinprop.cli.app import app
 

@@ -10,7 +10,7 @@ is written for it.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -73,6 +73,51 @@ def print_continuation(res: ContinuationResult) -> None:
     out.print(f"  smallest/largest singular value at the last feasible state: {res.singularity_ratio:.3g}")
 
 
+def solve_propagation(
+    model: Model,
+    changes: Mapping[str, object],
+    free: Sequence[str],
+    *,
+    tol: float,
+    max_iter: int,
+    weights: Mapping[str, float] | None,
+    continuation: bool | None,
+    on_fallback: Callable[[Propagation], None] | None = None,
+) -> tuple[Propagation, ContinuationResult | None, bool]:
+    """Plain Newton, continuation, or Newton with continuation as the fallback (``None``).
+
+    Returns ``(prop, res, newton_ran)``: the propagation to report, the continuation result
+    when continuation ran (else None) and whether plain Newton ran first. When ``res`` did
+    not converge, ``prop`` is the failed plain Newton propagation (or continuation's own).
+    ``on_fallback(plain)`` is called when plain Newton failed and continuation starts.
+    """
+    plain: Propagation | None = None
+    if continuation is not True:
+        plain = propagate(model, changes, free, tol=tol, max_iter=max_iter, weights=weights)
+        if plain.converged or continuation is False or not changes:
+            return plain, None, True
+        if on_fallback is not None:
+            on_fallback(plain)
+    res = propagate_continuation(model, changes, free, tol=tol, max_iter=min(max_iter, 20), weights=weights)
+    if res.converged:
+        return res.propagation, res, plain is not None
+    return (plain if plain is not None else res.propagation), res, plain is not None
+
+
+def propagate_json(prop: Propagation, res: ContinuationResult | None = None, newton_ran: bool = True) -> dict[str, Any]:
+    """What ``kinprop propagate --json`` prints for :func:`solve_propagation`'s result: the
+    propagation's JSON, and when continuation failed too, status ``not_converged`` and a
+    ``continuation`` object."""
+    obj = propagation_json(prop)
+    if res is None or res.converged:
+        return obj
+    obj["status"] = "not_converged"
+    if not newton_ran:
+        obj["message"] = res.message
+    obj["continuation"] = continuation_json(res)
+    return obj
+
+
 def run_propagation(
     model: Model,
     changes: Mapping[str, object],
@@ -85,32 +130,34 @@ def run_propagation(
     output: Path | None,
     as_json: bool,
 ) -> Propagation:
-    """Plain Newton, continuation, or Newton with continuation as the fallback (``None``).
-
-    Returns the propagation to report. When continuation cannot assemble the change either,
-    prints the diagnosis (with ``--json``: the failed propagation's JSON, status
-    ``not_converged``, plus a ``continuation`` object) and exits 1 itself, writing nothing.
+    """:func:`solve_propagation` for the CLI: returns the propagation to report. When
+    continuation cannot assemble the change either, prints the diagnosis (with ``--json``:
+    :func:`propagate_json`) and exits 1 itself, writing nothing.
     """
-    plain: Propagation | None = None
+
+    def say_fallback(plain: Propagation) -> None:
+        if not as_json:
+            err.print(f"plain Newton failed ({escape(plain.result.message)}); trying continuation")
+
     with shown_warnings():
-        if continuation is not True:
-            plain = propagate(model, changes, free, tol=tol, max_iter=max_iter, weights=weights)
-            if plain.converged or continuation is False or not changes:
-                return plain
-            if not as_json:
-                err.print(f"plain Newton failed ({escape(plain.result.message)}); trying continuation")
-        res = propagate_continuation(model, changes, free, tol=tol, max_iter=min(max_iter, 20), weights=weights)
+        prop, res, newton_ran = solve_propagation(
+            model,
+            changes,
+            free,
+            tol=tol,
+            max_iter=max_iter,
+            weights=weights,
+            continuation=continuation,
+            on_fallback=say_fallback,
+        )
+    if res is None:
+        return prop
     if res.converged:
         if not as_json:
             print_continuation(res)
-        return res.propagation
+        return prop
     if as_json:
-        obj = propagation_json(plain if plain is not None else res.propagation)
-        obj["status"] = "not_converged"
-        if plain is None:
-            obj["message"] = res.message
-        obj["continuation"] = continuation_json(res)
-        print_json(obj)
+        print_json(propagate_json(prop, res, newton_ran))
         raise typer.Exit(EXIT_NOT_CONVERGED)
     print_continuation(res)
     out.print(f"[red]{escape(res.message)}")
@@ -119,4 +166,11 @@ def run_propagation(
     raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
-__all__ = ["continuation_json", "print_continuation", "run_propagation", "shown_warnings"]
+__all__ = [
+    "continuation_json",
+    "print_continuation",
+    "propagate_json",
+    "run_propagation",
+    "shown_warnings",
+    "solve_propagation",
+]

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import numpy as np
 import typer
@@ -19,6 +20,9 @@ from kinprop.propagation import assemble
 if TYPE_CHECKING:
     import pandas as pd
 
+    from kinprop.model import Model
+    from kinprop.solver import SolveResult
+
 Json = Annotated[bool, typer.Option("--json", help="print one JSON object instead of a table")]
 
 
@@ -32,6 +36,43 @@ def sensitivity_table(frame: pd.DataFrame, title: str) -> Table:
         cells = [f"{x:.6g}" if abs(x) > 1e-9 * max(1.0, np.max(np.abs(row.values))) else "0" for x in row.values]
         t.add_row(escape(str(name)), *cells)
     return t
+
+
+def sensitivity_frame(
+    assembled: Model,
+    wrt: Sequence[str],
+    of: Sequence[str] | None,
+    free: Sequence[str],
+    weights: Mapping[str, float] | None,
+) -> pd.DataFrame:
+    """d(outputs)/d(wrt) at an assembled model; without ``of``, of the free variables."""
+    if of:
+        return output_sensitivity(assembled, of, wrt, free, weights)
+    return design_sensitivity(assembled, wrt, free, weights).frame()
+
+
+def sensitivity_json(
+    model: str,
+    frame: pd.DataFrame,
+    free: Sequence[str],
+    weights: Mapping[str, float] | None,
+    assembly: SolveResult,
+) -> dict[str, Any]:
+    """What ``kinprop sensitivity --json`` prints (``assembly``: the assembly solved first)."""
+    r = assembly
+    return {
+        "model": model,
+        "of": [str(i) for i in frame.index],
+        "wrt": [str(c) for c in frame.columns],
+        "matrix": frame.to_numpy().tolist(),
+        "free": list(free),
+        "weights": dict(weights) if weights else {},
+        "assembly": {
+            "initial_residual": r.residual_history[0],
+            "residual": r.residual_norm,
+            "iterations": r.iterations,
+        },
+    }
 
 
 @app.command(name="sensitivity")
@@ -67,23 +108,9 @@ def sensitivity_cmd(
             escape(f"note: {model} was not assembled (||Phi|| = {initial:.3g}); assembled first: {r.message}"),
             soft_wrap=True,
         )
-    assembled = prop.after
-    if of:
-        frame = output_sensitivity(assembled, of, wrt, free_set, weights)
-    else:
-        frame = design_sensitivity(assembled, wrt, free_set, weights).frame()
+    frame = sensitivity_frame(prop.after, wrt, of, free_set, weights)
     if as_json:
-        print_json(
-            {
-                "model": str(model),
-                "of": [str(i) for i in frame.index],
-                "wrt": [str(c) for c in frame.columns],
-                "matrix": frame.to_numpy().tolist(),
-                "free": list(free_set),
-                "weights": weights or {},
-                "assembly": {"initial_residual": initial, "residual": r.residual_norm, "iterations": r.iterations},
-            }
-        )
+        print_json(sensitivity_json(str(model), frame, free_set, weights, r))
         return
     title = f"sensitivity {model}"
     out.print(sensitivity_table(frame, title))

@@ -57,14 +57,19 @@ def comparison_table(prop: Propagation, title: str) -> Table:
     return t
 
 
-def write_csv(prop: Propagation, path: Path) -> None:
-    """Before/after rows (:func:`comparison_rows`, then hardpoints and named points) as CSV."""
+def comparison_csv(prop: Propagation) -> str:
+    """Before/after rows (:func:`comparison_rows`, then hardpoints and named points) as CSV text."""
     import pandas as pd
 
     frame = pd.DataFrame(
         comparison_rows(prop) + point_rows(prop), columns=["variable", "unit", "before", "after", "change", "role"]
     )
-    atomic_write(path, frame.to_csv(index=False))  # shortest round-trip float text
+    return frame.to_csv(index=False)  # shortest round-trip float text
+
+
+def write_csv(prop: Propagation, path: Path) -> None:
+    """:func:`comparison_csv`, written atomically."""
+    atomic_write(path, comparison_csv(prop))
 
 
 def write_plot(prop: Propagation, path: Path) -> None:

@@ -6,18 +6,21 @@ Exit codes: 0 every step converged, 1 some step failed (recorded, the sweep went
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
 import typer
 from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
-from kinprop.analysis.sweep import parse_drive, plot_sweep, sweep
+from kinprop.analysis.sweep import Drive, parse_drive, plot_sweep, sweep
 from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, handles_user_errors, out, parse_assignment, print_json
 from kinprop.io import load_model
 from kinprop.io.units import changes_to_internal
+from kinprop.model import Model
 
 #: show a progress bar from this many steps on
 PROGRESS_FROM = 50
@@ -63,7 +66,9 @@ def _records(frame) -> list[dict]:
     ]
 
 
-def _summary(res, base, output: Path | None, plot: Path | None) -> dict:
+def sweep_json(res, base, output: Path | None = None, plot: Path | None = None) -> dict:
+    """What ``kinprop sweep --json`` prints: counts, failed steps and every row (and the
+    baseline's rows when ``base`` is given)."""
     df = res.frame
     ok = df["status"] == "converged"
     obj = {
@@ -106,6 +111,17 @@ def _plot_before_after(base, res, path: Path, x: str | None, title: str) -> None
     plot_curves(ok, x, ys, units=units, title=title, path=path)
 
 
+def sweep_inputs(
+    m: Model, drive: Sequence[str], set_: Sequence[str], baseline: bool = False
+) -> tuple[list[Drive], dict[str, np.ndarray]]:
+    """The parsed ``--drive`` and ``--set`` options (``--set`` in model units, converted)."""
+    drives = [parse_drive(m, d) for d in drive]
+    changes = changes_to_internal(m, dict(parse_assignment(s) for s in set_))
+    if baseline and not changes:
+        raise ValueError("--baseline compares with the design before the --set changes: give at least one --set")
+    return drives, changes
+
+
 @app.command(name="sweep")
 @handles_user_errors
 def sweep_cmd(
@@ -145,10 +161,7 @@ def sweep_cmd(
 ) -> None:
     """Drive joint coordinates over a range; each step is solved from the previous one."""
     m = load_model(model)
-    drives = [parse_drive(m, d) for d in drive]
-    changes = changes_to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
-    if baseline and not changes:
-        raise ValueError("--baseline compares with the design before the --set changes: give at least one --set")
+    drives, changes = sweep_inputs(m, drive, set_ or [], baseline)
     quiet = quiet or as_json
     if output is not None and output.suffix.lower() not in (".csv", ".parquet", ".pq"):
         raise ValueError(f"--output {str(output)!r}: expected a .csv or .parquet file")
@@ -198,7 +211,7 @@ def sweep_cmd(
         )
     df = res.frame
     if as_json:
-        print_json(_summary(res, base, output, plot))
+        print_json(sweep_json(res, base, output, plot))
     if not quiet:
         out.print(_table(df, _shown_columns(res)))
     bad = df[df["status"] != "converged"]

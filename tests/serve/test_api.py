@@ -1,0 +1,343 @@
+"""The workbench's JSON API against the CLI: the same request gives the same JSON as
+``kinprop propagate/check/sweep/sensitivity --json`` (byte for byte), bad input the CLI's
+exit-2 messages with HTTP 4xx, and the session keeps an undo/redo history of models."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from workbench import cli, cli_json
+
+MC = "mcpherson.yaml"
+DW = "double_wishbone.yaml"
+
+
+def cli_errors(*args: object) -> list[str]:
+    code, out, err = cli(*args)
+    assert code == 2, (code, out, err)
+    return [line.removeprefix("error: ") for line in err.splitlines() if line.startswith("error: ")]
+
+
+# --- the CLI's contracts ----------------------------------------------------------------------
+
+
+def test_propagate_is_the_cli_json(make_client, examples: Path, tmp_path: Path) -> None:
+    """The paper's McPherson change (s'12ST moved, free s and l): the API prints what the CLI
+    prints; the change is applied, and a second change from the session's model equals the CLI
+    run on the model downloaded after the first."""
+    c = make_client(MC, assemble_first=False)
+    r = c.post("/api/propagate", json={"set": {"ST.s_i": [0.5, 1.0, 0.0]}, "free": ["s", "l"]})
+    code, out, _ = cli("propagate", examples / MC, "--set", "ST.s_i=0.5,1.0,0", "--free", "s", "--free", "l", "--json")
+    assert r.status_code == 200 and code == 0
+    assert r.text == out.rstrip("\n")
+    obj = r.json()
+    assert obj["status"] == "converged" and obj["residual_norm"] < 1e-10
+    assert obj["design"]["ST.s_i"] == [0.5, 1.0, 0.0]
+    assert "RS.length" in obj["changed"]
+    assert r.headers["x-kinprop-applied"] == "true"
+
+    first = tmp_path / "first.yaml"
+    first.write_text(c.get("/api/model.yaml").text)
+    r2 = c.post("/api/propagate", json={"set": {"RS.length": 0.21}, "free": ["q"]})
+    assert r2.json() == cli_json("propagate", first, "--set", "RS.length=0.21", "--json")
+    assert c.get("/api/state").json()["history"] == {"undo": 2, "redo": 0}
+
+
+def test_propagate_degrees_weights_and_strings(make_client, examples: Path) -> None:
+    """Values in the model's units (the double wishbone's angles in degrees), weights, and
+    values given as the CLI's text all mean what they mean on the command line."""
+    c = make_client(DW, assemble_first=False)
+    obj = c.post("/api/propagate", json={"set": {"LCA.q": 3}}).json()
+    assert obj == cli_json("propagate", examples / DW, "--set", "LCA.q=3", "--json")
+    assert obj["coordinates"]["LCA"][0] == pytest.approx(np.radians(3.0), abs=1e-15)
+
+    c = make_client(MC, assemble_first=False)
+    req = {"set": {"ST.s_i": "0.5,1.0,0"}, "free": ["s", "l"], "weights": {"s": 1, "RS.length": 10}}
+    args = ["--set", "ST.s_i=0.5,1.0,0", "--free", "s", "--free", "l", "--weight", "s=1", "--weight", "RS.length=10"]
+    assert c.post("/api/propagate", json=req).json() == cli_json("propagate", examples / MC, *args, "--json")
+
+
+def test_failed_change_is_reported_and_not_applied(make_client, examples: Path) -> None:
+    """A tie rod 5 m long cannot be assembled: the CLI's JSON (status not_converged, the
+    continuation's diagnosis), HTTP 200, and the session's model is unchanged."""
+    c = make_client(DW, assemble_first=False)
+    before = c.get("/api/model.yaml").text
+    r = c.post("/api/propagate", json={"set": {"TR.length": 5000}})
+    code, out, _ = cli("propagate", examples / DW, "--set", "TR.length=5000", "--json")
+    assert code == 1 and r.status_code == 200
+    assert r.text == out.rstrip("\n")
+    obj = r.json()
+    assert obj["status"] == "not_converged" and "cannot be assembled" in obj["continuation"]["message"]
+    assert r.headers["x-kinprop-applied"] == "false"
+    assert c.get("/api/model.yaml").text == before
+    assert c.get("/api/state").json()["history"] == {"undo": 0, "redo": 0}
+    assert c.get("/api/results.csv").status_code == 409  # the CLI writes no CSV either
+
+
+def test_check_is_the_cli_json(make_client, examples: Path, tmp_path: Path) -> None:
+    c = make_client(MC, assemble_first=False)
+    assert c.get("/api/check").text == cli("check", examples / MC, "--json")[1].rstrip("\n")
+    # the default session starts assembled: the report of `kinprop assemble -o` 's file
+    assembled = tmp_path / "assembled.yaml"
+    assert cli("assemble", examples / MC, "-o", assembled)[0] == 0
+    got = make_client(MC).get("/api/check").json()
+    want = cli_json("check", assembled, "--json")
+    assert got.pop("model") == str(examples / MC) and want.pop("model") == str(assembled)
+    assert got == want
+    assert got["assembled"] and got["mobility"] == 2
+
+
+def test_sweep_is_the_cli_json(make_client, examples: Path) -> None:
+    c = make_client(DW, assemble_first=False)
+    r = c.post("/api/sweep", json={"drive": ["LCA=-6:6:6"], "out": ["camber", "toe"]})
+    code, out, _ = cli("sweep", examples / DW, "--drive", "LCA=-6:6:6", "--out", "camber", "--out", "toe", "--json")
+    assert code == 0 and r.status_code == 200
+    assert r.text == out.rstrip("\n")
+    rows = r.json()["rows"]
+    assert len(rows) == 7 and [x["LCA.q"] for x in rows] == pytest.approx(np.linspace(-6, 6, 7))
+    # with a design change and the baseline (the design without it)
+    req = {
+        "drive": ["LCA=-6:6:4"],
+        "set": {"UCA.s_i": [-158.0642, 461.8482, 230.091]},
+        "out": ["camber"],
+        "baseline": True,
+    }
+    args = ["--drive", "LCA=-6:6:4", "--set", "UCA.s_i=-158.0642,461.8482,230.091", "--out", "camber", "--baseline"]
+    assert c.post("/api/sweep", json=req).json() == cli_json("sweep", examples / DW, *args, "--json")
+    assert c.get("/api/state").json()["history"]["undo"] == 0  # a sweep changes nothing
+
+
+def test_sensitivity_is_the_cli_json(make_client, examples: Path) -> None:
+    c = make_client("slider_crank.yaml", assemble_first=False)
+    req = {"wrt": ["J12.s_j"], "of": ["J01.q", "hardpoint:J12.i"]}
+    r = c.post("/api/sensitivity", json=req)
+    args = ["--wrt", "J12.s_j", "--of", "J01.q", "--of", "hardpoint:J12.i", "--json"]
+    assert r.status_code == 200
+    assert r.text == cli("sensitivity", examples / "slider_crank.yaml", *args)[1].rstrip("\n")
+    assert "not assembled" in r.headers["x-kinprop-note"]  # the CLI's stderr note
+    req = {"wrt": ["s"], "free": ["q", "l"], "weights": {"q": 2}}
+    args = ["--wrt", "s", "--free", "q", "--free", "l", "--weight", "q=2", "--json"]
+    assert c.post("/api/sensitivity", json=req).json() == cli_json("sensitivity", examples / "slider_crank.yaml", *args)
+
+
+# --- bad input: the CLI's exit-2 messages -------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("path", "body", "args"),
+    [
+        ("/api/propagate", {"set": {"XX.s_i": [1, 2, 3]}}, ["propagate", "--set", "XX.s_i=1,2,3"]),
+        ("/api/propagate", {"set": {"ST.s_i": "a,b"}}, ["propagate", "--set", "ST.s_i=a,b"]),
+        ("/api/propagate", {"set": {"ST.s_i": [1, 2]}}, ["propagate", "--set", "ST.s_i=1,2"]),
+        ("/api/propagate", {"free": ["zz"]}, ["propagate", "--free", "zz"]),
+        ("/api/propagate", {"weights": {"nope": 2}}, ["propagate", "--weight", "nope=2"]),
+        ("/api/sweep", {"drive": ["TD=1:2"]}, ["sweep", "--drive", "TD=1:2"]),
+        ("/api/sweep", {"drive": ["XX=1:2:3"]}, ["sweep", "--drive", "XX=1:2:3"]),
+        (
+            "/api/sweep",
+            {"drive": ["TD=0.2:0.3:2"], "baseline": True},
+            ["sweep", "--drive", "TD=0.2:0.3:2", "--baseline"],
+        ),
+        (
+            "/api/sweep",
+            {"drive": ["TD=0.2:0.3:2"], "out": ["point:x"]},
+            ["sweep", "--drive", "TD=0.2:0.3:2", "--out", "point:x"],
+        ),
+        ("/api/sensitivity", {"wrt": ["RS.nope"]}, ["sensitivity", "--wrt", "RS.nope"]),
+        (
+            "/api/sensitivity",
+            {"wrt": ["s"], "of": ["metric:wheel.camber"]},
+            ["sensitivity", "--wrt", "s", "--of", "metric:wheel.camber"],
+        ),
+    ],
+)
+def test_bad_input_gets_the_cli_message(make_client, examples: Path, path: str, body: dict, args: list[str]) -> None:
+    c = make_client(MC, assemble_first=False)
+    before = c.get("/api/model.yaml").text
+    r = c.post(path, json=body)
+    want = cli_errors(args[0], examples / MC, *args[1:])
+    assert r.status_code == 422
+    assert r.json() == {"errors": want}
+    assert want and all(len(line) > 20 for line in want)  # located messages, not a bare status
+    assert c.get("/api/model.yaml").text == before
+
+
+def test_malformed_requests(make_client) -> None:
+    c = make_client(MC, assemble_first=False)
+    r = c.post("/api/propagate", content=b"{bad", headers={"Content-Type": "application/json"})
+    assert r.status_code == 400 and "invalid JSON" in r.json()["errors"][0]
+    r = c.post("/api/propagate", content=b"[1, 2]", headers={"Content-Type": "application/json"})
+    assert r.status_code == 400 and r.json()["errors"] == ["request body: expected a JSON object, found '[1, 2]'"]
+    r = c.post("/api/propagate", json={"sett": {}})
+    assert r.status_code == 422 and r.json()["errors"] == ["body.sett: Extra inputs are not permitted"]
+    r = c.post("/api/propagate", json={"set": {"ST.s_i": {"x": 1}}})
+    assert r.status_code == 422 and all(e.startswith("body.set.ST.s_i") for e in r.json()["errors"])
+    r = c.post("/api/sweep", json={})
+    assert r.status_code == 422 and r.json()["errors"] == ["body.drive: Field required"]
+    assert c.post("/api/undo").status_code == 409 and c.post("/api/redo").json() == {"errors": ["nothing to redo"]}
+    assert c.get("/api/nope").status_code == 404
+
+
+# --- session: history, downloads, isolation -----------------------------------------------------
+
+
+def test_undo_redo_reset_and_downloads(make_client, examples: Path, tmp_path: Path) -> None:
+    c = make_client(MC, assemble_first=False)
+    start = c.get("/api/model.yaml").text
+    assert yaml_numbers(start) == yaml_numbers((examples / MC).read_text())
+    c.post("/api/propagate", json={"set": {"ST.s_i": [0.5, 1.0, 0.0]}, "free": ["q"]})
+    one = c.get("/api/model.yaml").text
+    # the downloads are what `kinprop propagate -o/--csv` write and what --json prints
+    out_yaml, out_csv = tmp_path / "one.yaml", tmp_path / "one.csv"
+    code = cli("propagate", examples / MC, "--set", "ST.s_i=0.5,1.0,0", "-o", out_yaml, "--csv", out_csv)[0]
+    assert code == 0
+    assert one == out_yaml.read_text()
+    assert c.get("/api/results.csv").text == out_csv.read_text()
+    res = c.get("/api/results.json")
+    assert "attachment" in res.headers["content-disposition"] and res.json()["design"]["ST.s_i"] == [0.5, 1.0, 0.0]
+    c.post("/api/propagate", json={"set": {"RS.length": 0.21}})
+    two = c.get("/api/model.yaml").text
+    assert c.post("/api/undo").json() == {"undo": 1, "redo": 1}
+    assert c.get("/api/model.yaml").text == one
+    assert c.get("/api/state").json()["before_scene"] is None  # nothing to compare after an undo
+    assert c.post("/api/undo").json() == {"undo": 0, "redo": 2}
+    assert c.get("/api/model.yaml").text == start
+    assert c.post("/api/redo").json() == {"undo": 1, "redo": 1}
+    assert c.get("/api/model.yaml").text == one
+    assert c.post("/api/redo").json() == {"undo": 2, "redo": 0}
+    assert c.get("/api/model.yaml").text == two
+    assert c.post("/api/reset").json() == {"undo": 3, "redo": 0}
+    assert c.get("/api/model.yaml").text == start
+    c.post("/api/undo")
+    assert c.get("/api/model.yaml").text == two
+
+
+def yaml_numbers(text: str) -> dict:
+    """The joints' s_i, s_j and lengths in a model file."""
+    import yaml
+
+    data = yaml.safe_load(text)
+    return {
+        j: {k: np.asarray(v, dtype=float).round(12).tolist() for k, v in spec.items() if k in ("s_i", "s_j", "length")}
+        for j, spec in data["joints"].items()
+    }
+
+
+def test_slider_moves_coalesce_into_one_undo_step(make_client) -> None:
+    c = make_client(DW)
+    for deg in (1.0, 2.0, 3.0):
+        obj = c.post("/api/propagate", json={"set": {"LCA.q": deg}}).json()
+        assert obj["status"] == "converged"
+        assert obj["coordinates"]["LCA"][0] == pytest.approx(np.radians(deg), abs=1e-15)
+    assert c.get("/api/state").json()["history"]["undo"] == 1
+    c.post("/api/propagate", json={"set": {"TR.length": 390.0}})
+    assert c.get("/api/state").json()["history"]["undo"] == 2
+    c.post("/api/undo")
+    c.post("/api/undo")
+    assert c.get("/api/state").json()["coordinates"]["LCA"][0] == pytest.approx(0.0, abs=1e-8)
+
+
+def test_sessions_are_isolated(make_client) -> None:
+    c = make_client(MC)
+    a, b = {"X-Kinprop-Session": "a"}, {"X-Kinprop-Session": "b"}
+    start = c.get("/api/model.yaml", headers=b).text
+    assert c.post("/api/propagate", json={"set": {"RS.length": 0.21}}, headers=a).json()["status"] == "converged"
+    assert c.get("/api/model.yaml", headers=b).text == start
+    assert c.get("/api/model.yaml", params={"session": "a"}).text != start
+    assert c.get("/api/state", headers=a).json()["history"]["undo"] == 1
+
+
+# --- the page's view ----------------------------------------------------------------------------
+
+
+def test_state_describes_the_model(make_client) -> None:
+    c = make_client(DW)
+    st = c.get("/api/state").json()
+    assert st["units"]["length"] == "mm" and st["result"]["status"] == "converged"
+    assert [s["address"] for s in st["sliders"]] == ["LCA.q", "UCA.q"]
+    assert all(s["unit"] == "deg" for s in st["sliders"])
+    assert st["default_outputs"] == ["metric:upright.camber", "metric:upright.toe"]
+    rows = {v["address"]: v for v in st["variables"]}
+    assert rows["TR.length"]["value"] == [pytest.approx(386.5370606)] and rows["TR.length"]["unit"] == "mm"
+    assert rows["UBJ.s_j"]["body"] == "upright" and rows["UBJ.s_j"]["group"] == "s"
+    # the chassis frame is the global one: a chassis point's s is its global hardpoint
+    assert rows["TR.s_i"]["global"] == pytest.approx(rows["TR.s_i"]["value"], abs=1e-9)
+    assert rows["TR.s_i"]["global"] == pytest.approx([-250.317, 448.437, 54.229], abs=1e-9)
+    # the scene: the tie rod is drawn as a link of its length between its two hardpoints
+    tr = next(g for g in st["scene"]["segments"] if g["kind"] == "link")["lines"][0]
+    assert np.linalg.norm(np.subtract(tr[1], tr[0])) == pytest.approx(386.5370606, rel=1e-9)
+    # after an edit: the set row, the moved rows, the before scene
+    c.post("/api/propagate", json={"set": {"TR.length": 390.0}, "free": ["q"]})
+    st = c.get("/api/state").json()
+    rows = {v["address"]: v for v in st["variables"]}
+    assert rows["TR.length"]["role"] == "set" and rows["TR.length"]["before"] == [pytest.approx(386.5370606)]
+    assert st["before_scene"] is not None and "LCA.q" in st["changed"]
+
+
+def test_curve_defaults_without_a_wheel(make_client) -> None:
+    """A four-bar's default curve: the rocker (and coupler) angle over the crank angle; the
+    McPherson's drive is the rack (the strut's slide is one coordinate of a 5-coordinate joint)."""
+    st = make_client("fourbar.yaml").get("/api/state").json()
+    assert st["drives"][0]["spec"] == "O2" and st["default_outputs"] == ["A.q", "O4.q"]
+    o2 = st["drives"][0]
+    assert o2["unit"] == "deg" and o2["curve"] == pytest.approx([o2["value"] - 10, o2["value"] + 10])
+    st = make_client(MC).get("/api/state").json()
+    assert [d["spec"] for d in st["drives"]] == ["TD", "ST[4]"] and st["sliders"] == []
+    assert st["drives"][0]["unit"] == "m"
+
+
+def test_page_and_static_files(make_client) -> None:
+    c = make_client(MC)
+    page = c.get("/")
+    assert page.status_code == 200 and '<div id="view3d"' in page.text
+    assert "http" not in page.text.replace("http-equiv", "")  # no CDN: everything from this server
+    js = c.get("/static/plotly.min.js")
+    assert js.status_code == 200 and len(js.content) > 1_000_000 and b"plotly.js" in js.content[:2000]
+    for name in ("app.js", "style.css"):
+        assert c.get(f"/static/{name}").status_code == 200
+
+
+def test_serve_command_errors(examples: Path, tmp_path: Path) -> None:
+    """`kinprop serve` rejects a bad model like the other commands (exit 2, located message)."""
+    bad = tmp_path / "bad.yaml"
+    bad.write_text((examples / MC).read_text().replace("length: 0.203", "length: [1, 2]"))
+    assert cli_errors("serve", bad) == cli_errors("check", bad)
+    assert cli_errors("serve", tmp_path / "missing.yaml") == cli_errors("check", tmp_path / "missing.yaml")
+    code, _, err = cli("serve", examples / MC, "--port", "0")
+    assert code == 2 and "--port 0" in err
+
+
+def test_serve_command_serves(examples: Path) -> None:
+    """`kinprop serve MODEL --port P` prints its URL (localhost by default) and answers there."""
+    import subprocess
+    import sys
+    import time
+    import urllib.request
+
+    from workbench import free_port
+
+    port = free_port()
+    code = "from kinprop.cli import main; import sys; sys.argv = ['kinprop', *sys.argv[1:]]; main()"
+    args = ["serve", str(examples / MC), "--port", str(port)]
+    proc = subprocess.Popen([sys.executable, "-c", code, *args], stdout=subprocess.PIPE, text=True)
+    try:
+        line = proc.stdout.readline()
+        url = f"http://127.0.0.1:{port}/"
+        assert url in line and "mcpherson.yaml" in line
+        deadline = time.monotonic() + 60
+        while True:
+            try:
+                with urllib.request.urlopen(url + "api/check", timeout=5) as r:
+                    obj = json.loads(r.read())
+                break
+            except OSError:
+                if time.monotonic() > deadline or proc.poll() is not None:
+                    raise
+                time.sleep(0.1)
+        assert obj["model"] == str(examples / MC) and obj["assembled"] and obj["mobility"] == 2
+    finally:
+        proc.terminate()
+        proc.wait(timeout=30)
