@@ -363,9 +363,10 @@ class Engine:
                 raise AddressError(f"{address!r}: not a proper rotation matrix (C^T C = I, det C = +1)")
             state.C[t.joint, t.side] = C
         else:
-            if not val > 0:
-                raise AddressError(f"{address!r}: a length must be positive, found {float(val):g}")
-            state.L[t.joint] = val
+            length = float(val.reshape(()))
+            if not length > 0:
+                raise AddressError(f"{address!r}: a length must be positive, found {length:g}")
+            state.L[t.joint] = length
 
     # --- evaluation --------------------------------------------------------------------------
     def _as_state(self, state: State | Design, coordinates: Mapping[str, Array] | None) -> State:
