@@ -32,7 +32,9 @@ def _fmt(x: float) -> str:
     return f"{x:.4g}"
 
 
-HEADER = ["problem", "method", "median", "min", "max", "unit", "time / first (pairwise)", "max error", "note"]
+HEADER = ["problem", "method", "median", "min", "max", "unit", "time / hand baseline (pairwise)", "max error", "note"]
+#: the hand-written baseline every ratio is taken against (when a problem has it)
+BASELINE = "hand numpy Newton"
 
 
 def compare(
@@ -45,10 +47,13 @@ def compare(
     per: float = 1.0,
     notes: dict[str, str] | None = None,
     inner: int = 1,
+    ref: str | None = None,
 ) -> list[Row]:
     """Time every method on every trial, interleaved (method order rotates per trial).
 
-    The first method is the reference for the pairwise ratios ``t_method / t_first`` (same trial).
+    The method ``ref`` (default: the hand-written baseline, the method whose name starts with
+    :data:`BASELINE`, else the first) is the reference for the pairwise ratios
+    ``t_method / t_ref`` (same trial).
     ``per`` divides each time (e.g. steps per trial); ``check`` returns an error for a result.
     With ``inner`` > 1 each method solves the trial ``inner`` times back to back (every call
     starts from the same state) and the trial's time is the median of the calls after the first;
@@ -72,7 +77,9 @@ def compare(
             cold[name].append(dts[0] * scale / per)
             times[name].append(statistics.median(dts[1:] if inner > 1 else dts) * scale / per)
             errors[name] = max(errors[name], float(check(trial, res)))
-    first = times[names[0]]
+    if ref is None:
+        ref = next((n for n in names if n.startswith(BASELINE)), names[0])
+    first = times[ref]
     rows = []
     for name in names:
         ratios = [a / b for a, b in zip(times[name], first, strict=True)]

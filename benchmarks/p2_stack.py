@@ -191,13 +191,15 @@ def summary_lines(summary: dict) -> list[str]:
         if 128 in kk:
             i = kk.index(128)
             line += (f"; K=128 engine.solve {s['solve_ms'][i]:.3f} ms median (min {s['solve_min_ms'][i]:.3f}; "
-                     f"target <= 1.5), by address {s['propagate_ms'][i]:.3f} ms, hand numpy {s['hand_ms'][i]:.3f} ms")  # fmt: skip
+                     f"target <= 1.5), by address {s['propagate_ms'][i]:.3f} ms, "
+                     f"hand numpy {s['hand_ms'][i]:.3f} ms")  # fmt: skip
         out.append(line)
         for key, label in (("solve_ms", "engine.solve time"), ("propagate_ms", "engine.propagate time"),
                            ("hand_ms", "hand numpy time"), ("mem_MiB", "build+compile memory")):  # fmt: skip
-            out.append(f"P2 {variant} growth exponent in K of {label}: {exponent(kk, s[key]):.3f} "
-                       f"(K {EXP_K[0]}..{min(EXP_K[1], max(kk))}), {exponent(kk, s[key], 16, 1 << 30):.3f} "
-                       f"(K 16..{max(kk)})")  # fmt: skip
+            line = f"P2 {variant} growth exponent in K of {label}: {exponent(kk, s[key]):.3f} (K {EXP_K[0]}..{EXP_K[1]})"
+            if max(kk) > EXP_K[1]:
+                line += f", {exponent(kk, s[key], EXP_K[0], 1 << 30):.3f} (K {EXP_K[0]}..{max(kk)})"
+            out.append(line + (" (target <= 1.0)" if key == "solve_ms" else ""))
         mem = ", ".join(f"{k}: {m:.2f}" for k, m in zip(kk, s["mem_MiB"], strict=True))
         out.append(f"P2 {variant} build+compile peak memory (MiB) by K: {mem}")
     return out

@@ -95,9 +95,17 @@ def run(trials: int = 20, reference_steps: int = 36) -> list[Row]:
         return io_error(*res)
 
     methods = {"engine.solve_sequence": sequence, "engine.propagate per step": per_step,
-               "kp.propagate per step (engine=)": reference, "hand numpy Newton": hand, "scipy least_squares (FD)": lsq}  # fmt: skip
-    rows = compare("P3 RSSR 360 x 1 deg", list(range(trials)), methods, check, unit="ms/step", per=THETA.size,
-                   notes={"engine.solve_sequence": "one call, 360 steps"})
+               "kp.propagate per step (engine=)": reference, "hand numpy Newton": hand,
+               "scipy least_squares (FD)": lsq}  # fmt: skip
+    rows = compare(
+        "P3 RSSR 360 x 1 deg",
+        list(range(trials)),
+        methods,
+        check,
+        unit="ms/step",
+        per=THETA.size,
+        notes={"engine.solve_sequence": "one call, 360 steps"},
+    )
     for row in rows:
         if row.method == "kp.propagate per step (engine=)":  # timed on fewer steps: scale to per step
             row.times = [t * THETA.size / reference_steps for t in row.times]

@@ -55,13 +55,14 @@ def run(N: int = 10_000, trials: int = 5, lsq_subset: int = 200, seed: int = 0) 
         n = x.shape[0]
         return np.abs(leg_lengths(A[:n], B[:n], x, R) - dl[:n]).max() if ok else np.inf
 
-    methods = {"engine.solve_batch (threads=False)": fast, "engine.solve_batch (threads=True)": lambda dl: fast(dl, True),
+    methods = {"engine.solve_batch (threads=False)": fast,
+               "engine.solve_batch (threads=True)": lambda dl: fast(dl, True),
                "hand numpy Newton (vectorised)": hand, "scipy least_squares (FD), per variant": lsq}  # fmt: skip
     rows = compare(f"P4 {N} Stewart variants", batches, methods, check, unit="variants/s", scale=1.0)
     for row in rows:  # seconds per batch -> variants per second
         n = lsq_subset if "least_squares" in row.method else N
         row.times = [n / t for t in row.times]
-        row.ratios = [x * N / n for x in row.ratios]  # time per variant relative to the serial batch
+        row.ratios = [x * N / n for x in row.ratios]  # time per variant relative to the hand numpy Newton
         if n != N:
             row.note = f"timed on {n} variants"
     rows[0].note = "serial (1 thread)"

@@ -4,6 +4,10 @@ Each problem is timed against hand-written baselines in the same run, interleave
 trial; "time / first" is the median over trials of (method time / first method's time) on the
 same trial (for P4, time per variant). Answers are checked independently (leg lengths by
 closed-form inverse kinematics, the RSSR input-output equation): "max error" in metres.
+Everything kinprop runs goes through the compiled engine (``kinprop.compile``) and its
+by-address API, or the model-level ``kinprop.propagate``. ``benchmarks/cold_start.py`` (the
+command line's first run with an empty kernel cache, then warm) runs last; ``--quick`` skips it
+unless named in ``--only``.
 """
 
 from __future__ import annotations
@@ -11,6 +15,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import statistics
 import subprocess
 import sys
 import time
@@ -24,12 +29,13 @@ from common import print_table  # noqa: E402
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--quick", action="store_true", help="few trials, K up to 128, N = 2,000 (about 15 s)")
+    ap.add_argument("--quick", action="store_true", help="few trials, K up to 128, no cold start")
     ap.add_argument("--max-k", type=int, default=None, help="largest stack size for P2 (default 512; 128 with --quick)")
     ap.add_argument("-o", "--output", help="also write the table (Markdown) to this file")
-    ap.add_argument("--only", nargs="*", default=None, help="subset of P1 P2 P3 P4 slider_crank")
+    ap.add_argument("--only", nargs="*", default=None, help="subset of P1 P2 P3 P4 slider_crank cold_start")
     args = ap.parse_args()
-    only = set(args.only or ["P1", "P2", "P3", "P4", "slider_crank"])
+    default = ["P1", "P2", "P3", "P4", "slider_crank"] + ([] if args.quick else ["cold_start"])
+    only = set(args.only or default)
     t0 = time.perf_counter()
     import numba
 
@@ -42,7 +48,13 @@ def main() -> int:
     if "P1" in only:
         import p1_stewart
 
-        rows += p1_stewart.run(trials=10 if args.quick else 50)
+        r = p1_stewart.run(trials=10 if args.quick else 50)
+        rows += r
+        for x in r:
+            if x.method in ("engine.propagate (by address)", "kp.propagate (engine=)"):
+                target = " (target <= 0.05 ms)" if x.problem.startswith("P1a") and "engine." in x.method else ""
+                extra.append(f"{x.problem}: {x.method} {statistics.median(x.times):.4f} ms median{target}, "
+                             f"{statistics.median(x.ratios):.3g} x the hand numpy Newton")  # fmt: skip
     if "P2" in only:
         import p2_stack
 
@@ -50,27 +62,26 @@ def main() -> int:
         Ks = [1 << i for i in range(kmax.bit_length()) if (1 << i) <= kmax]
         r, s = p2_stack.run(Ks, trials=3 if args.quick else 5)
         rows += r
-        kk = s["K"]
-        for key, label in (("fast_ms", "kinprop fast time (median)"), ("fast_min_ms", "kinprop fast time (min)"),
-                           ("splu_ms", "kinprop splu time"), ("hand_ms", "hand numpy time"),
-                           ("mem_MiB", "kinprop build+compile memory")):  # fmt: skip
-            e128 = p2_stack.exponent(kk, s[key], 8, 128)
-            eall = p2_stack.exponent(kk, s[key], 8)
-            extra.append(f"P2 growth exponent in K of {label}: {e128:.3f} (K 8..128), {eall:.3f} (K 8..{max(kk)})")
-        k128 = s["K"].index(128) if 128 in s["K"] else None
-        if k128 is not None:
-            extra.append(f"P2 K=128: kinprop fast {s['fast_ms'][k128]:.3f} ms per re-assembly")
-        mem = ", ".join(f"{k}: {m:.2f}" for k, m in zip(s["K"], s["mem_MiB"], strict=True))
-        extra.append(f"P2 build+compile peak memory (MiB) by K: {mem}")
+        extra += p2_stack.summary_lines(s)
     if "P3" in only:
         import p3_rssr
 
-        rows += p3_rssr.run(trials=5 if args.quick else 20)
+        r = p3_rssr.run(trials=5 if args.quick else 20)
+        rows += r
+        extra.append(f"P3 engine.solve_sequence: {statistics.median(r[0].times) * 1e3:.2f} us per 1-degree step, "
+                     f"{statistics.median(r[0].ratios):.3g} x the hand numpy Newton")  # fmt: skip
     if "P4" in only:
         import p4_batch
 
         q = args.quick
-        rows += p4_batch.run(N=2000 if q else 10_000, trials=3 if q else 5, lsq_subset=50 if q else 200)
+        r = p4_batch.run(N=10_000, trials=3 if q else 5, lsq_subset=50 if q else 200)
+        rows += r
+        rate = {x.method: statistics.median(x.times) for x in r}
+        extra.append(
+            "P4 "
+            + ", ".join(f"{m}: {v:,.0f} variants/s" for m, v in rate.items() if "engine" in m or "hand" in m)
+            + " (target >= 300,000/s with threads)"
+        )
     print()
     text = print_table(rows)
     for line in extra:
@@ -79,6 +90,13 @@ def main() -> int:
     if "slider_crank" in only and os.path.exists(sc):
         print("\n# benchmarks/slider_crank.py", flush=True)
         subprocess.run([sys.executable, sc, *(["--repeats", "20"] if args.quick else [])], check=False)
+    if "cold_start" in only:
+        import cold_start
+
+        print("\n# benchmarks/cold_start.py", flush=True)
+        cs = cold_start.lines(cold_start.measure())
+        print("\n".join(cs), flush=True)
+        extra += cs
     print(f"\ntotal {time.perf_counter() - t0:.1f} s")
     if args.output:
         with open(args.output, "w") as fh:

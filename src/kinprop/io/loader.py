@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
@@ -85,7 +84,7 @@ def _json_duplicates(tree: Any, path: str, out: list[Problem]) -> None:
             _json_duplicates(v, f"{path}[{k}]", out)
 
 
-def _parse(text: str, file: str) -> tuple[Any, list[Problem]]:
+def parse_document(text: str, file: str) -> tuple[Any, list[Problem]]:
     """Parsed data (duplicates: the last wins) and the duplicate-name problems."""
     dups: list[Problem] = []
     try:
@@ -110,7 +109,7 @@ def _parse(text: str, file: str) -> tuple[Any, list[Problem]]:
 
 def parse_text(text: str, file: str = "<string>") -> Any:
     """Parse YAML (or JSON, a subset) text; syntax errors and duplicate names become a ModelError."""
-    data, dups = _parse(text, file)
+    data, dups = parse_document(text, file)
     if dups:
         raise ModelError(dups)
     return data
@@ -140,7 +139,7 @@ MISSING_HINTS = {
 }
 
 
-def _found(value: Any) -> str:
+def describe_found(value: Any) -> str:
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
 
@@ -149,7 +148,7 @@ def _message(e: Any) -> str:
     """Expected versus found for one pydantic error."""
     loc, found, kind, ctx = tuple(e["loc"]), e.get("input"), e["type"], e.get("ctx") or {}
     if loc and loc[-1] == "[key]":
-        return f"expected a name (text), found {_found(loc[-2])}"
+        return f"expected a name (text), found {describe_found(loc[-2])}"
     if kind == "missing":
         key = str(loc[-1]) if loc else ""
         return "missing" + (f": {MISSING_HINTS[key]}" if key in MISSING_HINTS else " (required)")
@@ -170,7 +169,7 @@ def _message(e: Any) -> str:
         return f"expected {'at least' if kind == 'too_short' else 'at most'} {n} items, found {ctx['actual_length']}"
     text = e["msg"]
     if not isinstance(found, (dict, list)):
-        text += f" (found {_found(found)})"
+        text += f" (found {describe_found(found)})"
     return text
 
 
@@ -268,50 +267,6 @@ def build_or_report(data: dict[str, Any], schema: type[T], build: Any, file: str
             except ModelError as exc:
                 semantic = exc.problems
     raise ModelError(merge_problems(problems, semantic, structural))
-
-
-def load_model(path: str | Path) -> Model:
-    """Read and validate a model file (YAML or JSON); MJCF (``.xml``) and Project Chrono
-    suspension files (``.json`` with a ``Template``) are imported (:mod:`kinprop.imports`)."""
-    path = Path(path)
-    file = str(path)
-    if path.suffix.lower() in (".xml", ".mjcf"):
-        from kinprop.imports import import_model
-
-        return import_model(path)[0]
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelError([Problem("file", f"cannot read: {exc.strerror or exc}", file)]) from None
-    except UnicodeDecodeError as exc:
-        raise ModelError([Problem("file", f"not UTF-8 text (byte {exc.start})", file)]) from None
-    data, dups = _parse(text, file)
-    if file.endswith(".json") and isinstance(data, dict) and "Template" in data and "kinprop" not in data:
-        from kinprop.imports.chrono import chrono_hardpoints
-        from kinprop.io.hardpoints import model_from_hardpoints
-
-        return model_from_hardpoints(chrono_hardpoints(data, file)[0], file)
-    if not dups:
-        return model_from_data(data, file)
-    try:
-        model_from_data(data, file)
-    except ModelError as exc:  # the last of each duplicate was kept: report the rest too
-        raise ModelError(dups + [p for p in exc.problems if p.location not in {d.location for d in dups}]) from None
-    raise ModelError(dups)
-
-
-def model_from_data(data: Any, file: str = "<data>") -> Model:
-    """Validate parsed file data and build a Model; raise ModelError with every problem."""
-    if not isinstance(data, dict):
-        raise ModelError([Problem("model", f"expected a mapping at the top level, found {type(data).__name__}", file)])
-    style = data.get("style", "frames")
-    if not isinstance(style, str) or style not in STYLES:
-        raise ModelError([Problem("style", f"expected one of {', '.join(STYLES)}, found {_found(style)}", file)])
-    if style == "hardpoints":
-        from kinprop.io.hardpoints import model_from_hardpoints
-
-        return model_from_hardpoints(data, file)
-    return build_or_report(data, ModelFile, build_model, file)
 
 
 def _body(name: str, b: Any, file: str, problems: list[Problem]) -> Body:
