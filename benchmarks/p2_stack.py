@@ -196,7 +196,9 @@ def summary_lines(summary: dict) -> list[str]:
         out.append(line)
         for key, label in (("solve_ms", "engine.solve time"), ("propagate_ms", "engine.propagate time"),
                            ("hand_ms", "hand numpy time"), ("mem_MiB", "build+compile memory")):  # fmt: skip
-            line = f"P2 {variant} growth exponent in K of {label}: {exponent(kk, s[key]):.3f} (K {EXP_K[0]}..{EXP_K[1]})"
+            line = (
+                f"P2 {variant} growth exponent in K of {label}: {exponent(kk, s[key]):.3f} (K {EXP_K[0]}..{EXP_K[1]})"
+            )
             if max(kk) > EXP_K[1]:
                 line += f", {exponent(kk, s[key], EXP_K[0], 1 << 30):.3f} (K {EXP_K[0]}..{max(kk)})"
             out.append(line + (" (target <= 1.0)" if key == "solve_ms" else ""))

@@ -1,8 +1,8 @@
 """Run every benchmark and print one table (Markdown): ``python benchmarks/run_all.py [--quick]``.
 
 Each problem is timed against hand-written baselines in the same run, interleaved trial by
-trial; "time / first" is the median over trials of (method time / first method's time) on the
-same trial (for P4, time per variant). Answers are checked independently (leg lengths by
+trial; "time / hand baseline" is the median over trials of (method time / the hand-written numpy
+Newton's time) on the same trial (for P4, time per variant). Answers are checked independently (leg lengths by
 closed-form inverse kinematics, the RSSR input-output equation): "max error" in metres.
 Everything kinprop runs goes through the compiled engine (``kinprop.compile``) and its
 by-address API, or the model-level ``kinprop.propagate``. ``benchmarks/cold_start.py`` (the

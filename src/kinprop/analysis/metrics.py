@@ -42,16 +42,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from kinprop.analysis.context import OutputContext
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.spatial import EZ, Array
-
-if TYPE_CHECKING:
-    from kinprop.analysis.outputs import OutputContext
 
 ANGLE_METRICS = ("camber", "toe", "caster", "kpi")
 LENGTH_METRICS = ("scrub_radius", "trail", "wheel_centre_dx", "wheel_centre_dy", "wheel_centre_dz")
@@ -203,9 +200,7 @@ def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None)
             out["scrub_radius"], out["trail"] = ground_offsets(upper, lower, contact, axis)
     ref = None
     if ctx.reference is not None:
-        from kinprop.analysis.outputs import OutputContext as _Ctx
-
-        ref = _Ctx.of(ctx.reference).body_point(wheel, "wheel_centre")
+        ref = OutputContext.of(ctx.reference).body_point(wheel, "wheel_centre")
     else:
         found_ref = _find_point(model, wheel, "wheel_centre_ref", on_wheel=False)
         if found_ref is not None:
@@ -220,8 +215,6 @@ def suspension_metrics(
     model: Model, wheel: str | None = None, *, reference: Model | None = None, spec: WheelSpec | None = None
 ) -> dict[str, float]:
     """Metrics of ``wheel`` (the only wheel body when None) at the model's current state."""
-    from kinprop.analysis.outputs import OutputContext
-
     wheels = wheel_bodies(model)
     if wheel is None:
         if len(wheels) != 1:

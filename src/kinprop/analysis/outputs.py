@@ -22,12 +22,12 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
+from kinprop.analysis.context import HARD, POINT, OutputContext
 from kinprop.analysis.metrics import WheelSpec, metric_names, resolve_metric, wheel_metrics
-from kinprop.engine import Engine, Kinematics
+from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.model import Model
@@ -37,8 +37,7 @@ from kinprop.spatial import Array
 AXES = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
 _XYZ = "xyz"
 
-_POINT = re.compile(r"^point:(?P<body>[^.\s\[\]]+)\.(?P<name>[^\s\[\]]+?)(\[(?P<c>[xyz012])\])?$")
-_HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[ij])(\[(?P<c>[xyz012])\])?$")
+_POINT, _HARD = POINT, HARD
 _DIST = re.compile(r"^distance:(?P<a>[^,\s]+),(?P<b>[^,\s]+)$")
 
 
@@ -48,57 +47,6 @@ def _distance_ends(name: str) -> tuple[str, str]:
     if not m:
         raise AddressError(f"bad output {name!r}: expected distance:BODY.NAME,BODY.NAME (or hardpoint:JOINT.i|j ends)")
     return tuple(x if x.startswith(("point:", "hardpoint:")) else f"point:{x}" for x in (m["a"], m["b"]))  # type: ignore[return-value]
-
-
-@dataclass
-class OutputContext:
-    """A model with its forward kinematics, shared by every output evaluated at one state."""
-
-    model: Model
-    kin: Kinematics
-    reference: Model | None = None
-    wheels: Mapping[str, WheelSpec] | None = None
-
-    @classmethod
-    def of(
-        cls,
-        model: Model,
-        reference: Model | None = None,
-        wheels: Mapping[str, WheelSpec] | None = None,
-        engine: Engine | None = None,
-    ) -> OutputContext:
-        """Forward kinematics of ``model`` at its current state."""
-        eng = engine or compile_engine(model.mechanism)
-        return cls(model, eng.kinematics(model.design, model.coordinates), reference, wheels)
-
-    def body_point(self, body: str, point: str) -> Array:
-        """Global position of the named point ``point`` of ``body``."""
-        mech = self.model.mechanism
-        if body not in mech.body_names:
-            raise AddressError(f"unknown body {body!r}; bodies are {', '.join(mech.body_names)}")
-        pts = dict(mech.body(body).points)
-        if point not in pts:
-            known = ", ".join(pts) or "none"
-            raise AddressError(f"body {body!r} has no named point {point!r}; its points: {known}")
-        return self.kin.r[body] + self.kin.A[body] @ np.asarray(pts[point], dtype=float)
-
-    def hardpoint(self, joint: str, side: str) -> Array:
-        """Global origin of ``joint``'s frame on its first (``i``) or second (``j``) body."""
-        mech = self.model.mechanism
-        if joint not in mech.joint_names:
-            raise AddressError(f"unknown joint {joint!r}; joints are {', '.join(mech.joint_names)}")
-        f = self.kin.frames[joint]
-        return f.P_i if side == "i" else f.P_j
-
-    def point(self, spec: str) -> Array:
-        """A global point from a ``point:BODY.NAME`` or ``hardpoint:JOINT.i|j`` spec."""
-        m = _POINT.match(spec)
-        if m and m.group("c") is None:
-            return self.body_point(m.group("body"), m.group("name"))
-        m = _HARD.match(spec)
-        if m and m.group("c") is None:
-            return self.hardpoint(m.group("joint"), m.group("side"))
-        raise AddressError(f"{spec!r} is not a point: expected point:BODY.NAME or hardpoint:JOINT.i|j")
 
 
 def _vector_name(base: str, n: int, letters: bool) -> list[str]:

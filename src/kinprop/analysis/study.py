@@ -36,8 +36,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from kinprop.analysis.metrics import metric_names
+from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
+from kinprop.kinematics.layout import column_labels
 from kinprop.model import Design, Model
 from kinprop.model.design import as_coordinates, parse_address
 from kinprop.propagation.propagate import apply_changes
@@ -154,10 +157,6 @@ def _point_specs(model: Model) -> list[tuple[int, Array, str]]:
 
 def _default_outputs(model: Model) -> list[str]:
     try:
-        from kinprop.analysis.metrics import metric_names
-    except ImportError:  # pragma: no cover - metrics are another module's, optional here
-        return []
-    try:
         return list(metric_names(model))
     except Exception:  # a model without wheel bodies
         return []
@@ -166,10 +165,6 @@ def _default_outputs(model: Model) -> list[str]:
 def _outputs_for(model: Model, names: list[str]) -> dict[str, float]:
     if not names:
         return {}
-    try:
-        from kinprop.analysis.outputs import evaluate_outputs
-    except ImportError:  # pragma: no cover
-        return {}
     return evaluate_outputs(model, names)
 
 
@@ -177,8 +172,6 @@ def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, s
     """Rows of variants ``start .. start + len(values) - 1`` (runs on a Dask worker too)."""
     model = _model_from_payload(payload)
     asm = compile_engine(model.mechanism)
-    from kinprop.kinematics.layout import column_labels
-
     labels = column_labels(asm.layout)
     qcols = [v for v in asm.layout.variables if v.group == "q"]
     nq = sum(v.size for v in qcols)
@@ -187,12 +180,7 @@ def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, s
     point_cols = {f"{name}[{ax}]" for _, _, name in points for ax in "xyz"}
     out_names = spec.outputs if spec.outputs is not None else _default_outputs(model)
     if out_names:
-        try:
-            from kinprop.analysis.outputs import expand_outputs
-
-            out_names = [x for x in expand_outputs(model, out_names) if x not in point_cols]
-        except ImportError:  # pragma: no cover
-            out_names = []
+        out_names = [x for x in expand_outputs(model, out_names) if x not in point_cols]
     rows: dict[str, Any] = {"variant": np.arange(start, start + n, dtype=np.int64)}
     for k, a in enumerate(spec.addresses):
         rows[a] = values[:, k]

@@ -36,10 +36,13 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from kinprop.analysis.metrics import metric_names
+from kinprop.analysis.outputs import output_function
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, SingularityWarning
 from kinprop.model import Model
+from kinprop.propagation.continuation import propagate_continuation
 from kinprop.propagation.propagate import (
     SINGULAR_RTOL,
     Propagation,
@@ -126,10 +129,6 @@ def coordinate_columns(model: Model) -> list[tuple[str, str, int, bool]]:
 def default_outputs(model: Model) -> list[str]:
     """Named points of every body, plus the suspension metrics of wheel bodies if any."""
     names = [f"point:{b.name}.{p}" for b in model.mechanism.bodies for p, _ in b.points]
-    try:
-        from kinprop.analysis.metrics import metric_names
-    except ImportError:  # pragma: no cover - metrics are optional
-        return names
     try:
         return names + metric_names(model)
     except Exception:  # a model without wheels, or metrics unavailable: points only
@@ -266,8 +265,6 @@ def sweep(
     """
     import pandas as pd
 
-    from kinprop.analysis.outputs import output_function
-
     dr = tuple(parse_drive(model, d) if isinstance(d, str) else d for d in drives)
     if not dr:
         raise AddressError("a sweep needs at least one --drive")
@@ -362,8 +359,6 @@ def _solve_step(
             prop = propagate(good, changes, free, tol=tol, max_iter=max_iter, engine=engine)
         if prop.converged or mode == "newton":
             return prop, ""
-    from kinprop.propagation.continuation import propagate_continuation
-
     cont = propagate_continuation(
         good, changes, free, tol=tol, max_iter=min(max_iter, 20), min_step=1e-4, engine=engine
     )

@@ -21,7 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
 from kinprop.analysis.sensitivity import design_sensitivity
+from kinprop.analysis.study import run_study
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.kinematics.layout import column_labels
@@ -65,8 +67,6 @@ def _output_value(model: Model, name: str, labels: list[str]) -> float:
         for v in eng.layout.variables:
             if v.start <= col < v.start + v.size:
                 return float(eng.get(eng.state_of(model), v.key)[col - v.start])
-    from kinprop.analysis.outputs import evaluate_outputs
-
     return float(evaluate_outputs(model, [name])[name])
 
 
@@ -80,10 +80,6 @@ def expand_names(model: Model, names: Sequence[str]) -> list[str]:
         elif any(lab.startswith(n + "[") for lab in labels):
             out += [lab for lab in labels if lab.startswith(n + "[")]
         else:
-            try:
-                from kinprop.analysis.outputs import expand_outputs
-            except ImportError:  # pragma: no cover
-                raise AddressError(f"output {n!r} is not a coordinate of this model") from None
             out += expand_outputs(model, [n])
     return out
 
@@ -156,8 +152,6 @@ def monte_carlo(
 ) -> Array:
     """Sample standard deviations of ``outputs`` over ``n`` normal draws of the tolerances
     (a design study with an explicit plan; failed variants are dropped)."""
-    from kinprop.analysis.study import run_study
-
     layout = compile_engine(model.mechanism).layout
     labels = column_labels(layout)
     pcols, sigma = _inputs(model, tolerances)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from kinprop.imports.chrono import read_chrono
+from kinprop.imports.mjcf import document_to_model, read_mjcf
 from kinprop.model import Model
 
 
@@ -13,11 +15,7 @@ def import_model(
     """A model from an MJCF (``.xml``) or Chrono suspension (``.json``) file, with the importer's notes."""
     path = Path(path)
     if path.suffix.lower() == ".json":
-        from kinprop.imports.chrono import read_chrono
-
         return read_chrono(path, tire_radius)
-    from kinprop.imports.mjcf import document_to_model, read_mjcf
-
     doc = read_mjcf(path)
     return document_to_model(doc, keyframe), doc.notes
 

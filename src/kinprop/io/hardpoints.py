@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from kinprop.analysis.points import snapshot
 from kinprop.engine import JointFrames
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, ModelError, Problem
@@ -325,8 +326,6 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
 
 def joint_frames(model: Model) -> dict[str, JointFrames]:
     """Global joint frames of every joint at the model's coordinates (T-D: at the slid point)."""
-    from kinprop.analysis.points import snapshot
-
     snap = snapshot(model)
     return {name: JointFrames(snap.cut_point(name), f.R_i, f.P_j, f.R_j) for name, f in snap.frames.items()}
 

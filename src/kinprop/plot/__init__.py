@@ -11,7 +11,9 @@ from pathlib import Path
 
 from kinprop.io.writer import atomic_write
 from kinprop.model import Model
+from kinprop.plot.interactive import render_html
 from kinprop.plot.scene import Scene, build_scene
+from kinprop.plot.static import render_png
 from kinprop.plot.style import Layer
 
 FORMATS = (".png", ".html")
@@ -42,11 +44,7 @@ def render(
         raise ValueError(f"plot file {str(path)!r}: expected a name ending in .png or .html, found {found!r}")
     ls = layers(model, before, label, before_label)
     if suffix == ".png":
-        from kinprop.plot.static import render_png
-
         return render_png(ls, title or "", view)
-    from kinprop.plot.interactive import render_html
-
     return render_html(ls, title or "")
 
 

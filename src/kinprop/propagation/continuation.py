@@ -39,6 +39,7 @@ from kinprop.model.design import parse_address
 from kinprop.model.model import Model
 from kinprop.propagation.conditioning import scaled_jacobian
 from kinprop.propagation.propagate import Propagation, apply_changes, engine_for, propagate
+from kinprop.propagation.sensitivity import design_sensitivity
 from kinprop.solver.newton import RANK_RTOL
 from kinprop.spatial import Array, exp_so3, log_so3
 
@@ -219,8 +220,6 @@ def propagate_continuation(
     (``||Phi|| >= tol``): the branch followed is the one of that assembly. Sub-steps are
     fractions of the change, between ``min_step`` and 1; ``max_steps`` bounds the attempts.
     """
-    from kinprop.analysis.sensitivity import design_sensitivity
-
     engine = engine_for(model, engine)
     path = _build_path(engine, model, changes)
     layout = engine.layout

@@ -1,0 +1,73 @@
+"""The state every output is evaluated from: a model with its forward kinematics."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from kinprop.engine import Engine, Kinematics
+from kinprop.engine import compile as compile_engine
+from kinprop.errors import AddressError
+from kinprop.model import Model
+from kinprop.spatial import Array
+
+if TYPE_CHECKING:
+    from kinprop.analysis.metrics import WheelSpec
+
+POINT = re.compile(r"^point:(?P<body>[^.\s\[\]]+)\.(?P<name>[^\s\[\]]+?)(\[(?P<c>[xyz012])\])?$")
+HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[ij])(\[(?P<c>[xyz012])\])?$")
+
+
+@dataclass
+class OutputContext:
+    """A model with its forward kinematics, shared by every output evaluated at one state."""
+
+    model: Model
+    kin: Kinematics
+    reference: Model | None = None
+    wheels: Mapping[str, WheelSpec] | None = None
+
+    @classmethod
+    def of(
+        cls,
+        model: Model,
+        reference: Model | None = None,
+        wheels: Mapping[str, WheelSpec] | None = None,
+        engine: Engine | None = None,
+    ) -> OutputContext:
+        """Forward kinematics of ``model`` at its current state."""
+        eng = engine or compile_engine(model.mechanism)
+        return cls(model, eng.kinematics(model.design, model.coordinates), reference, wheels)
+
+    def body_point(self, body: str, point: str) -> Array:
+        """Global position of the named point ``point`` of ``body``."""
+        mech = self.model.mechanism
+        if body not in mech.body_names:
+            raise AddressError(f"unknown body {body!r}; bodies are {', '.join(mech.body_names)}")
+        pts = dict(mech.body(body).points)
+        if point not in pts:
+            known = ", ".join(pts) or "none"
+            raise AddressError(f"body {body!r} has no named point {point!r}; its points: {known}")
+        return self.kin.r[body] + self.kin.A[body] @ np.asarray(pts[point], dtype=float)
+
+    def hardpoint(self, joint: str, side: str) -> Array:
+        """Global origin of ``joint``'s frame on its first (``i``) or second (``j``) body."""
+        mech = self.model.mechanism
+        if joint not in mech.joint_names:
+            raise AddressError(f"unknown joint {joint!r}; joints are {', '.join(mech.joint_names)}")
+        f = self.kin.frames[joint]
+        return f.P_i if side == "i" else f.P_j
+
+    def point(self, spec: str) -> Array:
+        """A global point from a ``point:BODY.NAME`` or ``hardpoint:JOINT.i|j`` spec."""
+        m = POINT.match(spec)
+        if m and m.group("c") is None:
+            return self.body_point(m.group("body"), m.group("name"))
+        m = HARD.match(spec)
+        if m and m.group("c") is None:
+            return self.hardpoint(m.group("joint"), m.group("side"))
+        raise AddressError(f"{spec!r} is not a point: expected point:BODY.NAME or hardpoint:JOINT.i|j")
