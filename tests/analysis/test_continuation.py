@@ -25,16 +25,18 @@ def at60():
     return set_crank(load_solved("fourbar.yaml"), 60.0)
 
 
-def test_large_change_plain_newton_switches_branch_continuation_does_not(at150):
+def test_large_change_plain_newton_switches_branch_the_default_does_not(at150):
     a, b, c, d = CRANK_ROCKER
     change = {"B.s_i[0]": 2.0 * b}  # coupler doubled
     t2 = at150.coordinates["O2"][0]
     exact = freudenstein(a, 2.0 * b, c, d, t2)  # the open branch the model is on
     other = freudenstein(a, 2.0 * b, c, d, t2, branch=+1)
-    plain = propagate(at150, change, FREE)
+    plain = propagate(at150, change, FREE, branch=False)  # the paper's plain Newton
     assert plain.converged  # ... but silently on the crossed branch
     assert abs(wrap(plain.after.coordinates["O4"][0] - other)) < 1e-8
     assert abs(np.degrees(wrap(plain.after.coordinates["O4"][0] - exact))) > 30
+    default = propagate(at150, change, FREE, tol=1e-13)  # follows the change on the start's branch
+    assert default.converged and abs(np.degrees(wrap(default.after.coordinates["O4"][0] - exact))) < 1e-8
     res = propagate_continuation(at150, change, FREE, tol=1e-13)
     assert res.converged and res.fraction == 1.0, res.message
     assert abs(np.degrees(wrap(res.after.coordinates["O4"][0] - exact))) < 1e-8

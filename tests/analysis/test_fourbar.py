@@ -45,7 +45,8 @@ def test_double_rocker_fails_past_its_input_limit(examples):
     t2 = np.radians(df.loc[ok, "O2.q"])
     err = np.abs(wrap(np.radians(df.loc[ok, "O4.q"]) - freudenstein(*DOUBLE_ROCKER, t2)))
     assert np.degrees(err.max()) < 1e-8
-    assert df.loc[~ok, "message"].str.contains("not converged").all()
+    # each failure says how far the step could be followed on the branch (the toggle), never a pose
+    assert df.loc[~ok, "message"].str.contains("followed on the start's branch only to|not converged").all()
     assert df.loc[~ok, "O4.q"].isna().all()
 
 

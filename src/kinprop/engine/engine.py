@@ -35,9 +35,16 @@ from kinprop.solver.plan import Plan, build_plan
 from kinprop.spatial import Array, is_rotation
 from kinprop.topology import Topology, build_topology
 
-#: converged when ||Phi|| < max(tol, ROUNDOFF * eps * L^2): distance rows d.d - l^2 carry
-#: round-off of about eps * L^2, which exceeds 1e-10 for metre-sized mechanisms in mm
+#: converged when the scaled residual < max(tol, ROUNDOFF * eps * (U L)^2): distance rows
+#: d.d - l^2 carry round-off of about eps * L^2
 ROUNDOFF = 16.0
+#: metres per length unit a model may declare
+METRES_PER_UNIT = {"m": 1.0, "mm": 1e-3}
+#: branch keeping (kinprop.solver.newton.follow): jump test, smallest sub-step, sub-step cap
+KAPPA, JUMP_ATOL, MIN_STEP, MAX_SUBSTEPS = 0.5, 1e-9, 1e-6, 200
+#: at most this many Newton iterations per solve; a solve asked for tol <= POLISH_TOL takes one
+#: more step after converging (kept when it lowers the residual: results to round-off)
+MAX_ITER, POLISH_TOL = 10_000, 1e-8
 _FIELD_SIDE = {"s_i": 0, "s_j": 1, "C_i": 0, "C_j": 1}
 
 
@@ -119,6 +126,27 @@ class Solution:
     changes: Mapping[str, Array] = field(default_factory=dict)
     #: the tolerance asked for; ``tol`` is ``max(requested_tol, round-off floor)``
     requested_tol: float = 0.0
+    #: fraction of the change followed (1 when converged), sub-steps taken, follow flags
+    fraction: float = 1.0
+    substeps: int = 1
+    flags: int = 0
+
+    @property
+    def subdivided(self) -> bool:
+        """The change was split into sub-steps to stay on the start's branch."""
+        return bool(self.flags & newton.SUBDIVIDED)
+
+    @property
+    def notes(self) -> list[str]:
+        """One line per thing a user should know about this solve (empty: nothing to say)."""
+        out = []
+        if self.converged and self.flags & newton.FROM_ESTIMATES and self.flags & newton.SIGN_FLIP:
+            out.append("ambiguous assembly: det of the free Jacobian changed sign between the estimates and the "
+                       "solution, so it may be another assembly branch than the estimates suggest")  # fmt: skip
+        if self.converged and self.subdivided:
+            why = " (a full step left the start's branch)" if self.flags & (newton.JUMPED | newton.SIGN_FLIP) else ""
+            out.append(f"the change was followed in {self.substeps} sub-steps to stay on the start's branch{why}")
+        return out
 
     @property
     def converged(self) -> bool:
@@ -137,6 +165,12 @@ class Solution:
             return "no free variables: nothing can move to satisfy the constraints"
         if self.status is Status.DIVERGED:
             return f"diverged at iteration {self.iterations}: ||Phi|| = {self.residual:.3g}"
+        if self.status is Status.INFEASIBLE:
+            return (f"the change can be followed on the start's branch only to {self.fraction:.6g} of its size "
+                    f"(no assembly beyond, or a singular configuration there); {self.substeps} sub-steps")  # fmt: skip
+        if self.status is Status.STEP_LIMIT:
+            return (f"sub-step cap reached ({self.substeps} sub-steps, at {self.fraction:.6g} of the change): "
+                    "the change is too large or too close to a singular configuration to follow")  # fmt: skip
         return f"not converged after {self.iterations} iterations: ||Phi|| = {self.residual:.3g} >= {bound}"
 
     @cached_property
@@ -163,6 +197,8 @@ class BatchSolution:
     status_code: Array
     iterations: Array
     residual: Array
+    fraction: Array | None = None
+    flags: Array | None = None
 
     @property
     def converged(self) -> Array:
@@ -428,16 +464,62 @@ class Engine:
                 vals.append(abs(float(state.L[k])))
         return max(vals)
 
-    def _floor(self, state: State | None) -> float:
-        """The stopping floor: at the compiled model's length scale (a design change does not
-        loosen it: an absurd length must not make a non-assembly "converge"), else the state's."""
-        return self.roundoff_floor(None if self.length_scale is not None else state)
+    # --- scaling and settings ----------------------------------------------------------------
+    @cached_property
+    def unit(self) -> float:
+        """Metres per model length unit (1 for a bare mechanism)."""
+        return METRES_PER_UNIT[self.model.units.get("length", "m")] if self.model is not None else 1.0
+
+    @cached_property
+    def row_scale(self) -> Array:
+        """Per-row scale of the residual the stopping test reads: length rows (spherical, dot-2)
+        times U, distance rows (length^2) times U^2, dot-1 and normalisation rows 1, with U the
+        metres per model length unit. Models in mm and in m meet the same accuracy; for metre
+        models the residual is the paper's."""
+        U = self.unit
+        per_kind = {"spherical": U, "dot2": U, "distance": U * U}
+        return np.array([per_kind.get(lab.split("[")[0], 1.0) for b in self.row_blocks for lab in b.labels])
+
+    @cached_property
+    def col_scale(self) -> Array:
+        """Per-column scale of the branch-jump metric: lengths / L (L the model's length scale),
+        angles, Euler parameters and orientations 1."""
+        L = self.length_scale or 1.0
+        scale = np.ones(self.n_columns)
+        for v in self.layout.variables:
+            if v.group in ("s", "l"):
+                scale[v.columns] = 1.0 / L
+            elif v.group == "q":
+                jt = self.mechanism.joint(v.joint).jtype
+                tree = v.joint in self._tree
+                angular = set(jt.angle_indices) | (set(range(jt.euler.start, jt.euler.stop)) if jt.euler else set())
+                for k in range(v.size):
+                    if not (tree and k in angular):
+                        scale[v.start + k] = 1.0 / L
+        return scale
+
+    @cached_property
+    def _tree(self) -> frozenset[str]:
+        return frozenset(self.topology.tree_joints)
 
     def roundoff_floor(self, state: State | None = None) -> float:
-        """``ROUNDOFF * eps * L^2``: below this ||Phi|| is round-off (about 1e-13 for the paper's
-        metre-scale examples, 1e-8 for a vehicle suspension in mm)."""
-        L = self._length_scale(state) if state is not None or self.length_scale is None else self.length_scale
-        return ROUNDOFF * float(np.finfo(float).eps) * L**2
+        """``ROUNDOFF * eps * (U L)^2``: below this the scaled residual is round-off (distance
+        rows carry ~eps L^2); L the compiled model's length scale (a design change never
+        loosens it: an absurd length must not make a non-assembly converge)."""
+        L = self._length_scale(state) if state is not None and self.length_scale is None else self.length_scale or 1.0
+        return ROUNDOFF * float(np.finfo(float).eps) * (self.unit * L) ** 2
+
+    def settings(self, tol: float = 1e-10, max_iter: int = 50, *, branch: bool = True, divergence: float = 1e6,
+                 state: State | None = None) -> newton.Settings:  # fmt: skip
+        """The compiled loops' settings (caps: :data:`MAX_SUBSTEPS` sub-steps per change, the
+        smallest sub-step :data:`MIN_STEP` of the change)."""
+        if not (np.isfinite(tol) and tol > 0):
+            raise ValueError(f"tolerance must be a positive number, found {tol}")
+        if not (isinstance(max_iter, int | np.integer) and 0 <= max_iter <= MAX_ITER):
+            raise ValueError(f"max_iter must be an integer in 0..{MAX_ITER}, found {max_iter}")
+        target = max(tol, self.roundoff_floor(state))
+        return newton.Settings(target, int(max_iter), divergence, KAPPA, JUMP_ATOL, MIN_STEP if branch else 1.0,
+                               MAX_SUBSTEPS if branch else 1, bool(tol <= POLISH_TOL), bool(branch))  # fmt: skip
 
     # --- solving -----------------------------------------------------------------------------
     def solve(
@@ -445,24 +527,31 @@ class Engine:
         start: State,
         free: Sequence[str] | Array = ("q",),
         *,
+        target: State | None = None,
         exclude: Iterable[str] = (),
         weights: Mapping[str, float] | None = None,
         tol: float = 1e-10,
         max_iter: int = 50,
-        divergence: float = 1e6,
+        branch: bool = True,
         changes: Mapping[str, Array] | None = None,
     ) -> Solution:
-        """Newton from ``start`` (copied) moving only the ``free`` columns (groups/addresses or
-        an array of columns), minus the ``exclude`` variable keys."""
+        """Solve from ``start`` (copied) moving only the ``free`` columns (groups/addresses or an
+        array of columns, minus the ``exclude`` variable keys) for the design of ``target``
+        (default: ``start``'s own). With ``branch`` (the default) the change is followed on the
+        start's branch (:func:`kinprop.solver.newton.follow`); ``branch=False`` is the paper's
+        plain Newton."""
         cols = free if isinstance(free, np.ndarray) else self.columns(free, exclude)
         plan = self.plan(cols, self.weights_for(cols, weights))
+        cfg = self.settings(tol, max_iter, branch=branch, state=start)
         st = start.copy()
+        goal = target if target is not None else start
         hist = np.zeros(max_iter + 1)
-        target = max(tol, self._floor(start))
-        code, it, norm = newton.solve_one(self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, target, max_iter,
-                                          divergence, hist)  # fmt: skip
-        return Solution(self, start, st, STATUSES[code], it, float(norm), hist[: it + 1], cols, target,
-                        dict(changes or {}), tol)  # fmt: skip
+        offset0 = self.residual(start)
+        code, it, frac, subs, norm, flags = newton.follow_one(
+            self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, goal.Q, goal.S, goal.C, goal.L, offset0,
+            self.row_scale, self.col_scale, cfg, hist)  # fmt: skip
+        return Solution(self, start, st, STATUSES[code], int(it), float(norm), hist[: min(it, max_iter) + 1], cols,
+                        cfg.tol, dict(changes or {}), tol, float(frac), int(subs), int(flags))  # fmt: skip
 
     def apply(self, start: State, changes: Mapping[str, Any]) -> tuple[State, dict[str, Array], set[str]]:
         """A copy of ``start`` with ``changes`` (address -> value) written; returns it, the
@@ -485,48 +574,54 @@ class Engine:
         weights: Mapping[str, float] | None = None,
         tol: float = 1e-10,
         max_iter: int = 50,
+        branch: bool = True,
     ) -> Solution:
         """Apply ``changes`` by address to ``start`` (default: the compiled model's state) and
-        re-assemble moving only ``free`` (groups ``q s C l`` and/or addresses); the changed
-        variables are never free (PAPER-NOTES 7)."""
+        re-assemble moving only ``free`` (groups ``q s C l`` and/or addresses), on the start's
+        branch; the changed variables are never free (PAPER-NOTES 7)."""
         base = start.state if isinstance(start, Solution) else start if start is not None else self.reference
         if base is None:
             raise ValueError("this engine was compiled from a Mechanism: pass start=engine.pack(design, coordinates)")
-        st, done, keys = self.apply(base, changes or {})
+        goal, done, keys = self.apply(base, changes or {})
         key = (tuple(free), frozenset(keys))
-        cols = self._free_cache.get(key) if weights is None else None
+        cols = self._free_cache.get(key)
         if cols is None:
-            cols = self.columns(free, keys)
-            if weights is None:
-                self._free_cache[key] = cols
-        return self.solve(st, cols, weights=weights, tol=tol, max_iter=max_iter, changes=done)
+            cols = self._free_cache[key] = self.columns(free, keys)
+        return self.solve(base, cols, target=goal, weights=weights, tol=tol, max_iter=max_iter, branch=branch,
+                          changes=done)  # fmt: skip
 
     def solve_batch(
         self,
-        states: State,
+        targets: State,
         free: Sequence[str] | Array = ("q",),
         *,
+        start: State | None = None,
         exclude: Iterable[str] = (),
         tol: float = 1e-10,
         max_iter: int = 50,
-        divergence: float = 1e6,
+        branch: bool = True,
         threads: bool | None = None,
     ) -> BatchSolution:
-        """Solve every variant of a batched state (leading axis) on its own; ``threads`` splits
-        the batch over numba's threads (default: for batches of 256 and more)."""
+        """Follow every variant of a batched state (leading axis) from ``start`` (default: the
+        compiled model's state) to its own design, each on the start's branch; ``threads``
+        splits the batch over numba's threads (default: for batches of 256 and more)."""
+        base = start if start is not None else self.reference
+        if base is None:
+            raise ValueError("this engine was compiled from a Mechanism: pass start=engine.pack(design, coordinates)")
         cols = free if isinstance(free, np.ndarray) else self.columns(free, exclude)
         plan = self.plan(cols)
-        st = states.copy()
-        N = st.Q.shape[0]
-        status, iters, res = np.zeros(N, np.int64), np.zeros(N, np.int64), np.zeros(N)
-        target = max(tol, self._floor(st[0] if N else None))
-        threaded = N >= 256 if threads is None else threads
-        args = (self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, target, max_iter, divergence, status, iters, res)
-        if threaded:
-            newton.solve_batch_threaded(*args, max(1, min(get_num_threads(), N)))
+        cfg = self.settings(tol, max_iter, branch=branch, state=base)
+        N = targets.Q.shape[0]
+        st = State(*(np.array(np.broadcast_to(getattr(base, a), getattr(targets, a).shape)) for a in "QSCL"))
+        out = np.zeros((N, 6))
+        args = (self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, targets.Q, targets.S, targets.C, targets.L,
+                self.residual(base), self.row_scale, self.col_scale, cfg, out)  # fmt: skip
+        if (N >= 256 if threads is None else threads) and N:
+            newton.follow_batch_threaded(*args, max(1, min(get_num_threads(), N)))
         else:
-            newton.solve_batch(*args)
-        return BatchSolution(st, status, iters, res)
+            newton.follow_batch(*args)
+        return BatchSolution(st, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4], out[:, 2],
+                             out[:, 5].astype(np.int64))  # fmt: skip
 
     def solve_sequence(
         self,
@@ -537,25 +632,27 @@ class Engine:
         *,
         tol: float = 1e-10,
         max_iter: int = 50,
-        divergence: float = 1e6,
+        branch: bool = True,
     ) -> tuple[Array, BatchSolution]:
-        """Set the coordinate ``addresses`` to each row of ``values`` in turn, solving each step
-        from the previous one; returns the coordinates of every step and the per-step outcome."""
-        set_cols = np.array([self.target(a).start + (self.target(a).index or 0) for a in addresses], np.int64)
-        if any(self.target(a).group != "q" for a in addresses):
+        """Drive the coordinate ``addresses`` through the rows of ``values``, each step followed
+        from the last good one on the start's branch (a failed step is recorded and the next
+        restarts from the last good step). Returns the coordinates of every step (NaN rows where
+        a step failed) and the per-step outcome."""
+        targets = [self.target(a) for a in addresses]
+        if any(t.group != "q" for t in targets):
             raise AddressError("a sequence drives coordinates (JOINT.q or JOINT.q[k])")
-        keys = {parse_address(a).key for a in addresses}
-        cols = self.columns(free, keys)
+        set_cols = np.array([t.start + (t.index or 0) for t in targets], np.int64)
+        cols = self.columns(free, {t.key for t in targets})
         plan = self.plan(cols)
+        cfg = self.settings(tol, max_iter, branch=branch, state=start)
         st = start.copy()
         values = np.ascontiguousarray(np.reshape(values, (len(values), len(addresses))), dtype=float)
         n = values.shape[0]
-        Qout = np.zeros((n, self.n_coordinates))
-        status, iters, res = np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n)
-        target = max(tol, self._floor(start))
-        newton.solve_sequence(self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, target, max_iter, divergence,
-                              set_cols, values, Qout, status, iters, res)  # fmt: skip
-        return Qout, BatchSolution(st, status, iters, res)
+        Qout, out = np.zeros((n, self.n_coordinates)), np.zeros((n, 6))
+        newton.follow_sequence(self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, set_cols, values,
+                               self.residual(start), self.row_scale, self.col_scale, cfg, Qout, out)  # fmt: skip
+        return Qout, BatchSolution(st, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4], out[:, 2],
+                                   out[:, 5].astype(np.int64))  # fmt: skip
 
 
 def compile(model: Model | Mechanism) -> Engine:

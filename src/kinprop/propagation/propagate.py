@@ -115,9 +115,11 @@ def propagate(
     max_iter: int = 50,
     weights: Mapping[str, float] | None = None,
     engine: Engine | None = None,
+    branch: bool = True,
 ) -> Propagation:
     """Apply ``changes`` (address -> value, solver units: radians) and re-assemble, moving only
-    ``free`` variables.
+    ``free`` variables, on the start's assembly branch (``branch=False``: the paper's plain
+    Newton, which may land on another branch; docs/analysis/continuation.md).
 
     ``free`` holds groups (``q``, ``s``, ``C``, ``l``) and/or addresses (``J.s_i``, ``J.q``,
     ``J.s_i[2]``). ``weights`` maps addresses or groups to positive weights of a weighted
@@ -125,15 +127,22 @@ def propagate(
     """
     eng = engine_for(model, engine)
     start = eng.reference if eng.model is model else eng.state_of(model)
-    sol = eng.propagate(changes or {}, free, start=start, weights=weights, tol=tol, max_iter=max_iter)
+    sol = eng.propagate(changes or {}, free, start=start, weights=weights, tol=tol, max_iter=max_iter, branch=branch)
     return propagation_of(eng, model, sol, free)
 
 
 def assemble(
-    model: Model, free: Sequence[str] = ("q",), *, tol: float = 1e-10, max_iter: int = 50, engine: Engine | None = None
+    model: Model,
+    free: Sequence[str] = ("q",),
+    *,
+    tol: float = 1e-10,
+    max_iter: int = 50,
+    engine: Engine | None = None,
+    branch: bool = True,
 ) -> Propagation:
-    """Solve for an assembled configuration from the model's estimates (no design change)."""
-    return propagate(model, {}, free, tol=tol, max_iter=max_iter, engine=engine)
+    """Solve for an assembled configuration from the model's estimates (no design change): a
+    Newton homotopy from the estimates, so the assembly found is the one they point at."""
+    return propagate(model, {}, free, tol=tol, max_iter=max_iter, engine=engine, branch=branch)
 
 
 def roundoff_floor(model: Model, engine: Engine | None = None) -> float:

@@ -12,11 +12,13 @@ it returns a :class:`Status` code, the iteration count and the residual history.
 from __future__ import annotations
 
 from enum import StrEnum
+from typing import NamedTuple
 
 import numpy as np
 
 from kinprop.jit import njit, prange
 from kinprop.kinematics.kernels import evaluate, retract, workspace
+from kinprop.spatial import exp_so3_into, mm_into, mmT_into
 
 #: relative singular-value threshold for the rank (``s_k > RANK_RTOL * s_max``)
 RANK_RTOL = 1e-9
@@ -29,35 +31,60 @@ class Status(StrEnum):
     NOT_CONVERGED = "not_converged"
     DIVERGED = "diverged"
     NO_FREE = "no_free"
-    #: a change that cannot be followed (continuation found no assembly along the way)
+    #: a change that cannot be followed on the start's branch (the reached fraction is reported)
     INFEASIBLE = "infeasible"
+    #: a documented cap (sub-steps of one change) was reached before the change was followed
+    STEP_LIMIT = "step_limit"
 
 
 STATUSES = tuple(Status)
-CONVERGED, NOT_CONVERGED, DIVERGED, NO_FREE = 0, 1, 2, 3
+CONVERGED, NOT_CONVERGED, DIVERGED, NO_FREE, INFEASIBLE, STEP_LIMIT = 0, 1, 2, 3, 4, 5
+#: ``follow`` flags: the change was subdivided / a sub-step left the predicted branch / the
+#: sign of det(Phi_free) flipped on a trial step (a singularity between two configurations) /
+#: the start was not assembled (estimates: one Newton solve, no branch to keep yet)
+SUBDIVIDED, JUMPED, SIGN_FLIP, FROM_ESTIMATES = 1, 2, 4, 8
+
+
+class Settings(NamedTuple):
+    """Numbers the compiled loops read (``kinprop.engine`` builds them from its options)."""
+
+    tol: float  # on the scaled residual ||diag(row_scale) (Phi - offset)||
+    max_iter: int  # Newton iterations per solve
+    divergence: float  # stop when the residual grows beyond this factor of the first
+    kappa: float  # jump test: corrections <= kappa |predictor| + jump_atol (col-scaled)
+    jump_atol: float
+    min_step: float  # smallest sub-step (fraction of the change) before a change is infeasible
+    max_substeps: int  # cap on the sub-steps of one change (bounded work on any input)
+    polish: bool  # one more step after convergence (to round-off) when it lowers the residual
+    branch: bool  # keep the start's branch (jump and det-sign tests, subdivision); False: plain Newton
 
 
 @njit
 def _lu_solve(M, b, x):
-    """``M x = b`` by Gaussian elimination with partial pivoting (destroys M, b); False if singular."""
+    """``M x = b`` by Gaussian elimination with partial pivoting (destroys M, b); returns the
+    sign of det M (+1 or -1), 0 when singular."""
     n = M.shape[0]
     scale = 0.0
     for i in range(n):
         for j in range(n):
             scale = max(scale, abs(M[i, j]))
     if scale == 0.0:
-        return False
+        return 0
+    sign = 1
     for col in range(n):
         piv, big = col, abs(M[col, col])
         for i in range(col + 1, n):
             if abs(M[i, col]) > big:
                 big, piv = abs(M[i, col]), i
         if big <= 1e-13 * scale:
-            return False
+            return 0
         if piv != col:
+            sign = -sign
             for j in range(n):
                 M[col, j], M[piv, j] = M[piv, j], M[col, j]
             b[col], b[piv] = b[piv], b[col]
+        if M[col, col] < 0.0:
+            sign = -sign
         inv = 1.0 / M[col, col]
         for i in range(col + 1, n):
             f = M[i, col] * inv
@@ -70,31 +97,32 @@ def _lu_solve(M, b, x):
         for j in range(i + 1, n):
             s -= M[i, j] * x[j]
         x[i] = s / M[i, i]
-    return True
+    return sign
 
 
 @njit
 def min_norm_step(J, rhs, out):
     """``out = -pinv(J) rhs``: pivoted LU when square and well conditioned, else the SVD
-    pseudo-inverse (singular values below ``eps max(m, n) s_max`` dropped, as ``lstsq``)."""
+    pseudo-inverse (singular values below ``eps max(m, n) s_max`` dropped, as ``lstsq``).
+    Returns the sign of det J when square and regular, else 0."""
     m, n = J.shape
     if n == 0:
-        return
+        return 1
     if m == n:
         M, b = J.copy(), rhs.copy()
-        if _lu_solve(M, b, out):
+        sign = _lu_solve(M, b, out)
+        if sign != 0:
             ok = True
             for i in range(n):
                 out[i] = -out[i]
                 ok = ok and np.isfinite(out[i])
             if ok:
-                return
+                return sign
+    out[:] = 0.0
     if m == 0:
-        out[:] = 0.0
-        return
+        return 0
     U, s, Vt = np.linalg.svd(J, full_matrices=False)
     cut = 2.220446049250313e-16 * max(m, n) * (s[0] if s.shape[0] else 0.0)
-    out[:] = 0.0
     for k in range(s.shape[0]):
         if s[k] > cut:
             c = 0.0
@@ -103,28 +131,28 @@ def min_norm_step(J, rhs, out):
             c /= s[k]
             for i in range(n):
                 out[i] -= c * Vt[k, i]
+    return 0
 
 
 @njit
 def buffers(tb, plan, nnz):
-    """Work arrays of one solve: Phi, entry values, block storage, step, and the kinematics workspace."""
-    return (
-        np.zeros(plan.n_rows),
-        np.zeros(nnz),
-        np.zeros(plan.store_ptr[-1]),
-        np.zeros(plan.free.shape[0]),
-        workspace(tb),
-    )
+    """Work arrays of one solve: Phi, entry values, block storage, step, displacement, and
+    the kinematics workspace."""
+    nf = plan.free.shape[0]
+    return np.zeros(plan.n_rows), np.zeros(nnz), np.zeros(plan.store_ptr[-1]), np.zeros(nf), np.zeros(nf), \
+        np.zeros(nf), workspace(tb)  # fmt: skip
 
 
 @njit
 def newton_step(plan, Phi, vals, store, dx):
-    """The minimum-norm step over the free columns (block by block) into ``dx`` (free order)."""
+    """The minimum-norm step over the free columns (block by block) into ``dx`` (free order);
+    returns the sign of det of the free Jacobian (product over square blocks; 0: unknown)."""
     store[:] = 0.0
     slot = plan.entry_slot
     for k in range(slot.shape[0]):
         if slot[k] >= 0:
             store[slot[k]] += vals[k]
+    sign = 1
     for b in range(plan.row_ptr.shape[0] - 1):
         r0, r1 = plan.row_ptr[b], plan.row_ptr[b + 1]
         c0, c1 = plan.col_ptr[b], plan.col_ptr[b + 1]
@@ -142,87 +170,290 @@ def newton_step(plan, Phi, vals, store, dx):
             for i in range(mb):
                 J[i, y] *= w
         out = np.empty(nb)
-        min_norm_step(J, rhs, out)
+        sign *= min_norm_step(J, rhs, out)
         for y in range(nb):
             f = plan.block_cols[c0 + y]
             dx[f] = out[y] * plan.sqrt_weights[f]
+    return sign
 
 
 @njit
-def solve(tb, plan, Q, S, C, L, tol, max_iter, divergence, history, buf):
-    """Newton from the state ``Q, S, C, L`` (updated in place); returns (status, iterations, ||Phi||).
-
-    ``history[k]`` receives ``||Phi||`` after k updates (length ``max_iter + 1``, may be shorter).
-    """
-    Phi, vals, store, dx, ws = buf
-    free, need = plan.free, plan.need
+def _residual(tb, plan, Q, S, C, L, offset, row_scale, buf):
+    """Evaluate Phi - offset (kept in ``buf``) and return its scaled norm."""
+    Phi, vals, ws = buf[0], buf[1], buf[6]
     dummy = np.zeros(0, np.int64)
-    evaluate(tb, Q, S, C, L, ws, Phi, vals, need, dummy, dummy, False)
-    norm = np.sqrt(Phi @ Phi)
+    evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, dummy, dummy, False)
+    s = 0.0
+    for i in range(Phi.shape[0]):
+        Phi[i] -= offset[i]
+        r = Phi[i] * row_scale[i]
+        s += r * r
+    return np.sqrt(s)
+
+
+@njit
+def solve(tb, plan, Q, S, C, L, offset, row_scale, col_scale, cfg, tol, history, buf):
+    """Newton on ``Phi(x) = offset`` from ``Q, S, C, L`` (updated in place), to ``tol``.
+
+    Returns ``(status, iterations, ||row_scale (Phi - offset)||, |dx_1|, |x - x_1|, sign_0,
+    sign_1)``: the first step (the implicit-function predictor) and how far the later
+    corrections took the solution from it (column-scaled), and the sign of det of the free
+    Jacobian at the first and last step taken (0: not square or singular).
+    ``history[k]`` receives the residual after k updates (may be shorter than ``max_iter + 1``).
+    """
+    Phi, vals, store, dx, disp, dx1 = buf[0], buf[1], buf[2], buf[3], buf[4], buf[5]
+    free = plan.free
+    nf = free.shape[0]
+    norm = _residual(tb, plan, Q, S, C, L, offset, row_scale, buf)
     if history.shape[0] > 0:
         history[0] = norm
     first = max(norm, 1e-300)
-    it = 0
-    status = NOT_CONVERGED
-    while norm >= tol and it < max_iter:
-        if free.shape[0] == 0:
+    it, status = 0, NOT_CONVERGED
+    step1, sign0, sign1 = 0.0, 0, 0
+    disp[:] = 0.0
+    while norm >= tol and it < cfg.max_iter:
+        if nf == 0:
             status = NO_FREE
             break
-        newton_step(plan, Phi, vals, store, dx)
+        sign1 = newton_step(plan, Phi, vals, store, dx)
+        if it == 0:
+            sign0 = sign1
+            for i in range(nf):
+                dx1[i] = dx[i]
+                step1 += (dx[i] * col_scale[free[i]]) ** 2
+        for i in range(nf):
+            disp[i] += dx[i]
         retract(tb, free, dx, Q, S, C, L)
         it += 1
-        evaluate(tb, Q, S, C, L, ws, Phi, vals, need, dummy, dummy, False)
-        norm = np.sqrt(Phi @ Phi)
+        norm = _residual(tb, plan, Q, S, C, L, offset, row_scale, buf)
         if it < history.shape[0]:
             history[it] = norm
-        if not np.isfinite(norm) or norm > divergence * first:
+        if not np.isfinite(norm) or norm > cfg.divergence * first:
             status = DIVERGED
             break
     if norm < tol:
         status = CONVERGED
-    return status, it, norm
+        if cfg.polish and nf > 0 and norm > 0.0:  # one more step to round-off, kept if better
+            newton_step(plan, Phi, vals, store, dx)
+            retract(tb, free, dx, Q, S, C, L)
+            polished = _residual(tb, plan, Q, S, C, L, offset, row_scale, buf)
+            if polished < norm:
+                norm = polished
+                for i in range(nf):
+                    disp[i] += dx[i]
+            else:
+                for i in range(nf):
+                    dx[i] = -dx[i]
+                retract(tb, free, dx, Q, S, C, L)
+    corr = 0.0
+    if it > 0:  # how far the corrections took the solution from the predictor x_0 + dx_1
+        for i in range(nf):
+            corr += ((disp[i] - dx1[i]) * col_scale[free[i]]) ** 2
+    return status, it, norm, np.sqrt(step1), np.sqrt(corr), sign0, sign1
 
 
 @njit
-def solve_one(tb, plan, nnz, Q, S, C, L, tol, max_iter, divergence, history):
-    """:func:`solve` with its own buffers."""
-    return solve(tb, plan, Q, S, C, L, tol, max_iter, divergence, history, buffers(tb, plan, nnz))
+def log_so3_into(R, w):
+    """``w`` with ``exp(tilde(w)) = R`` (angle in [0, pi])."""
+    c = min(1.0, max(-1.0, 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0)))
+    th = np.arccos(c)
+    v0, v1, v2 = R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]
+    if th < 1e-8:
+        w[0], w[1], w[2] = 0.5 * v0, 0.5 * v1, 0.5 * v2
+    elif np.pi - th < 1e-6:  # near a half turn: the axis from the largest diagonal of (R + I) / 2
+        k = 0
+        for i in range(1, 3):
+            if R[i, i] > R[k, k]:
+                k = i
+        a = np.empty(3)
+        a[k] = np.sqrt(max(0.0, 0.5 * (R[k, k] + 1.0)))
+        for i in range(3):
+            if i != k:
+                a[i] = 0.5 * (R[i, k] + R[k, i]) / (2.0 * a[k])
+        n = np.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
+        for i in range(3):
+            w[i] = th * a[i] / n
+    else:
+        f = th / (2.0 * np.sin(th))
+        w[0], w[1], w[2] = f * v0, f * v1, f * v2
 
 
 @njit
-def solve_batch(tb, plan, nnz, Q, S, C, L, tol, max_iter, divergence, status, iterations, residual):
-    """:func:`solve` on every variant of a leading batch axis (each converges on its own)."""
+def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, offset0, row_scale, col_scale, cfg, buf, history):
+    """Follow a change from the state ``Q, S, C, L`` (design p0, residual ``offset0`` there)
+    to the design of ``Q1, S1, C1, L1`` (entries that differ from the start; free entries
+    must be equal) on the start's branch: predictor-corrector over sub-steps ``t -> t + h``
+    of the straight path (geodesic for orientations; the residual offset shrinks as ``1 - t``,
+    so a start that is not assembled is followed by a Newton homotopy).
+
+    A sub-step is accepted when Newton converges, its corrections stay within ``kappa`` of
+    the predictor (no jump to another branch) and det of the free Jacobian keeps its sign (no
+    singularity crossed unseen); otherwise it is halved, down to ``min_step``, within
+    ``max_substeps``. The state ends at the last accepted point. Returns ``(status,
+    iterations, fraction reached, sub-steps, ||scaled residual||, flags)``.
+    """
+    nj = S.shape[0]
+    Q0, S0, C0, L0 = Q.copy(), S.copy(), C.copy(), L.copy()
+    Qs, Ss, Cs, Ls = Q.copy(), S.copy(), C.copy(), L.copy()
+    W = np.zeros((nj, 2, 3))
+    turn = np.zeros((nj, 2), np.bool_)
+    T = np.empty((3, 3))
+    for j in range(nj):
+        for side in range(2):
+            for a in range(3):
+                for b in range(3):
+                    if C1[j, side, a, b] != C0[j, side, a, b]:
+                        turn[j, side] = True
+            if turn[j, side]:
+                mmT_into(C1[j, side], C0[j, side], T)
+                log_so3_into(T, W[j, side])
+    offset = np.empty(offset0.shape[0])
+    off_norm = 0.0
+    for i in range(offset0.shape[0]):
+        off_norm += (offset0[i] * row_scale[i]) ** 2
+    # from a start that is not assembled (estimates) there is no branch to follow yet: one
+    # Newton solve, with a flag when det of the free Jacobian changed sign on the way
+    single = not cfg.branch or np.sqrt(off_norm) >= cfg.tol
+    w, E = np.empty(3), np.empty((3, 3))
+    t, h = 0.0, 1.0
+    subs, its, flags, last = 0, 0, 0, CONVERGED
+    status, norm = CONVERGED, 0.0
+    while t < 1.0:
+        if subs >= cfg.max_substeps:
+            status = STEP_LIMIT
+            break
+        tn = 1.0 if t + h >= 1.0 - 1e-12 else t + h
+        Qs[:], Ss[:], Cs[:], Ls[:] = Q, S, C, L
+        for k in range(Q.shape[0]):
+            if Q1[k] != Q0[k]:
+                Q[k] = Q0[k] + tn * (Q1[k] - Q0[k])
+        for j in range(nj):
+            if L1[j] != L0[j]:
+                L[j] = L0[j] + tn * (L1[j] - L0[j])
+            for side in range(2):
+                for a in range(3):
+                    if S1[j, side, a] != S0[j, side, a]:
+                        S[j, side, a] = S0[j, side, a] + tn * (S1[j, side, a] - S0[j, side, a])
+                if turn[j, side]:
+                    for a in range(3):
+                        w[a] = tn * W[j, side, a]
+                    exp_so3_into(w, E)
+                    mm_into(E, C0[j, side], C[j, side])
+        for i in range(offset.shape[0]):
+            offset[i] = (1.0 - tn) * offset0[i]
+        st, it, nr, p1, corr, s0, s1 = solve(tb, plan, Q, S, C, L, offset, row_scale, col_scale, cfg, cfg.tol,
+                                             history, buf)  # fmt: skip
+        last = st
+        its += it
+        subs += 1
+        norm = nr
+        if st == NO_FREE:
+            status = NO_FREE
+            break
+        jump = corr > cfg.kappa * p1 + cfg.jump_atol
+        flip = s0 != 0 and s1 != 0 and s0 != s1
+        if single:  # plain Newton: one solve, its outcome
+            status = st
+            t = 1.0 if st == CONVERGED else 0.0
+            if flip:
+                flags |= SIGN_FLIP
+            if cfg.branch:
+                flags |= FROM_ESTIMATES
+            break
+        if st == CONVERGED and not jump and not flip:
+            t = tn
+            if it <= 3:
+                h = min(2.0 * h, 1.0)
+            continue
+        if jump and st == CONVERGED:
+            flags |= JUMPED
+        if flip:
+            flags |= SIGN_FLIP
+        flags |= SUBDIVIDED
+        Q[:], S[:], C[:], L[:] = Qs, Ss, Cs, Ls
+        h *= 0.5
+        if h < cfg.min_step:
+            status = INFEASIBLE
+            break
+    if status != CONVERGED and t == 0.0 and not flags & (JUMPED | SIGN_FLIP) and last != CONVERGED:
+        status = last  # nothing of the change could be solved at all: say why (not a branch matter)
+    return status, its, t, subs, norm, flags
+
+
+@njit
+def _store(out, k, r):
+    out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4], out[k, 5] = r[0], r[1], r[2], r[3], r[4], r[5]
+
+
+@njit
+def follow_one(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, offset0, row_scale, col_scale, cfg, history):
+    """:func:`follow` with its own buffers."""
+    buf = buffers(tb, plan, nnz)
+    return follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, offset0, row_scale, col_scale, cfg, buf, history)
+
+
+@njit
+def follow_batch(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, offset0, row_scale, col_scale, cfg, out):
+    """:func:`follow` for every variant of a leading batch axis; ``out[v]`` = (status,
+    iterations, fraction, sub-steps, residual, flags)."""
     buf = buffers(tb, plan, nnz)
     hist = np.zeros(0)
     for v in range(Q.shape[0]):
-        st, it, nr = solve(tb, plan, Q[v], S[v], C[v], L[v], tol, max_iter, divergence, hist, buf)
-        status[v], iterations[v], residual[v] = st, it, nr
+        r = follow(tb, plan, Q[v], S[v], C[v], L[v], Q1[v], S1[v], C1[v], L1[v], offset0, row_scale, col_scale,
+                   cfg, buf, hist)  # fmt: skip
+        _store(out, v, r)
 
 
 @njit(parallel=True)
-def solve_batch_threaded(tb, plan, nnz, Q, S, C, L, tol, max_iter, divergence, status, iterations, residual, nth):
-    """:func:`solve_batch` split into ``nth`` contiguous chunks, one per thread."""
+def follow_batch_threaded(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, offset0, row_scale, col_scale, cfg, out, nth):
+    """:func:`follow_batch` split into ``nth`` contiguous chunks, one per thread."""
     N = Q.shape[0]
     for c in prange(nth):
         buf = buffers(tb, plan, nnz)
         hist = np.zeros(0)
         for v in range(c * N // nth, (c + 1) * N // nth):
-            st, it, nr = solve(tb, plan, Q[v], S[v], C[v], L[v], tol, max_iter, divergence, hist, buf)
-            status[v], iterations[v], residual[v] = st, it, nr
+            r = follow(tb, plan, Q[v], S[v], C[v], L[v], Q1[v], S1[v], C1[v], L1[v], offset0, row_scale,
+                       col_scale, cfg, buf, hist)  # fmt: skip
+            _store(out, v, r)
 
 
 @njit
-def solve_sequence(tb, plan, nnz, Q, S, C, L, tol, max_iter, divergence, set_cols, values, Qout, status,
-                   iterations, residual):  # fmt: skip
-    """For each row of ``values``, set the q columns ``set_cols`` and solve from the previous step."""
+def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, offset0, row_scale, col_scale, cfg, Qout, out):
+    """Drive the q columns ``set_cols`` through the rows of ``values``, following each step
+    from the last good one (a failed step leaves the state at the last good step: the next
+    step restarts from there, on the same branch). ``Qout[s]`` holds the coordinates after
+    step ``s`` (NaN when it failed); ``out[s]`` = (status, iterations, fraction, sub-steps,
+    residual, flags)."""
     buf = buffers(tb, plan, nnz)
     hist = np.zeros(0)
+    Qg, Sg, Cg, Lg = Q.copy(), S.copy(), C.copy(), L.copy()
+    zero = np.zeros(offset0.shape[0])
+    first = True
     for s in range(values.shape[0]):
+        Q1 = Q.copy()
         for i in range(set_cols.shape[0]):
-            Q[set_cols[i]] = values[s, i]
-        st, it, nr = solve(tb, plan, Q, S, C, L, tol, max_iter, divergence, hist, buf)
-        Qout[s] = Q
-        status[s], iterations[s], residual[s] = st, it, nr
+            Q1[set_cols[i]] = values[s, i]
+        r = follow(tb, plan, Q, S, C, L, Q1, S, C, L, offset0 if first else zero, row_scale, col_scale, cfg, buf,
+                   hist)  # fmt: skip
+        _store(out, s, r)
+        if r[0] == CONVERGED:
+            first = False
+            Qout[s] = Q
+            Qg[:], Sg[:], Cg[:], Lg[:] = Q, S, C, L
+        else:
+            Qout[s] = np.nan
+            Q[:], S[:], C[:], L[:] = Qg, Sg, Cg, Lg
 
 
-__all__ = ["RANK_RTOL", "STATUSES", "Status", "min_norm_step", "solve", "solve_batch", "solve_one"]
+__all__ = [
+    "RANK_RTOL",
+    "STATUSES",
+    "Settings",
+    "Status",
+    "follow",
+    "follow_batch",
+    "follow_one",
+    "follow_sequence",
+    "min_norm_step",
+    "solve",
+]
