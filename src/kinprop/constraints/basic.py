@@ -22,7 +22,7 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from kinprop.jit import njit
-from kinprop.spatial import EZ, Array, cross_into
+from kinprop.spatial import EZ, Array
 
 DOT1, DOT2, SPHERICAL, DISTANCE = 0, 1, 2, 3
 #: rows per kind
@@ -30,9 +30,16 @@ ROWS = (1, 1, 3, 1)
 
 
 @njit
-def _axis(R, axes, off, out):
-    for x in range(3):
-        out[x] = R[x, 0] * axes[off] + R[x, 1] * axes[off + 1] + R[x, 2] * axes[off + 2]
+def _axis(R, axes, off):
+    """``R @ axes[off:off+3]`` as three scalars (no allocation in the hot loop)."""
+    x, y, z = axes[off], axes[off + 1], axes[off + 2]
+    return (R[0, 0] * x + R[0, 1] * y + R[0, 2] * z, R[1, 0] * x + R[1, 1] * y + R[1, 2] * z,
+            R[2, 0] * x + R[2, 1] * y + R[2, 2] * z)  # fmt: skip
+
+
+@njit
+def _cross_row(a0, a1, a2, b0, b1, b2, out, r):
+    out[r, 0], out[r, 1], out[r, 2] = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
 @njit
@@ -47,25 +54,18 @@ def basic_rows(kind, on_j, axes, d, R_i, R_j, l, r, Phi, Phi_d, Phi_wi, Phi_wj, 
     * spherical (eq. 15): ``d`` (3 rows), ``Phi_d = I``;
     * distance (eq. 17): ``d . d - l^2``, ``Phi_d = 2 d``, ``Phi_l = -2 l``.
     """
-    a = np.empty(3)
-    b = np.empty(3)
     if kind == DOT1:
-        _axis(R_i, axes, 0, a)
-        _axis(R_j, axes, 3, b)
-        Phi[r] = a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-        cross_into(a, b, Phi_wi[r])
-        cross_into(b, a, Phi_wj[r])
+        a0, a1, a2 = _axis(R_i, axes, 0)
+        b0, b1, b2 = _axis(R_j, axes, 3)
+        Phi[r] = a0 * b0 + a1 * b1 + a2 * b2
+        _cross_row(a0, a1, a2, b0, b1, b2, Phi_wi, r)
+        _cross_row(b0, b1, b2, a0, a1, a2, Phi_wj, r)
         return 1
     if kind == DOT2:
-        if on_j:
-            _axis(R_j, axes, 0, a)
-            cross_into(a, d, Phi_wj[r])
-        else:
-            _axis(R_i, axes, 0, a)
-            cross_into(a, d, Phi_wi[r])
-        Phi[r] = a[0] * d[0] + a[1] * d[1] + a[2] * d[2]
-        for x in range(3):
-            Phi_d[r, x] = a[x]
+        a0, a1, a2 = _axis(R_j if on_j else R_i, axes, 0)
+        _cross_row(a0, a1, a2, d[0], d[1], d[2], Phi_wj if on_j else Phi_wi, r)
+        Phi[r] = a0 * d[0] + a1 * d[1] + a2 * d[2]
+        Phi_d[r, 0], Phi_d[r, 1], Phi_d[r, 2] = a0, a1, a2
         return 1
     if kind == SPHERICAL:
         for x in range(3):

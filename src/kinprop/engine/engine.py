@@ -432,9 +432,9 @@ class Engine:
     def poses(self, state: State) -> tuple[Array, Array, Array, Array]:
         """Body positions ``r`` (nb, 3), orientations ``A`` (nb, 3, 3) and joint frames ``P``
         (nj, 2, 3), ``R`` (nj, 2, 3, 3) (global origins and axes of frames i and j) of a single state."""
-        r, A, P, R, _, _ = kernels.workspace(self.tables)
-        kernels.forward_kinematics(self.tables, state.Q, state.S, state.C, r, A, P, R)
-        return r, A, P, R
+        ws = kernels.workspace(self.tables)
+        kernels.forward_kinematics(self.tables, state.Q, state.S, state.C, ws)
+        return ws[0], ws[1], ws[2], ws[3]
 
     def kinematics(self, design: Design | State, coordinates: Mapping[str, Array] | None = None) -> Kinematics:
         """Body poses and joint frames by name, of a state or of ``(design, coordinates)``."""
@@ -499,6 +499,12 @@ class Engine:
         return scale
 
     @cached_property
+    def _reference_assembled(self) -> bool:
+        """Whether the compiled model's state is an assembly (at the default tolerance)."""
+        r = self.residual(self.reference) * self.row_scale
+        return bool(np.linalg.norm(r) < max(1e-10, self.roundoff_floor()))
+
+    @cached_property
     def _tree(self) -> frozenset[str]:
         return frozenset(self.topology.tree_joints)
 
@@ -534,22 +540,22 @@ class Engine:
         max_iter: int = 50,
         branch: bool = True,
         changes: Mapping[str, Array] | None = None,
+        assembled: bool | None = None,
     ) -> Solution:
         """Solve from ``start`` (copied) moving only the ``free`` columns (groups/addresses or an
         array of columns, minus the ``exclude`` variable keys) for the design of ``target``
         (default: ``start``'s own). With ``branch`` (the default) the change is followed on the
         start's branch (:func:`kinprop.solver.newton.follow`); ``branch=False`` is the paper's
-        plain Newton."""
+        plain Newton. ``assembled``: whether ``start`` is an assembly (None: find out)."""
         cols = free if isinstance(free, np.ndarray) else self.columns(free, exclude)
         plan = self.plan(cols, self.weights_for(cols, weights))
         cfg = self.settings(tol, max_iter, branch=branch, state=start)
         st = start.copy()
         goal = target if target is not None else start
         hist = np.zeros(max_iter + 1)
-        offset0 = self.residual(start)
         code, it, frac, subs, norm, flags = newton.follow_one(
-            self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, goal.Q, goal.S, goal.C, goal.L, offset0,
-            self.row_scale, self.col_scale, cfg, hist)  # fmt: skip
+            self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, goal.Q, goal.S, goal.C, goal.L,
+            -1 if assembled is None else int(assembled), self.row_scale, self.col_scale, cfg, hist)  # fmt: skip
         return Solution(self, start, st, STATUSES[code], int(it), float(norm), hist[: min(it, max_iter) + 1], cols,
                         cfg.tol, dict(changes or {}), tol, float(frac), int(subs), int(flags))  # fmt: skip
 
@@ -582,13 +588,15 @@ class Engine:
         base = start.state if isinstance(start, Solution) else start if start is not None else self.reference
         if base is None:
             raise ValueError("this engine was compiled from a Mechanism: pass start=engine.pack(design, coordinates)")
+        assembled = start.converged if isinstance(start, Solution) else self._reference_assembled if start is None \
+            else None  # fmt: skip
         goal, done, keys = self.apply(base, changes or {})
         key = (tuple(free), frozenset(keys))
         cols = self._free_cache.get(key)
         if cols is None:
             cols = self._free_cache[key] = self.columns(free, keys)
         return self.solve(base, cols, target=goal, weights=weights, tol=tol, max_iter=max_iter, branch=branch,
-                          changes=done)  # fmt: skip
+                          changes=done, assembled=assembled)  # fmt: skip
 
     def solve_batch(
         self,
@@ -614,8 +622,9 @@ class Engine:
         N = targets.Q.shape[0]
         st = State(*(np.array(np.broadcast_to(getattr(base, a), getattr(targets, a).shape)) for a in "QSCL"))
         out = np.zeros((N, 6))
+        assembled = int(np.linalg.norm(self.residual(base) * self.row_scale) < cfg.tol)
         args = (self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, targets.Q, targets.S, targets.C, targets.L,
-                self.residual(base), self.row_scale, self.col_scale, cfg, out)  # fmt: skip
+                assembled, self.row_scale, self.col_scale, cfg, out)  # fmt: skip
         if (N >= 256 if threads is None else threads) and N:
             newton.follow_batch_threaded(*args, max(1, min(get_num_threads(), N)))
         else:
@@ -649,8 +658,8 @@ class Engine:
         values = np.ascontiguousarray(np.reshape(values, (len(values), len(addresses))), dtype=float)
         n = values.shape[0]
         Qout, out = np.zeros((n, self.n_coordinates)), np.zeros((n, 6))
-        newton.follow_sequence(self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, set_cols, values,
-                               self.residual(start), self.row_scale, self.col_scale, cfg, Qout, out)  # fmt: skip
+        newton.follow_sequence(self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, set_cols, values, self.row_scale,
+                               self.col_scale, cfg, Qout, out)  # fmt: skip
         return Qout, BatchSolution(st, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4], out[:, 2],
                                    out[:, 5].astype(np.int64))  # fmt: skip
 

@@ -79,18 +79,23 @@ MAX_CUT_ROWS, MAX_Q = 6, 7
 
 @njit
 def workspace(tb):
-    """Per-call arrays: body poses ``r``, ``A``; joint frames ``P`` (nj, 2, 3), ``R`` (nj, 2, 3, 3);
-    tree twists ``Tq`` (nt, 6, 7) and ``Td`` (nt, 4, 6, 3); scratch."""
+    """Per-call arrays, allocated once per solve: body poses ``r``, ``A``; joint frames ``P``
+    (nj, 2, 3), ``R`` (nj, 2, 3, 3); tree twists ``Tq`` (nt, 6, 7) and ``Td`` (nt, 4, 6, 3); and
+    scratch: 3x3 matrices, 3-vectors, the motion columns ``dd``, ``H``, one cut joint's partial
+    rows (``Phi_d``, ``Phi_wi``, ``Phi_wj``; ``Phi_l``) and arms ``Z_i``, ``Z_j``."""
     nb, nj, nt = tb.fixed.shape[0], tb.joint.shape[0], tb.tree.shape[0]
     return (np.zeros((nb, 3)), np.zeros((nb, 3, 3)), np.zeros((nj, 2, 3)), np.zeros((nj, 2, 3, 3)),
-            np.zeros((nt, 6, MAX_Q)), np.zeros((nt, 4, 6, 3)))  # fmt: skip
+            np.zeros((nt, 6, MAX_Q)), np.zeros((nt, 4, 6, 3)), np.zeros((3, 3, 3)), np.zeros((8, 3)),
+            np.zeros((2, 3, MAX_Q)), np.zeros((3, MAX_CUT_ROWS, 3)), np.zeros(MAX_CUT_ROWS),
+            np.zeros((2, MAX_CUT_ROWS, 6)))  # fmt: skip
 
 
 @njit
-def forward_kinematics(tb, Q, S, C, r, A, P, R):
-    """Body poses ``r``, ``A`` and global joint frames ``P``, ``R`` of every joint (eq. 28)."""
-    Ap, App, T1 = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
-    dpp, w = np.empty(3), np.empty(3)
+def forward_kinematics(tb, Q, S, C, ws):
+    """Body poses ``r``, ``A`` and global joint frames ``P``, ``R`` of every joint (eq. 28), into ``ws``."""
+    r, A, P, R = ws[0], ws[1], ws[2], ws[3]
+    Ap, App, T1 = ws[6][0], ws[6][1], ws[6][2]
+    dpp, w = ws[7][0], ws[7][1]
     for b in range(tb.fixed.shape[0]):
         if tb.fixed[b]:
             r[b] = tb.r0[b]
@@ -99,7 +104,9 @@ def forward_kinematics(tb, Q, S, C, r, A, P, R):
         j, par, chi = tb.tree[t, T_JOINT], tb.tree[t, T_PARENT], tb.tree[t, T_CHILD]
         q0, nq = tb.joint[j, J_QCOL], tb.joint[j, J_NQ]
         placement(tb.joint[j, J_CODE], Q[max(q0, 0) : max(q0, 0) + nq], App, dpp)
-        Ap[:, :] = A[par]
+        for x in range(3):
+            for y in range(3):
+                Ap[x, y] = A[par, x, y]
         a, b = (0, 1) if tb.tree[t, T_REVERSED] == 0 else (1, 0)  # parent side a, child side b
         mv_into(Ap, S[j, a], w)
         for x in range(3):
@@ -116,7 +123,9 @@ def forward_kinematics(tb, Q, S, C, r, A, P, R):
             for x in range(3):
                 P[j, 0, x] = P[j, 1, x] - w[x]
         mmT_into(R[j, b], C[j, b], T1)
-        A[chi] = T1
+        for x in range(3):
+            for y in range(3):
+                A[chi, x, y] = T1[x, y]
         mv_into(T1, S[j, b], w)
         for x in range(3):
             r[chi, x] = P[j, b, x] - w[x]
@@ -131,10 +140,11 @@ def forward_kinematics(tb, Q, S, C, r, A, P, R):
 
 
 @njit
-def tree_twists(tb, Q, A, P, R, Tq, Td):
-    """B (q columns) and M, N (s', C columns) of every tree joint as global twists (eqs. 34-35)."""
-    App, dd, H = np.empty((3, 3)), np.zeros((3, MAX_Q)), np.zeros((3, MAX_Q))
-    dpp, v, w, x3 = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+def tree_twists(tb, Q, ws):
+    """B (q columns) and M, N (s', C columns) of every tree joint as global twists (eqs. 34-35), into ``ws``."""
+    A, P, R, Tq, Td = ws[1], ws[2], ws[3], ws[4], ws[5]
+    App, dd, H = ws[6][0], ws[8][0], ws[8][1]
+    dpp, v, w, x3 = ws[7][0], ws[7][1], ws[7][2], ws[7][3]
     for t in range(tb.tree.shape[0]):
         j, par, chi = tb.tree[t, T_JOINT], tb.tree[t, T_PARENT], tb.tree[t, T_CHILD]
         q0, nq = tb.joint[j, J_QCOL], tb.joint[j, J_NQ]
@@ -186,13 +196,12 @@ def evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols, record):
     too (the sparsity pattern, same order). ``ws`` from :func:`workspace` holds the poses and
     frames afterwards.
     """
-    r, A, P, R, Tq, Td = ws
-    forward_kinematics(tb, Q, S, C, r, A, P, R)
-    tree_twists(tb, Q, A, P, R, Tq, Td)
-    Pd, Wi, Wj, Pl = np.empty((MAX_CUT_ROWS, 3)), np.empty((MAX_CUT_ROWS, 3)), np.empty((MAX_CUT_ROWS, 3)), \
-        np.empty(MAX_CUT_ROWS)  # fmt: skip
-    Zi, Zj = np.empty((MAX_CUT_ROWS, 6)), np.empty((MAX_CUT_ROWS, 6))
-    d, Ru, g, x3, Pi = np.empty(3), np.zeros(3), np.empty(3), np.empty(3), np.empty(3)
+    A, P, R, Tq, Td = ws[1], ws[2], ws[3], ws[4], ws[5]
+    forward_kinematics(tb, Q, S, C, ws)
+    tree_twists(tb, Q, ws)
+    Pd, Wi, Wj, Pl = ws[9][0], ws[9][1], ws[9][2], ws[10]
+    Zi, Zj = ws[11][0], ws[11][1]
+    d, Ru, g, x3, Pi = ws[7][0], ws[7][1], ws[7][2], ws[7][3], ws[7][4]
     k = 0
     for c in range(tb.cut.shape[0]):
         j, row0, m = tb.cut[c, K_JOINT], tb.cut[c, K_ROW0], tb.cut[c, K_NROWS]

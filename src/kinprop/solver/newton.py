@@ -43,12 +43,14 @@ CONVERGED, NOT_CONVERGED, DIVERGED, NO_FREE, INFEASIBLE, STEP_LIMIT = 0, 1, 2, 3
 #: sign of det(Phi_free) flipped on a trial step (a singularity between two configurations) /
 #: the start was not assembled (estimates: one Newton solve, no branch to keep yet)
 SUBDIVIDED, JUMPED, SIGN_FLIP, FROM_ESTIMATES = 1, 2, 4, 8
+#: a converged residual below this (scaled, ~ metres) is at round-off already: no polishing step
+POLISHED = 1e-14
 
 
 class Settings(NamedTuple):
     """Numbers the compiled loops read (``kinprop.engine`` builds them from its options)."""
 
-    tol: float  # on the scaled residual ||diag(row_scale) (Phi - offset)||
+    tol: float  # on the scaled residual ||diag(row_scale) Phi||
     max_iter: int  # Newton iterations per solve
     divergence: float  # stop when the residual grows beyond this factor of the first
     kappa: float  # jump test: corrections <= kappa |predictor| + jump_atol (col-scaled)
@@ -136,11 +138,11 @@ def min_norm_step(J, rhs, out):
 
 @njit
 def buffers(tb, plan, nnz):
-    """Work arrays of one solve: Phi, entry values, block storage, step, displacement, and
-    the kinematics workspace."""
+    """Work arrays of one solve: Phi, entry values, block storage, step, displacement, (unused),
+    the kinematics workspace, and the first step."""
     nf = plan.free.shape[0]
     return np.zeros(plan.n_rows), np.zeros(nnz), np.zeros(plan.store_ptr[-1]), np.zeros(nf), np.zeros(nf), \
-        np.zeros(nf), workspace(tb)  # fmt: skip
+        np.zeros(0), workspace(tb), np.zeros(nf)  # fmt: skip
 
 
 @njit
@@ -178,33 +180,33 @@ def newton_step(plan, Phi, vals, store, dx):
 
 
 @njit
-def _residual(tb, plan, Q, S, C, L, offset, row_scale, buf):
-    """Evaluate Phi - offset (kept in ``buf``) and return its scaled norm."""
+def _residual(tb, plan, Q, S, C, L, row_scale, buf):
+    """Evaluate Phi (kept in ``buf``) and the Jacobian entries the plan needs; return the
+    scaled norm of Phi."""
     Phi, vals, ws = buf[0], buf[1], buf[6]
     dummy = np.zeros(0, np.int64)
     evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, dummy, dummy, False)
     s = 0.0
     for i in range(Phi.shape[0]):
-        Phi[i] -= offset[i]
         r = Phi[i] * row_scale[i]
         s += r * r
     return np.sqrt(s)
 
 
 @njit
-def solve(tb, plan, Q, S, C, L, offset, row_scale, col_scale, cfg, tol, history, buf):
-    """Newton on ``Phi(x) = offset`` from ``Q, S, C, L`` (updated in place), to ``tol``.
+def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
+    """Newton on ``Phi(x) = 0`` from ``Q, S, C, L`` (updated in place), to ``tol``.
 
-    Returns ``(status, iterations, ||row_scale (Phi - offset)||, |dx_1|, |x - x_1|, sign_0,
+    Returns ``(status, iterations, ||row_scale Phi||, |dx_1|, |x - x_1|, sign_0,
     sign_1)``: the first step (the implicit-function predictor) and how far the later
     corrections took the solution from it (column-scaled), and the sign of det of the free
     Jacobian at the first and last step taken (0: not square or singular).
     ``history[k]`` receives the residual after k updates (may be shorter than ``max_iter + 1``).
     """
-    Phi, vals, store, dx, disp, dx1 = buf[0], buf[1], buf[2], buf[3], buf[4], buf[5]
+    Phi, vals, store, dx, disp, dx1 = buf[0], buf[1], buf[2], buf[3], buf[4], buf[7]
     free = plan.free
     nf = free.shape[0]
-    norm = _residual(tb, plan, Q, S, C, L, offset, row_scale, buf)
+    norm = _residual(tb, plan, Q, S, C, L, row_scale, buf)
     if history.shape[0] > 0:
         history[0] = norm
     first = max(norm, 1e-300)
@@ -225,7 +227,7 @@ def solve(tb, plan, Q, S, C, L, offset, row_scale, col_scale, cfg, tol, history,
             disp[i] += dx[i]
         retract(tb, free, dx, Q, S, C, L)
         it += 1
-        norm = _residual(tb, plan, Q, S, C, L, offset, row_scale, buf)
+        norm = _residual(tb, plan, Q, S, C, L, row_scale, buf)
         if it < history.shape[0]:
             history[it] = norm
         if not np.isfinite(norm) or norm > cfg.divergence * first:
@@ -233,10 +235,10 @@ def solve(tb, plan, Q, S, C, L, offset, row_scale, col_scale, cfg, tol, history,
             break
     if norm < tol:
         status = CONVERGED
-        if cfg.polish and nf > 0 and norm > 0.0:  # one more step to round-off, kept if better
+        if cfg.polish and nf > 0 and norm > POLISHED:  # one more step to round-off, kept if better
             newton_step(plan, Phi, vals, store, dx)
             retract(tb, free, dx, Q, S, C, L)
-            polished = _residual(tb, plan, Q, S, C, L, offset, row_scale, buf)
+            polished = _residual(tb, plan, Q, S, C, L, row_scale, buf)
             if polished < norm:
                 norm = polished
                 for i in range(nf):
@@ -279,27 +281,45 @@ def log_so3_into(R, w):
 
 
 @njit
-def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, offset0, row_scale, col_scale, cfg, buf, history):
-    """Follow a change from the state ``Q, S, C, L`` (design p0, residual ``offset0`` there)
-    to the design of ``Q1, S1, C1, L1`` (entries that differ from the start; free entries
-    must be equal) on the start's branch: predictor-corrector over sub-steps ``t -> t + h``
-    of the straight path (geodesic for orientations; the residual offset shrinks as ``1 - t``,
-    so a start that is not assembled is followed by a Newton homotopy).
+def follow_buffers(Q, S, C, L):
+    """State-shaped work arrays of :func:`follow` (start, last accepted, rotation paths)."""
+    nj = S.shape[0]
+    return (Q.copy(), S.copy(), C.copy(), L.copy(), Q.copy(), S.copy(), C.copy(), L.copy(), np.zeros((nj, 2, 3)),
+            np.zeros((nj, 2), np.bool_))  # fmt: skip
+
+
+@njit
+def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, buf, fbuf, history):
+    """Follow a change from the assembled state ``Q, S, C, L`` (design p0) to the design of
+    ``Q1, S1, C1, L1`` (the entries that differ from the start; free entries are equal) on the
+    start's branch: predictor-corrector over sub-steps ``t -> t + h`` of the straight path
+    (geodesic for orientations).
 
     A sub-step is accepted when Newton converges, its corrections stay within ``kappa`` of
     the predictor (no jump to another branch) and det of the free Jacobian keeps its sign (no
     singularity crossed unseen); otherwise it is halved, down to ``min_step``, within
-    ``max_substeps``. The state ends at the last accepted point. Returns ``(status,
-    iterations, fraction reached, sub-steps, ||scaled residual||, flags)``.
+    ``max_substeps``. The state ends at the last accepted point. A start that is not assembled
+    (estimates; ``assembled`` 0, or -1: evaluate to know) has no branch yet: one Newton solve,
+    flagged when det changed sign. Returns
+    ``(status, iterations, fraction reached, sub-steps, ||scaled residual||, flags)``.
     """
     nj = S.shape[0]
-    Q0, S0, C0, L0 = Q.copy(), S.copy(), C.copy(), L.copy()
-    Qs, Ss, Cs, Ls = Q.copy(), S.copy(), C.copy(), L.copy()
-    W = np.zeros((nj, 2, 3))
-    turn = np.zeros((nj, 2), np.bool_)
-    T = np.empty((3, 3))
+    Q0, S0, C0, L0, Qs, Ss, Cs, Ls, W, turn = fbuf
+    Q0[:], S0[:], C0[:], L0[:] = Q, S, C, L
+    ws = buf[6]
+    if cfg.branch and assembled < 0:  # is the start assembled? (no Jacobian entries needed)
+        Phi, vals = buf[0], buf[1]
+        dummy = np.zeros(0, np.int64)
+        evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need_none, dummy, dummy, False)
+        r2 = 0.0
+        for i in range(Phi.shape[0]):
+            r2 += (Phi[i] * row_scale[i]) ** 2
+        assembled = 1 if np.sqrt(r2) < cfg.tol else 0
+    single = not cfg.branch or assembled == 0
+    T = ws[6][0]
     for j in range(nj):
         for side in range(2):
+            turn[j, side] = False
             for a in range(3):
                 for b in range(3):
                     if C1[j, side, a, b] != C0[j, side, a, b]:
@@ -307,14 +327,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, offset0, row_scale, col_scale, 
             if turn[j, side]:
                 mmT_into(C1[j, side], C0[j, side], T)
                 log_so3_into(T, W[j, side])
-    offset = np.empty(offset0.shape[0])
-    off_norm = 0.0
-    for i in range(offset0.shape[0]):
-        off_norm += (offset0[i] * row_scale[i]) ** 2
-    # from a start that is not assembled (estimates) there is no branch to follow yet: one
-    # Newton solve, with a flag when det of the free Jacobian changed sign on the way
-    single = not cfg.branch or np.sqrt(off_norm) >= cfg.tol
-    w, E = np.empty(3), np.empty((3, 3))
+    w, E = ws[7][5], ws[6][1]
     t, h = 0.0, 1.0
     subs, its, flags, last = 0, 0, 0, CONVERGED
     status, norm = CONVERGED, 0.0
@@ -339,10 +352,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, offset0, row_scale, col_scale, 
                         w[a] = tn * W[j, side, a]
                     exp_so3_into(w, E)
                     mm_into(E, C0[j, side], C[j, side])
-        for i in range(offset.shape[0]):
-            offset[i] = (1.0 - tn) * offset0[i]
-        st, it, nr, p1, corr, s0, s1 = solve(tb, plan, Q, S, C, L, offset, row_scale, col_scale, cfg, cfg.tol,
-                                             history, buf)  # fmt: skip
+        st, it, nr, p1, corr, s0, s1 = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, history, buf)
         last = st
         its += it
         subs += 1
@@ -386,58 +396,60 @@ def _store(out, k, r):
 
 
 @njit
-def follow_one(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, offset0, row_scale, col_scale, cfg, history):
+def follow_one(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, history):
     """:func:`follow` with its own buffers."""
     buf = buffers(tb, plan, nnz)
-    return follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, offset0, row_scale, col_scale, cfg, buf, history)
+    return follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, buf,
+                  follow_buffers(Q, S, C, L), history)  # fmt: skip
 
 
 @njit
-def follow_batch(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, offset0, row_scale, col_scale, cfg, out):
+def follow_batch(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, out):
     """:func:`follow` for every variant of a leading batch axis; ``out[v]`` = (status,
     iterations, fraction, sub-steps, residual, flags)."""
     buf = buffers(tb, plan, nnz)
+    fbuf = follow_buffers(Q[0], S[0], C[0], L[0])
     hist = np.zeros(0)
     for v in range(Q.shape[0]):
-        r = follow(tb, plan, Q[v], S[v], C[v], L[v], Q1[v], S1[v], C1[v], L1[v], offset0, row_scale, col_scale,
-                   cfg, buf, hist)  # fmt: skip
+        r = follow(tb, plan, Q[v], S[v], C[v], L[v], Q1[v], S1[v], C1[v], L1[v], assembled, row_scale, col_scale,
+                   cfg, buf, fbuf, hist)  # fmt: skip
         _store(out, v, r)
 
 
 @njit(parallel=True)
-def follow_batch_threaded(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, offset0, row_scale, col_scale, cfg, out, nth):
+def follow_batch_threaded(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, out, nth):
     """:func:`follow_batch` split into ``nth`` contiguous chunks, one per thread."""
     N = Q.shape[0]
     for c in prange(nth):
         buf = buffers(tb, plan, nnz)
+        fbuf = follow_buffers(Q[0], S[0], C[0], L[0])
         hist = np.zeros(0)
         for v in range(c * N // nth, (c + 1) * N // nth):
-            r = follow(tb, plan, Q[v], S[v], C[v], L[v], Q1[v], S1[v], C1[v], L1[v], offset0, row_scale,
-                       col_scale, cfg, buf, hist)  # fmt: skip
+            r = follow(tb, plan, Q[v], S[v], C[v], L[v], Q1[v], S1[v], C1[v], L1[v], assembled, row_scale,
+                       col_scale, cfg, buf, fbuf, hist)  # fmt: skip
             _store(out, v, r)
 
 
 @njit
-def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, offset0, row_scale, col_scale, cfg, Qout, out):
+def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, row_scale, col_scale, cfg, Qout, out):
     """Drive the q columns ``set_cols`` through the rows of ``values``, following each step
     from the last good one (a failed step leaves the state at the last good step: the next
     step restarts from there, on the same branch). ``Qout[s]`` holds the coordinates after
     step ``s`` (NaN when it failed); ``out[s]`` = (status, iterations, fraction, sub-steps,
     residual, flags)."""
     buf = buffers(tb, plan, nnz)
+    fbuf = follow_buffers(Q, S, C, L)
     hist = np.zeros(0)
     Qg, Sg, Cg, Lg = Q.copy(), S.copy(), C.copy(), L.copy()
-    zero = np.zeros(offset0.shape[0])
-    first = True
+    Q1 = Q.copy()
     for s in range(values.shape[0]):
-        Q1 = Q.copy()
+        Q1[:] = Q
         for i in range(set_cols.shape[0]):
             Q1[set_cols[i]] = values[s, i]
-        r = follow(tb, plan, Q, S, C, L, Q1, S, C, L, offset0 if first else zero, row_scale, col_scale, cfg, buf,
+        r = follow(tb, plan, Q, S, C, L, Q1, S, C, L, -1 if s == 0 else 1, row_scale, col_scale, cfg, buf, fbuf,
                    hist)  # fmt: skip
         _store(out, s, r)
         if r[0] == CONVERGED:
-            first = False
             Qout[s] = Q
             Qg[:], Sg[:], Cg[:], Lg[:] = Q, S, C, L
         else:

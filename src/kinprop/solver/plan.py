@@ -36,6 +36,7 @@ class Plan(NamedTuple):
     free: Array  # (nf,) sorted layout columns that may move
     sqrt_weights: Array  # (nf,) sqrt of the weighted min-norm weights (ones: plain pinv)
     need: Array  # (n,) int8: 1 on every column of a variable that has a free column
+    need_none: Array  # (n,) int8 zeros: evaluate the residual only
     entry_slot: Array  # (nnz,) slot of an entry in its diagonal block's storage, or -1
     block_rows: Array  # rows of Phi, block by block; block b holds row_ptr[b]:row_ptr[b+1]
     row_ptr: Array
@@ -145,6 +146,7 @@ def build_plan(
         return np.concatenate([[0], np.cumsum([p.size for p in parts])]).astype(np.int64)
 
     sw = np.ones(nf) if weights is None else np.sqrt(np.asarray(weights, dtype=float))
-    return Plan(m, free, sw, need, slot, cat([r for r, _ in blocks]), ptr([r for r, _ in blocks]),
-                cat([c for _, c in blocks]), ptr([c for _, c in blocks]), store_ptr,
+    rows_b, cols_b = [r for r, _ in blocks], [c for _, c in blocks]
+    return Plan(m, free, sw, need, np.zeros(n, dtype=np.int8), slot, cat(rows_b), ptr(rows_b), cat(cols_b), ptr(cols_b),
+                store_ptr,
                 c_entry.astype(np.int64), c_row.astype(np.int64), c_free.astype(np.int64), c_ptr)  # fmt: skip
