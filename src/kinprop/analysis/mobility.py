@@ -93,7 +93,7 @@ def numerical_rank(sv: np.ndarray, rtol: float = RANK_RTOL) -> int:
     return int(np.sum(sv > rtol * sv[0])) if sv.size and sv[0] > 0 else 0
 
 
-def mobility(model: Model, rtol: float = RANK_RTOL, free: Sequence[str] = ("q",)) -> MobilityReport:
+def mobility(model: Model, rtol: float = RANK_RTOL, free: Sequence[str] = ("q", "inputs")) -> MobilityReport:
     """True mobility at the model's configuration, Gruebler count and redundant rows.
 
     ``free`` selects the Jacobian columns that may move (groups or addresses, as in

@@ -316,7 +316,7 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
         final.append(Body(b.name, b.fixed, b.position, b.orientation, pts))
     if problems:
         raise ModelError(problems)
-    mech = Mechanism(tuple(final), tuple(joints), spec.name)
+    mech = Mechanism(tuple(final), tuple(joints), spec.name, tuple(spec.inputs))
     units = {"length": spec.units.length, "angle": spec.units.angle, "axes": spec.units.axes}
     return Model(mech, Design(values), as_coordinates(coords), units, file)
 
@@ -407,6 +407,7 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
         "body_frames": body_frames,
         "bodies": bodies,
         "joints": joints,
+        **({"inputs": list(mech.inputs)} if mech.inputs else {}),
     }
 
 

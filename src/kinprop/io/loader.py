@@ -321,7 +321,7 @@ def build_model(spec: ModelFile, file: str) -> Model:
     problems += [Problem(p.location, p.message, file) for p in validate_structure(tuple(bodies), tuple(joints))]
     if problems:
         raise ModelError(problems)
-    mech = Mechanism(tuple(bodies), tuple(joints), spec.name)
+    mech = Mechanism(tuple(bodies), tuple(joints), spec.name, tuple(spec.inputs))
     try:
         topo = build_topology(mech)
     except ModelError as exc:

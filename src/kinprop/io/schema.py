@@ -79,6 +79,8 @@ class ModelFile(Strict):
     units: Units
     bodies: dict[str, BodySpec]
     joints: dict[str, JointSpec]
+    #: driven joints (``JOINT`` or ``JOINT.q[k]``): held unless named in a free set
+    inputs: list[str] = Field(default_factory=list)
 
 
 class HardpointBodySpec(Strict):
@@ -117,3 +119,5 @@ class HardpointFile(Strict):
     body_frames: Literal["global", "joint"] = "global"
     bodies: dict[str, HardpointBodySpec]
     joints: dict[str, HardpointJointSpec]
+    #: driven joints (``JOINT`` or ``JOINT.q[k]``): held unless named in a free set
+    inputs: list[str] = Field(default_factory=list)

@@ -75,6 +75,7 @@ def model_to_data(model: Model) -> dict[str, Any]:
         "units": dict(model.units),
         "bodies": bodies,
         "joints": joints,
+        **({"inputs": list(mech.inputs)} if mech.inputs else {}),
     }
 
 

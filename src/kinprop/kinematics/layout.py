@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from kinprop.errors import AddressError
+from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.model.design import GROUPS, parse_address
 from kinprop.model.mechanism import Mechanism
 from kinprop.topology import Topology
@@ -37,6 +37,9 @@ class Variable:
 class VariableLayout:
     variables: tuple[Variable, ...]
     n: int
+    #: columns of the declared inputs (driven coordinates): the group ``q`` leaves them out
+    #: (held unless named), the group ``inputs`` selects them
+    inputs: frozenset[int] = frozenset()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_by_key", {v.key: v for v in self.variables})
@@ -55,13 +58,20 @@ class VariableLayout:
         return tuple(v.joint for v in self.variables if v.group == "q")
 
     def columns(self, selectors: list[str] | tuple[str, ...], exclude: set[str] = frozenset()) -> np.ndarray:
-        """Column indices for groups (``q``, ``s``, ``C``, ``l``) and addresses, minus ``exclude`` keys."""
+        """Column indices for groups (``q`` — the coordinates other than the declared inputs —,
+        ``inputs``, ``s``, ``C``, ``l``) and addresses, minus the ``exclude`` variable keys."""
         cols: list[int] = []
         for sel in selectors:
-            if sel in GROUPS:
-                for v in self.group(sel):
+            if sel in GROUPS or sel == "inputs":
+                for v in self.group("q" if sel == "inputs" else sel):
                     if v.key not in exclude:
-                        cols.extend(range(v.start, v.start + v.size))
+                        span = range(v.start, v.start + v.size)
+                        if sel == "q":
+                            cols.extend(c for c in span if c not in self.inputs)
+                        elif sel == "inputs":
+                            cols.extend(c for c in span if c in self.inputs)
+                        else:
+                            cols.extend(span)
                 continue
             addr = parse_address(sel)
             if addr.key not in self:
@@ -95,7 +105,18 @@ def build_layout(mech: Mechanism, topo: Topology) -> VariableLayout:
     for joint, field, group, size in rows:
         variables.append(Variable(f"{joint}.{field}", joint, field, group, start, size))
         start += size
-    return VariableLayout(tuple(variables), start)
+    layout = VariableLayout(tuple(variables), start)
+    inputs: set[int] = set()
+    problems = []
+    for k, name in enumerate(mech.inputs):
+        address = name if ".q" in name else f"{name}.q"
+        if f"{address.split('[')[0]}" not in layout or address.split(".q")[0] not in tree:
+            problems.append(Problem(f"inputs[{k}]", f"{name!r} is not a tree joint with coordinates to drive"))
+            continue
+        inputs.update(int(c) for c in layout.columns([address]))
+    if problems:
+        raise ModelError(problems)
+    return VariableLayout(tuple(variables), start, frozenset(inputs))
 
 
 def column_labels(layout: VariableLayout) -> list[str]:

@@ -65,12 +65,15 @@ class Mechanism:
     bodies: tuple[Body, ...]
     joints: tuple[Joint, ...]
     name: str = "mechanism"
+    #: driven joints (input coordinates): held unless named in a free set; ``JOINT`` (all its
+    #: coordinates) or ``JOINT.q[k]``
+    inputs: tuple[str, ...] = ()
 
     _bodies: dict[str, Body] = field(init=False, repr=False, compare=False, hash=False)
     _joints: dict[str, Joint] = field(init=False, repr=False, compare=False, hash=False)
 
     def __post_init__(self) -> None:
-        problems = validate_structure(self.bodies, self.joints)
+        problems = validate_structure(self.bodies, self.joints, self.inputs)
         if problems:
             raise ModelError(problems)
         object.__setattr__(self, "_bodies", {b.name: b for b in self.bodies})
@@ -91,9 +94,16 @@ class Mechanism:
         return [j.name for j in self.joints]
 
 
-def validate_structure(bodies: tuple[Body, ...], joints: tuple[Joint, ...]) -> list[Problem]:
+def validate_structure(
+    bodies: tuple[Body, ...], joints: tuple[Joint, ...], inputs: tuple[str, ...] = ()
+) -> list[Problem]:
     """Names, types and connectivity problems (the topology checks reachability)."""
     problems: list[Problem] = []
+    jnames = {j.name for j in joints}
+    for k, name in enumerate(inputs):
+        joint = name.split(".q")[0] if ".q" in name else name
+        if joint not in jnames:
+            problems.append(Problem(f"inputs[{k}]", f"unknown joint {name!r}; joints are {sorted(jnames)}"))
     seen: set[str] = set()
     for k, b in enumerate(bodies):
         if b.name in seen:
