@@ -265,13 +265,16 @@ class TargetPropagation:
 
     @cached_property
     def propagation(self) -> Propagation:
-        sol = self.engine.solve(self.result.after[0], ("q",), max_iter=5)
-        return propagation_of(self.engine, self.before_model(0), sol, ("q",))
+        """The model before and the changed design re-assembled at the model's own coordinates
+        (only coordinates free), with body poses and joint values."""
+        orig, new = self.engine.state_of(self.model), self.result.after[0]
+        sol = self.engine.solve(State(orig.Q.copy(), new.S.copy(), new.C.copy(), new.L.copy()), ("q",))
+        return propagation_of(self.engine, self.model, sol, ("q",))
 
     @property
     def after(self) -> Model:
-        """The changed design at the first configuration."""
-        return self.after_model(0)
+        """The changed design, re-assembled at the model's own coordinates."""
+        return self.propagation.after
 
     def table(self) -> list[dict[str, Any]]:
         """One row per target: spec, output, wanted, before, achieved, residual (display units:

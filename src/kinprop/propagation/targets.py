@@ -18,7 +18,7 @@ which for a consistent system is exactly ``-pinv([H_y; T_y]) [H; T]`` — the ge
 inverse of the paper's propagation over the stacked system — and otherwise the minimum-norm
 step to the least-squares compromise of the targets while the mechanism stays assembled. The
 step is applied on the manifold (:meth:`Engine.retract`: additive for q, s', l; exponential map
-for C) with backtracking on ``||H||^2 + ||T||^2``.
+for C) halving only a step that blows a residual up tenfold (full Newton steps otherwise).
 
 Jacobians: ``H``'s Phi block is the engine's analytic ``Phi_x`` (Table 1). The output rows'
 derivative with respect to the state is a **central difference of the output map only**
@@ -50,6 +50,8 @@ from kinprop.spatial import Array, log_so3
 FD_STEP = 1e-6
 #: relative cut-off of the pseudo-inverses (hard rows, reduced target rows)
 RCOND_HARD, RCOND_TARGET = 1e-10, 1e-9
+#: a Newton step is halved when it makes a residual norm this many times larger
+BLOWUP = 10.0
 #: a left singular vector component at least this large names a target in a conflict
 CONFLICT_WEIGHT = 0.1
 
@@ -277,11 +279,15 @@ def solve_targets(
                 return sts, it, True, hist
             if it == max_iter:
                 break
+            # full Newton steps (the hard rows are re-closed quadratically at the next step);
+            # halve only a step that blows a residual up (a jump towards another branch)
             lam, trial = 1.0, None
+            tn = float(np.linalg.norm(t))
             for _ in range(8):
                 trial = apply_step(sts, lam * dz, with_design)
                 h2, _, t2, _, _ = blocks_residual(trial, with_design)
-                if float(h2 @ h2 + t2 @ t2) < merit or merit < floor**2:
+                h2n, t2n = float(np.linalg.norm(h2)), float(np.linalg.norm(t2))
+                if np.isfinite(h2n + t2n) and h2n <= max(BLOWUP * hn, np.sqrt(floor)) and t2n <= BLOWUP * tn + 1e-12:
                     break
                 lam *= 0.5
             sts = trial  # type: ignore[assignment]
