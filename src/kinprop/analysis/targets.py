@@ -187,6 +187,10 @@ def parse_target(model: Model, text: str) -> TargetSpec:
     kind = _kind(model, out)
     v, unit = _number(value, where)
     parts = [c for c in conds.split("&") if c.strip()] if conds else []
+    if any("=" not in c for c in parts):
+        raise AddressError(
+            f"{where}: expected OUTPUT@CONDITION=VALUE with CONDITION as NAME=VALUE (target value missing?)"
+        )
     if is_slope:
         if len(parts) != 1 or ".." not in parts[0]:
             raise AddressError(f"{where}: a slope needs one condition range, e.g. slope:toe@travel=-50..50=0")
