@@ -161,10 +161,72 @@ def hardpoint_map(engine: Engine, state: State, address: str) -> tuple[list[str]
     return g.fields(), M, [f"{g.text}[{c}]" for c in "xyz"]
 
 
+_COMPONENT = re.compile(r"^(?P<base>hardpoint:[^\s\[\]=]+)\[(?P<c>[xyz012])\]$")
+_AXIS = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
+
+
+def global_columns(engine: Engine, state: State, wrt: Sequence[str]) -> tuple[list[str], dict[str, dict[str, float]]]:
+    """For sensitivities per global length unit: ``wrt`` with every ``hardpoint:`` address
+    replaced by the ``s'`` addresses it moves, and for each global column label
+    (``hardpoint:J.i[x]``) its coefficients over the design column labels (``J.s_i[k]``):
+    ``d/dp = sum_side (d/ds'_side) A_side^T`` (exact: the conversion is affine)."""
+    design: list[str] = []
+    combos: dict[str, dict[str, float]] = {}
+    for w in wrt:
+        m = _COMPONENT.match(w.strip())
+        base = m["base"] if m else w.strip()
+        if not (is_global(base) and base.startswith("hardpoint:")):
+            design.append(w)
+            continue
+        fields, M, labels = hardpoint_map(engine, state, base)
+        design += fields
+        comps = [_AXIS[m["c"]]] if m else [0, 1, 2]
+        for c in comps:
+            coef: dict[str, float] = {}
+            for f_i, fld in enumerate(fields):
+                for k in range(3):
+                    coef[f"{fld}[{k}]"] = coef.get(f"{fld}[{k}]", 0.0) + float(M[3 * f_i + k, c])
+            combos[labels[c]] = coef
+    return list(dict.fromkeys(design)), combos
+
+
+def global_plan(engine: Engine, state: State, addresses: Sequence[str], values: Array) -> tuple[list[str], Array]:
+    """A study plan with global hardpoint components (``hardpoint:J.i[z]`` factors) replaced by
+    the ``s'`` component columns they set, per sample (exact, at ``state``'s assembly; the other
+    components of that point stay where they are)."""
+    values = np.atleast_2d(np.asarray(values, dtype=float))
+    keep = [k for k, a in enumerate(addresses) if not _COMPONENT.match(a.strip())]
+    addrs = [addresses[k] for k in keep]
+    cols = [values[:, k] for k in keep]
+    groups: dict[str, list[tuple[int, int]]] = {}
+    for k, a in enumerate(addresses):
+        m = _COMPONENT.match(a.strip())
+        if m:
+            groups.setdefault(m["base"], []).append((k, _AXIS[m["c"]]))
+    _, _, P, _ = engine.poses(state)
+    for base, comps in groups.items():
+        g = parse_global(engine, base)
+        j = engine.joint_index[g.joint]
+        for side, fld in zip(g.sides, g.fields(), strict=True):
+            p = np.tile(P[j, side], (values.shape[0], 1))
+            for k, c in comps:
+                p[:, c] = values[:, k]
+            s_new = state.S[j, side] + (p - P[j, side]) @ body_rotation(engine, state, j, side)
+            for c in range(3):
+                addr = f"{fld}[{c}]"
+                if addr in addrs or fld in addrs:
+                    raise AddressError(f"{base}: {fld} is also varied directly; vary one or the other")
+                addrs.append(addr)
+                cols.append(s_new[:, c])
+    return addrs, np.stack(cols, axis=1) if cols else np.zeros((values.shape[0], 0))
+
+
 __all__ = [
     "GlobalAddress",
     "free_addresses",
     "free_weights",
+    "global_columns",
+    "global_plan",
     "hardpoint_map",
     "is_global",
     "min_rotation",
