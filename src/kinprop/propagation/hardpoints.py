@@ -7,8 +7,11 @@ Designers know where joints are in the assembled machine. These addresses take g
   point ``p``: ``s'_i <- A_i^T (p - r_i) = s'_i + A_i^T (p - P_i)`` with ``P_i = r_i + A_i s'_i``
   the current global joint origin on body i (``A_i = R_i C_i^T`` from the joint frame ``R_i``);
 * ``hardpoint:J.j=...`` — the same on body j;
-* ``hardpoint:J=...`` — both sides: the joint moves, the assembly stays closed (for a tree
-  joint body j does not move: both sides shift by the same global vector);
+* ``hardpoint:J=...`` — both sides: the joint moves, the assembly stays closed (both
+  attachments shift by the same global vector, so no body moves). A tree joint whose body j
+  frame *is* its joint frame (no ``s_j``/``C_j`` design variable, the usual paper-style tree
+  joint) has only side i to move: body j then moves with the joint and the propagation
+  re-assembles; for a cut joint a missing side is an error;
 * ``axis:J=x,y,z`` (and ``axis:J.i``, ``axis:J.j``) — the joint frame's z'' axis turns to the
   global direction ``u`` (any length) by the smallest rotation ``R_d`` (about ``z x u``), applied
   to the joint frame(s) in global: ``C <- A^T R_d R`` — so the relative joint value is kept.
@@ -70,9 +73,11 @@ def parse_global(engine: Engine, address: str) -> GlobalAddress:
     g = GlobalAddress(text, m["kind"], joint, sides)
     fields = engine.mechanism.joint(joint).fields
     missing = [f for f in g.fields() if f.split(".", 1)[1] not in fields]
-    if len(missing) == len(g.fields()):
-        raise AddressError(f"{address!r}: joint {joint!r} has no {' or '.join(f.split('.', 1)[1] for f in missing)}")
-    # a one-sided joint field (e.g. a distance joint's C) is skipped when both sides are asked
+    tree = joint in engine.topology.tree_joints
+    if len(missing) == len(g.fields()) or (missing and not tree):
+        names = " or ".join(f.split(".", 1)[1] for f in missing)
+        raise AddressError(f"{address!r}: joint {joint!r} has no {names} design variable; name the side it has")
+    # a tree joint whose body j frame is the joint frame (no s_j / C_j): body j follows the joint
     return GlobalAddress(
         text, g.kind, joint, tuple(s for s, f in zip(g.sides, g.fields(), strict=True) if f not in missing)
     )
