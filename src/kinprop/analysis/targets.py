@@ -280,6 +280,17 @@ class TargetPropagation:
         """The changed design, re-assembled at the model's own coordinates."""
         return self.propagation.after
 
+    def unit(self, spec: TargetSpec) -> str:
+        """The display unit of a target's values (a slope: per model length unit)."""
+        length = self.model.units.get("length", "")
+        names = {"deg": "deg", "rad": self.model.units.get("angle", "rad"), "length": length, "none": ""}
+        u = names[_kind(self.model, spec.output)]
+        if spec.slope is not None:
+            if u == "deg" and _kind(self.model, spec.output) == "rad":
+                u = "rad"
+            return f"{u or '1'}/{names[_kind(self.model, spec.slope[0][0].output)] or '1'}"
+        return u
+
     def table(self) -> list[dict[str, Any]]:
         """One row per target: spec, output, wanted, before, achieved, residual (display units:
         metric angles deg, coordinate/joint angles in the model's angle unit, lengths model unit)."""
@@ -289,7 +300,7 @@ class TargetPropagation:
             k = 1.0
             if _kind(self.model, spec.output) == "rad" and deg and spec.slope is None:
                 k = 180 / math.pi
-            row = {"target": spec.text, "output": spec.output}
+            row = {"target": spec.text, "output": spec.output, "unit": self.unit(spec)}
             rows.append(row | {n: t[n] * k for n in ("value", "before", "achieved", "residual")})
         return rows
 

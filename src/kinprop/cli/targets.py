@@ -44,10 +44,11 @@ def targets_json(tp: TargetPropagation) -> dict[str, Any]:
 
 def targets_table(tp: TargetPropagation, title: str) -> Table:
     t = Table(title=escape(title), title_justify="left")
-    for c in ("target", "wanted", "before", "achieved", "residual"):
-        t.add_column(c, justify="left" if c == "target" else "right")
+    for c in ("target", "unit", "wanted", "before", "achieved", "residual"):
+        t.add_column(c, justify="left" if c in ("target", "unit") else "right")
     for row in tp.table():
-        t.add_row(escape(row["target"]), *(f"{row[k]:.6g}" for k in ("value", "before", "achieved", "residual")))
+        cells = (f"{row[k]:.6g}" for k in ("value", "before", "achieved", "residual"))
+        t.add_row(escape(row["target"]), row["unit"], *cells)
     return t
 
 
