@@ -216,5 +216,16 @@ def test_units_in_target_values():
     assert parse_target(model, "slope:toe@travel=-50..50=1deg/m").value == pytest.approx(1e-3)
 
 
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(pytest.main([__file__, "-q"]))
+def test_worked_example_script_writes_the_figure(tmp_path, capsys):
+    """examples/double_wishbone_targets.py (docs/guide/targets.md): targets met, figure written,
+    and the after curve of the ordinary sweep passes through the targets."""
+    import runpy
+
+    mod = runpy.run_path(str(EXAMPLES / "double_wishbone_targets.py"))
+    out = tmp_path / "targets.png"
+    mod["main"](out)
+    assert out.stat().st_size > 10_000
+    text = capsys.readouterr().out
+    assert text.startswith("targets met")
+    after = text.splitlines()[-2]
+    assert "after: targets met" in after

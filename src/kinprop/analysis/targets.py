@@ -308,6 +308,14 @@ class TargetPropagation:
     def design_change(self) -> dict[str, Array]:
         return self.result.design_change
 
+    def joint_positions(self, k: int = 0) -> dict[str, tuple[Array, Array]]:
+        """Global joint origins ``J.i``/``J.j`` -> (before, after) in configuration ``k``
+        (both designs solved there: where the joints actually sit, model length unit)."""
+        _, _, P0, _ = self.engine.poses(self.result.before[k])
+        _, _, P1, _ = self.engine.poses(self.result.after[k])
+        return {f"{j.name}.{'ij'[s]}": (P0[n, s].copy(), P1[n, s].copy())
+                for n, j in enumerate(self.engine.mechanism.joints) for s in (0, 1)}  # fmt: skip
+
     def hardpoint_moves(self) -> dict[str, Array]:
         """Global displacement of every changed joint attachment (``J.i``/``J.j`` -> [dx, dy, dz],
         model length unit): ``A (s'_after - s'_before)`` with the body's orientation ``A`` at the
