@@ -4,7 +4,6 @@ independent closed construction of the changed design (docs/guide/targets.md).""
 
 from __future__ import annotations
 
-import sys
 import warnings
 from pathlib import Path
 
