@@ -27,7 +27,9 @@ from kinprop.model import Model
 def targets_json(tp: TargetPropagation) -> dict[str, Any]:
     """The propagation JSON of the changed design plus the targets: ``targets_status``,
     ``targets`` (wanted, before, achieved, residual; display units), ``conflicts``,
-    ``configurations``, ``design_change`` and ``hardpoint_moves`` (global, length unit)."""
+    ``configurations``, ``design_change``, ``hardpoint_moves`` (each changed attachment's ``A ds'``
+    with the body's orientation before the change, global) and ``joint_positions`` (per
+    configuration, the joint origins that moved: before and after, global)."""
     obj = propagation_json(tp.propagation)
     r = tp.result
     obj.update(
@@ -38,8 +40,18 @@ def targets_json(tp: TargetPropagation) -> dict[str, Any]:
         configurations=list(tp.configuration_names),
         design_change={k: np.asarray(v, float).tolist() for k, v in r.design_change.items()},
         hardpoint_moves={k: np.asarray(v, float).tolist() for k, v in tp.hardpoint_moves().items()},
+        joint_positions={
+            name: {j: {"before": a.tolist(), "after": b.tolist()} for j, (a, b) in moved_joints(tp, k).items()}
+            for k, name in enumerate(tp.configuration_names)
+        },
     )
     return obj
+
+
+def moved_joints(tp: TargetPropagation, k: int) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Joint origins that moved in configuration ``k`` (before, after), global."""
+    tiny = 1e-9 * max(1.0, tp.engine.length_scale or 1.0)
+    return {n: (a, b) for n, (a, b) in tp.joint_positions(k).items() if np.linalg.norm(b - a) > tiny}
 
 
 def targets_table(tp: TargetPropagation, title: str) -> Table:
@@ -80,10 +92,10 @@ def run_targets(
     else:
         out.print(targets_table(tp, f"propagate {path} to targets"))
         unit = model.units.get("length", "")
-        for k, d in tp.hardpoint_moves().items():
-            out.print(
-                f"hardpoint {k} moves by [{', '.join(f'{x:.6g}' for x in d)}] {unit} (|d| = {np.linalg.norm(d):.6g})"
-            )
+        where = tp.configuration_names[0]
+        for k, (a, b) in moved_joints(tp, 0).items():
+            pa, pb = (", ".join(f"{x:.6g}" for x in v) for v in (a, b))
+            out.print(escape(f"{k} at {where}: [{pa}] -> [{pb}] {unit} (moved {np.linalg.norm(b - a):.6g})"))
         for k, d in r.design_change.items():
             if not k.split(".")[1].startswith("s_"):
                 out.print(f"{k} changes by {np.asarray(d).round(9).tolist()}")
