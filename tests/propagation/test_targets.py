@@ -228,3 +228,31 @@ def test_worked_example_script_writes_the_figure(tmp_path, capsys):
     assert text.startswith("targets met")
     after = text.splitlines()[-2]
     assert "after: targets met" in after
+
+
+def test_design_weights_shift_the_change_between_hardpoints():
+    model = solved("double_wishbone.yaml")
+    specs = ["camber@travel=50=-2", "camber@travel=0=0"]
+    plain = propagate_targets(model, specs, ["hardpoint:UBJ.j", "hardpoint:TR.i"])
+    heavy = propagate_targets(model, specs, ["hardpoint:UBJ.j", "hardpoint:TR.i"], weights={"hardpoint:TR.i": 100.0})
+    assert plain.status == heavy.status == "met"
+    n = {k: np.linalg.norm(tp.design_change["TR.s_i"]) for k, tp in (("plain", plain), ("heavy", heavy))}
+    assert n["heavy"] > 2 * n["plain"]
+
+
+def test_output_jacobian_of_a_hardpoint_is_the_body_rotation():
+    """The output map's central difference against the analytic d(r + A s')/ds' = A."""
+    from kinprop import compile
+    from kinprop.propagation.hardpoints import body_rotation
+    from kinprop.propagation.targets import output_jacobian
+
+    model = solved("double_wishbone.yaml")
+    eng = compile(model)
+    k = eng.joint_index["UBJ"]
+
+    def f(st):
+        return eng.poses(st)[2][k, 1]
+
+    cols = eng.columns(["UBJ.s_j"])
+    G = output_jacobian(eng, f, eng.reference, cols)
+    np.testing.assert_allclose(G, body_rotation(eng, eng.reference, k, 1), atol=1e-9)
