@@ -23,7 +23,8 @@ def test_targets_met_from_the_cli_with_achieved_values(examples, tmp_path):
     out = tmp_path / "after.yaml"
     r = run("propagate", examples / "double_wishbone.yaml",
             "--target", "metric:camber@travel=50mm=-1.5deg", "--target", "slope:toe@travel=-50..50=0deg/m",
-            "--free", "hardpoint:UBJ", "--free", "hardpoint:TR.i", "--json", "-o", out)  # fmt: skip
+            "--free", "hardpoint:UBJ", "--free", "hardpoint:TR.i", "--json", "-o", out,
+            "--csv", tmp_path / "after.csv")  # fmt: skip
     assert r.exit_code == 0, r.output
     obj = json.loads(r.stdout)
     assert obj["targets_status"] == "met"
@@ -41,6 +42,8 @@ def test_targets_met_from_the_cli_with_achieved_values(examples, tmp_path):
         joint_hardpoints(load_model(examples / "double_wishbone.yaml"))["TR.i"]
     )
     np.testing.assert_allclose(moved, obj["hardpoint_moves"]["TR.i"], atol=1e-6)
+    rows = {line.split(",")[0]: line.split(",") for line in (tmp_path / "after.csv").read_text().splitlines()}
+    assert float(rows["TR.s_i[2]"][4]) == pytest.approx(moved[2], abs=1e-9)  # chassis frame = global
 
 
 def test_conflicting_targets_exit_1_and_name_the_conflict(examples):

@@ -256,3 +256,19 @@ def test_output_jacobian_of_a_hardpoint_is_the_body_rotation():
     cols = eng.columns(["UBJ.s_j"])
     G = output_jacobian(eng, f, eng.reference, cols)
     np.testing.assert_allclose(G, body_rotation(eng, eng.reference, k, 1), atol=1e-9)
+
+
+def test_targets_on_frame_style_and_hardpoint_style_models_agree():
+    """The same targets and free hardpoints on both styles of the double wishbone: the joints
+    end up at the same global points (body frames differ between the styles)."""
+    specs = ["camber@travel=50=-2", "toe@travel=50=0"]
+    res = [
+        propagate_targets(solved(name), specs, ["hardpoint:UBJ.j", "hardpoint:TR.i"])
+        for name in ("double_wishbone.yaml", "double_wishbone_hardpoints.yaml")
+    ]
+    assert [r.status for r in res] == ["met", "met"]
+    pa, pb = (r.joint_positions(0) for r in res)
+    for key in pa:
+        np.testing.assert_allclose(pa[key][1], pb[key][1], atol=1e-6)
+    for key in ("UBJ.j", "TR.i"):
+        np.testing.assert_allclose(res[0].hardpoint_moves()[key], res[1].hardpoint_moves()[key], atol=1e-6)

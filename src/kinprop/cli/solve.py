@@ -173,8 +173,9 @@ def propagate_cmd(
     changes |= {k: v for k, v in assignments.items() if is_global(k)}
     weights = dict(parse_weight(w) for w in (weight or [])) or None
     if target:
+        writers = [(p, fn) for p, fn in ((csv, write_csv), (plot, write_plot)) if p is not None]
         run_targets(m, model, target, tuple(free or []), changes, weights, max_iter=max_iter, output=output,
-                    as_json=as_json)  # fmt: skip
+                    as_json=as_json, writers=writers)  # fmt: skip
         return
     # global hardpoints and axes: exact s'/C values at the model's assembly (propagation/hardpoints.py)
     engine = compile_engine(m)

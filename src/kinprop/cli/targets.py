@@ -8,7 +8,7 @@ the targets are met, 1 when they are not (least-squares compromise or no converg
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +22,7 @@ from kinprop.cli.app import EXIT_NOT_CONVERGED, err, out, print_json
 from kinprop.io import dump_model
 from kinprop.io.results import propagation_json
 from kinprop.model import Model
+from kinprop.propagation import Propagation
 
 
 def targets_json(tp: TargetPropagation) -> dict[str, Any]:
@@ -75,18 +76,22 @@ def run_targets(
     max_iter: int,
     output: Path | None,
     as_json: bool,
+    writers: Sequence[tuple[Path, Callable[[Propagation, Path], None]]] = (),
 ) -> None:
-    """Solve for the targets, print (table or JSON), write the model when met; exit 1 if not met."""
+    """Solve for the targets, print (table or JSON), write the model (and ``writers``: CSV, plot
+    of the before/after propagation) when met; exit 1 if not met."""
     if not free or all(f == "q" for f in free):
         raise ValueError("--target needs --free design variables (e.g. --free hardpoint:UBJ --free TR.s_i)")
     tp = propagate_targets(model, targets, [f for f in free if f != "q"], changes=changes, weights=weights,
                            max_iter=max_iter)  # fmt: skip
     r = tp.result
-    if output is not None:
+    for path, write in [(output, lambda p, path: dump_model(p.after, path)), *writers]:
+        if path is None:
+            continue
         if r.status == "met":
-            dump_model(tp.after, output)
+            write(tp.propagation, path)
         else:
-            err.print(f"not writing {output}: the targets were not met")
+            err.print(f"not writing {path}: the targets were not met")
     if as_json:
         print_json(targets_json(tp))
     else:
@@ -100,7 +105,9 @@ def run_targets(
             if not k.split(".")[1].startswith("s_"):
                 out.print(f"{k} changes by {np.asarray(d).round(9).tolist()}")
         out.print(("[green]" if r.status == "met" else "[red]") + escape(r.message))
-        if output is not None and r.status == "met":
-            out.print(f"wrote {output}")
+        if r.status == "met":
+            for path in [output, *(p for p, _ in writers)]:
+                if path is not None:
+                    out.print(f"wrote {path}")
     if r.status != "met":
         raise typer.Exit(EXIT_NOT_CONVERGED)
