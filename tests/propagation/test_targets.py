@@ -272,3 +272,12 @@ def test_targets_on_frame_style_and_hardpoint_style_models_agree():
         np.testing.assert_allclose(pa[key][1], pb[key][1], atol=1e-6)
     for key in ("UBJ.j", "TR.i"):
         np.testing.assert_allclose(res[0].hardpoint_moves()[key], res[1].hardpoint_moves()[key], atol=1e-6)
+
+
+def test_slope_range_unit_written_once_applies_to_both_ends():
+    model = load_model(EXAMPLES / "double_wishbone.yaml")  # mm
+    spec = parse_target(model, "slope:toe@travel=-0.05..50mm=0")
+    (a,), (b,), span = spec.slope
+    assert (a.value, b.value, span) == pytest.approx((-0.05, 50.0, 50.05))
+    spec = parse_target(model, "slope:toe@travel=-5..5cm=0")
+    assert spec.slope[2] == pytest.approx(100.0)

@@ -196,6 +196,9 @@ def parse_target(model: Model, text: str) -> TargetSpec:
             raise AddressError(f"{where}: a slope needs one condition range, e.g. slope:toe@travel=-50..50=0")
         name, _, rng = parts[0].partition("=")
         a_text, _, b_text = rng.partition("..")
+        a_unit, b_unit = _number(a_text, where)[1], _number(b_text, where)[1]
+        if b_unit and not a_unit:  # "-50..50mm": the unit written once, at the end, is both ends'
+            a_text += b_unit
         ca, cb = _condition(model, name, where, a_text), _condition(model, name, where, b_text)
         if ca.value == cb.value:
             raise AddressError(f"{where}: the slope's range is empty")

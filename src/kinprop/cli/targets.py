@@ -85,13 +85,13 @@ def run_targets(
     tp = propagate_targets(model, targets, [f for f in free if f != "q"], changes=changes, weights=weights,
                            max_iter=max_iter)  # fmt: skip
     r = tp.result
-    for path, write in [(output, lambda p, path: dump_model(p.after, path)), *writers]:
-        if path is None:
+    for dest, write in [(output, lambda p, where: dump_model(p.after, where)), *writers]:
+        if dest is None:
             continue
         if r.status == "met":
-            write(tp.propagation, path)
+            write(tp.propagation, dest)
         else:
-            err.print(f"not writing {path}: the targets were not met")
+            err.print(f"not writing {dest}: the targets were not met")
     if as_json:
         print_json(targets_json(tp))
     else:
@@ -106,8 +106,8 @@ def run_targets(
                 out.print(f"{k} changes by {np.asarray(d).round(9).tolist()}")
         out.print(("[green]" if r.status == "met" else "[red]") + escape(r.message))
         if r.status == "met":
-            for path in [output, *(p for p, _ in writers)]:
-                if path is not None:
-                    out.print(f"wrote {path}")
+            for dest in [output, *(p for p, _ in writers)]:
+                if dest is not None:
+                    out.print(f"wrote {dest}")
     if r.status != "met":
         raise typer.Exit(EXIT_NOT_CONVERGED)
