@@ -38,16 +38,18 @@ from typing import Any
 
 import numpy as np
 
+from kinprop.analysis.context import HARD, POINT
 from kinprop.analysis.metrics import ANGLE_METRICS, METRIC_ALIASES, resolve_metric, wheel_bodies
-from kinprop.analysis.outputs import expand_outputs, output_function
+from kinprop.analysis.outputs import _distance_ends, expand_outputs, output_function
 from kinprop.engine import Engine, State
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.design import parse_address
 from kinprop.propagation.hardpoints import body_rotation, free_addresses, free_weights, resolve_changes
+from kinprop.propagation.point_jacobians import PointJacobians, PointSpec
 from kinprop.propagation.poses import joint_values
 from kinprop.propagation.propagate import Propagation, engine_for, propagation_of
-from kinprop.propagation.targets import Configuration, Row, TargetResult, solve_targets
+from kinprop.propagation.targets import Configuration, Row, TargetResult, output_jacobian, solve_targets
 from kinprop.spatial import Array
 
 LENGTHS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "inch": 0.0254}
@@ -243,6 +245,103 @@ def _config_outputs(model: Model, engine: Engine, names: list[str]) -> Callable[
     return outputs
 
 
+_DEG = 180.0 / math.pi
+_XYZ = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
+
+
+def _point_spec(model: Model, engine: Engine, spec: str) -> PointSpec:
+    """A ``point:BODY.NAME`` / ``hardpoint:JOINT.i|j`` spec (no component) as a :class:`PointSpec`."""
+    m = POINT.match(spec)
+    if m:
+        return PointSpec(m["body"], tuple(float(x) for x in dict(model.mechanism.body(m["body"]).points)[m["name"]]))
+    m = HARD.match(spec)
+    j = model.mechanism.joint(m["joint"])  # type: ignore[index]
+    side = 0 if m["side"] == "i" else 1  # type: ignore[index]
+    return PointSpec(j.body_i if side == 0 else j.body_j, joint=j.name, side=side)
+
+
+def _analytic_rows(model: Model, engine: Engine, names: list[str]) -> tuple[list[PointSpec], dict[str, Callable]]:
+    """Point specs and, per output name with an analytic derivative, ``row(P, G, cols) -> dy/dx``
+    from the points ``P`` (n, 3) and their Jacobians ``G`` (n, 3, ncols)."""
+    specs: list[PointSpec] = []
+
+    def idx(spec: PointSpec) -> int:
+        if spec not in specs:
+            specs.append(spec)
+        return specs.index(spec)
+
+    rows: dict[str, Callable] = {}
+    for name in names:
+        if name.startswith(("point:", "hardpoint:")):
+            m = POINT.match(name) or HARD.match(name)
+            base = name[: name.index("[")] if m and m["c"] is not None else None
+            if base is None:
+                continue
+            k, c = idx(_point_spec(model, engine, base)), _XYZ[m["c"]]  # type: ignore[index]
+            rows[name] = lambda P, G, cols, k=k, c=c: G[k, c]
+        elif name.startswith("distance:"):
+            a, b = (idx(_point_spec(model, engine, e)) for e in _distance_ends(name))
+
+            def dist(P, G, cols, a=a, b=b):
+                d = P[a] - P[b]
+                return (d / np.linalg.norm(d)) @ (G[a] - G[b])
+
+            rows[name] = dist
+        elif name.startswith("metric:"):
+            wheel, metric = resolve_metric(model, name)
+            pts = dict(model.mechanism.body(wheel).points)
+            centre = idx(PointSpec(wheel, tuple(float(x) for x in pts["wheel_centre"])))
+            spin = idx(PointSpec(wheel, tuple(float(x) for x in pts["spin_axis"])))
+            if metric == "camber":
+
+                def camber(P, G, cols, c=centre, s=spin):
+                    a = P[s] - P[c]
+                    n = np.linalg.norm(a)
+                    u = a / n
+                    du = ((np.eye(3) - np.outer(u, u)) / n) @ (G[s] - G[c])
+                    return -_DEG * du[2] / math.sqrt(max(1.0 - u[2] ** 2, 1e-300))
+
+                rows[name] = camber
+            elif metric == "toe":
+
+                def toe(P, G, cols, c=centre, s=spin):
+                    a, da = P[s] - P[c], G[s] - G[c]
+                    sy = 1.0 if a[1] >= 0 else -1.0
+                    return _DEG * (abs(a[1]) * da[0] - a[0] * sy * da[1]) / (a[0] ** 2 + a[1] ** 2)
+
+                rows[name] = toe
+            elif metric in ("wheel_centre_dx", "wheel_centre_dy", "wheel_centre_dz"):
+                k = "xyz".index(metric[-1])
+                rows[name] = lambda P, G, cols, c=centre, k=k: G[c, k]
+        elif not name.startswith("joint:"):
+            addr = parse_address(name)
+            if addr.field in ("C_i", "C_j") or addr.key not in engine.layout:
+                continue
+            col = engine.layout[addr.key].start + (addr.index or 0)
+            rows[name] = lambda P, G, cols, col=col: (np.asarray(cols) == col).astype(float)
+    return specs, rows
+
+
+def _config_jacobian(model: Model, engine: Engine, names: list[str]) -> Callable[[State, Array], Array]:
+    """``(state, cols) -> d outputs / d x``: analytic rows (:func:`_analytic_rows`, the kernel's
+    partials via :class:`PointJacobians`), central differences of the output map for the rest."""
+    specs, rows = _analytic_rows(model, engine, names)
+    pj = PointJacobians(engine, specs) if specs else None
+    fd_names = [n for n in names if n not in rows]
+    f_fd = _config_outputs(model, engine, fd_names) if fd_names else None
+
+    def jacobian(st: State, cols: Array) -> Array:
+        cols = np.asarray(cols, np.int64)
+        P, G = pj.evaluate(st, cols) if pj is not None else (np.zeros((0, 3)), np.zeros((0, 3, cols.size)))
+        fd = output_jacobian(engine, f_fd, st, cols) if f_fd is not None else None
+        out = np.zeros((len(names), cols.size))
+        for r, n in enumerate(names):
+            out[r] = rows[n](P, G, cols) if n in rows else fd[fd_names.index(n)]  # type: ignore[index]
+        return out
+
+    return jacobian
+
+
 @dataclass(frozen=True)
 class TargetPropagation:
     """The outcome of :func:`propagate_targets`: the solver's :class:`TargetResult`, the specs,
@@ -346,12 +445,15 @@ def propagate_targets(
     tol: float = 1e-9,
     target_tol: float = 1e-6,
     max_iter: int = 60,
+    analytic: bool = True,
 ) -> TargetPropagation:
     """Find the minimum-(weighted-)norm change of the ``free`` design variables that meets the
     ``targets`` (specs, module docstring) with every configuration assembled.
 
     ``changes`` (addresses, global hardpoints too) are applied first, at the model's assembly.
     ``weights``: ``{address or group: w}``, a larger weight lets a variable move more.
+    ``analytic``: analytic output Jacobians where available (False: central differences of the
+    output map for every output; :mod:`kinprop.propagation.targets`).
     """
     eng = engine_for(model, engine)
     start = eng.state_of(model)
@@ -399,7 +501,12 @@ def propagate_targets(
             rows.append(Row(s.text, s.value, terms, scale=1.0 / s.weight))
     names = tuple(" & ".join(f"{c.output}={c.value:g}" for c in cs) or "base" for cs in conds)
     configurations = [
-        Configuration(names[k], _config_outputs(model, eng, outs[k]), {c.output: [c.value] for c in cs if c.held})
+        Configuration(
+            names[k],
+            _config_outputs(model, eng, outs[k]),
+            {c.output: [c.value] for c in cs if c.held},
+            _config_jacobian(model, eng, outs[k]) if analytic else None,
+        )
         for k, cs in enumerate(conds)
     ]
     opts = {"tol": tol, "target_tol": target_tol, "max_iter": max_iter}

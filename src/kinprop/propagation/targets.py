@@ -20,12 +20,15 @@ step to the least-squares compromise of the targets while the mechanism stays as
 step is applied on the manifold (:meth:`Engine.retract`: additive for q, s', l; exponential map
 for C) halving only a step that blows a residual up tenfold (full Newton steps otherwise).
 
-Jacobians: ``H``'s Phi block is the engine's analytic ``Phi_x`` (Table 1). The output rows'
-derivative with respect to the state is a **central difference of the output map only**
-(forward kinematics, no re-solve) along each free state column on the manifold, as
-:mod:`kinprop.analysis.sensitivity` does: the chain rule through the assembly is then carried
-by the Newton system itself (the coordinates ``q_k`` are unknowns tied to ``p`` by Phi), so
-the converged design is exact; only the step direction carries the O(h^2) difference error.
+Jacobians: ``H``'s Phi block is the engine's analytic ``Phi_x`` (Table 1). A configuration's
+output rows use its ``jacobian`` when given — :mod:`kinprop.analysis.targets` gives analytic
+ones for points, hardpoints, distances, coordinates, design variables and the camber, toe and
+wheel-centre metrics (:mod:`kinprop.propagation.point_jacobians`: the kernel's own partials,
+chained through the metric formula) — and otherwise a **central difference of the output map
+only** (forward kinematics, no re-solve) along each free state column on the manifold, as
+:mod:`kinprop.analysis.sensitivity` does. Either way the chain rule through the assembly is
+carried by the Newton system itself (the coordinates ``q_k`` are unknowns tied to ``p`` by
+Phi), so the converged design is exact; a difference only perturbs the step direction (O(h^2)).
 
 Conflicts: at the solution, the left singular vectors of ``T_y N`` (targets restricted to the
 motions that keep every configuration assembled) whose singular value is (numerically) zero
@@ -66,6 +69,8 @@ class Configuration:
     name: str
     outputs: OutputMap
     held: Mapping[str, Any] = field(default_factory=dict)
+    #: ``(state, columns) -> d outputs / d x`` (analytic); None: central differences of ``outputs``
+    jacobian: Callable[[State, Array], Array] | None = None
 
 
 @dataclass(frozen=True)
@@ -225,7 +230,10 @@ def solve_targets(
             Hj.append(row)
             cols = np.concatenate([qcols[k], pcols[:npc]])
             outs.append(np.asarray(configurations[k].outputs(st), float))
-            grads.append(output_jacobian(engine, configurations[k].outputs, st, cols))
+            cfg = configurations[k]
+            grads.append(
+                cfg.jacobian(st, cols) if cfg.jacobian is not None else output_jacobian(engine, cfg.outputs, st, cols)
+            )
 
         def lin(rs: list[Row]) -> tuple[Array, Array]:
             val = np.zeros(len(rs))
