@@ -24,7 +24,10 @@ A target spec (CLI ``--target``, Python ``propagate_targets(model, [...])``)::
 
 :func:`propagate_targets` solves by :func:`kinprop.propagation.targets.solve_targets` (the
 minimum-(weighted-)norm change of the ``free`` design variables: ``hardpoint:J[.i|.j]``,
-``axis:J``, ``J.s_i``, ``J.length``, groups ``s C l``).
+``axis:J``, ``J.s_i``, ``J.length``, groups ``s C l``). Output Jacobians are analytic for
+points, hardpoints, distances, coordinates, design variables and the camber, toe and
+wheel-centre metrics (:func:`_config_jacobian`); caster, KPI, scrub radius, trail and joint
+values use central differences of the output map.
 """
 
 from __future__ import annotations
