@@ -5,6 +5,7 @@ Kinematic Analysis", ASME J. Mech. Des. 119(3).
 """
 
 from kinprop.analysis import design_sensitivity, evaluate_outputs, mobility, output_sensitivity, sweep
+from kinprop.analysis.targets import TargetPropagation, propagate_targets
 from kinprop.engine import BatchSolution, Engine, Solution, State, Status, compile
 from kinprop.errors import AddressError, ConvergenceError, KinpropError, ModelError, SingularityWarning
 from kinprop.io import dump_model, load_model
@@ -32,6 +33,7 @@ __all__ = [
     "SolveResult",
     "State",
     "Status",
+    "TargetPropagation",
     "assemble",
     "compile",
     "design_sensitivity",
@@ -42,5 +44,6 @@ __all__ = [
     "output_sensitivity",
     "propagate",
     "propagate_continuation",
+    "propagate_targets",
     "sweep",
 ]

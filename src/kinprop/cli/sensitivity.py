@@ -14,8 +14,10 @@ from rich.table import Table
 from kinprop.analysis.sensitivity import RESIDUAL_WARN, design_sensitivity, output_sensitivity
 from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, fail, handles_user_errors, out, parse_weight, print_json
 from kinprop.cli.continuation import shown_warnings
+from kinprop.engine import compile as compile_engine
 from kinprop.io import load_model
 from kinprop.propagation import assemble
+from kinprop.propagation.hardpoints import free_weights, global_columns, is_global
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -51,6 +53,27 @@ def sensitivity_frame(
     return design_sensitivity(assembled, wrt, free, weights).frame()
 
 
+def global_frame(
+    assembled: Model,
+    wrt: Sequence[str],
+    of: Sequence[str] | None,
+    free: Sequence[str],
+    weights: Mapping[str, float] | None,
+) -> pd.DataFrame:
+    """:func:`sensitivity_frame` where ``hardpoint:J[.i|.j][c]`` columns are per global length
+    unit (kinprop.propagation.hardpoints.global_columns); other columns unchanged."""
+    engine = compile_engine(assembled)
+    design, combos = global_columns(engine, engine.reference, wrt)
+    frame = sensitivity_frame(assembled, design, of, free, free_weights(engine, weights))
+    if not combos:
+        return frame
+    for label, coef in combos.items():
+        frame[label] = sum(c * frame[col] for col, c in coef.items())
+    plain = set(sensitivity_frame(assembled, [w for w in wrt if not is_global(w)], of, free, None).columns) if any(
+        not is_global(w) for w in wrt) else set()  # fmt: skip
+    return frame[[c for c in frame.columns if c in combos or c in plain]]
+
+
 def sensitivity_json(
     model: str,
     frame: pd.DataFrame,
@@ -79,7 +102,12 @@ def sensitivity_json(
 @handles_user_errors
 def sensitivity_cmd(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
-    wrt: Annotated[list[str], typer.Option("--wrt", help="design variables: addresses (RS.s_i[2]) or groups")],
+    wrt: Annotated[
+        list[str],
+        typer.Option(
+            "--wrt", help="design variables: addresses (RS.s_i[2]), groups, hardpoint:J.i[x] (per global unit)"
+        ),
+    ],
     of: Annotated[
         list[str] | None,
         typer.Option("--of", help="outputs: J.q[k], J.s_i[k], point:BODY.NAME[x], hardpoint:J.i[x], metric:W.camber"),
@@ -108,7 +136,7 @@ def sensitivity_cmd(
             escape(f"note: {model} was not assembled (||Phi|| = {initial:.3g}); assembled first: {r.message}"),
             soft_wrap=True,
         )
-    frame = sensitivity_frame(prop.after, wrt, of, free_set, weights)
+    frame = global_frame(prop.after, wrt, of, free_set, weights)
     if as_json:
         print_json(sensitivity_json(str(model), frame, free_set, weights, r))
         return

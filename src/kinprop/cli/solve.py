@@ -19,11 +19,14 @@ from kinprop.cli.app import (
     print_json,
 )
 from kinprop.cli.continuation import run_propagation, shown_warnings
+from kinprop.cli.targets import run_targets
+from kinprop.engine import compile as compile_engine
 from kinprop.io import dump_model, load_model
 from kinprop.io.results import comparison_rows, point_rows, propagation_json, variable_rows
 from kinprop.io.units import changes_to_internal
 from kinprop.io.writer import atomic_write
 from kinprop.propagation import Propagation, propagate
+from kinprop.propagation.hardpoints import free_addresses, free_weights, is_global, resolve_changes
 
 Tol = Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL (the paper used 1e-3)")]
 MaxIter = Annotated[int, typer.Option("--max-iter", help="maximum Newton iterations")]
@@ -141,7 +144,10 @@ def assemble(
 @handles_user_errors
 def propagate_cmd(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
-    set_: Annotated[list[str] | None, typer.Option("--set", help="ADDRESS=VALUE, e.g. J12.s_j=-2.8,0.2,0.1")] = None,
+    set_: Annotated[
+        list[str] | None,
+        typer.Option("--set", help="ADDRESS=VALUE, e.g. J12.s_j=-2.8,0.2,0.1 or hardpoint:UBJ=x,y,z (global)"),
+    ] = None,
     free: Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")] = None,
     weight: Annotated[list[str] | None, typer.Option("--weight", help="ADDRESS_OR_GROUP=W: larger moves more")] = None,
     tol: Tol = 1e-10,
@@ -154,11 +160,28 @@ def propagate_cmd(
         bool | None,
         typer.Option("--continuation/--no-continuation", help="predictor-corrector sub-steps (default: on failure)"),
     ] = None,
+    target: Annotated[
+        list[str] | None,
+        typer.Option("--target", help="OUTPUT[@COND]=VALUE[UNIT], e.g. metric:camber@travel=50mm=-1.5deg"),
+    ] = None,
 ) -> None:
-    """Change design variables and re-assemble, moving only the free variables."""
+    """Change design variables and re-assemble, moving only the free variables; with
+    --target, find the smallest change of the --free design variables meeting the targets."""
     m = load_model(model)
-    changes = changes_to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
+    assignments = dict(parse_assignment(s) for s in (set_ or []))
+    changes = changes_to_internal(m, {k: v for k, v in assignments.items() if not is_global(k)})
+    changes |= {k: v for k, v in assignments.items() if is_global(k)}
     weights = dict(parse_weight(w) for w in (weight or [])) or None
+    if target:
+        writers = [(p, fn) for p, fn in ((csv, write_csv), (plot, write_plot)) if p is not None]
+        run_targets(m, model, target, tuple(free or []), changes, weights, max_iter=max_iter, output=output,
+                    as_json=as_json, writers=writers)  # fmt: skip
+        return
+    # global hardpoints and axes: exact s'/C values at the model's assembly (propagation/hardpoints.py)
+    engine = compile_engine(m)
+    changes = resolve_changes(engine, engine.reference, changes)
+    free = list(free_addresses(engine, free or ["q"]))
+    weights = free_weights(engine, weights)
     # continuation (explicit, or the fallback when Newton fails) and singularity warnings: cli/continuation.py
     prop = run_propagation(
         m,

@@ -55,7 +55,9 @@ def study_cmd(
     as_json: Annotated[bool, typer.Option("--json", help="print a JSON summary")] = False,
 ) -> None:
     """Run a design study: every variant re-assembled, inputs and results streamed to Parquet."""
-    from kinprop.analysis.study import Factor, parse_vary, run_study  # pandas/pyarrow only when used
+    from kinprop.analysis.study import Factor, parse_vary, run_study, sample_plan  # pandas/pyarrow only when used
+    from kinprop.engine import compile as compile_engine
+    from kinprop.propagation.hardpoints import global_plan, is_global, resolve_changes
 
     m = load_model(model)
     sets = _to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
@@ -67,12 +69,22 @@ def study_cmd(
         factors.append(Factor(f.address, lo, hi))
     if method not in ("grid", "lhs", "mc"):
         raise AddressError(f"--method {method!r}: expected grid, lhs or mc")
+    # global hardpoints (hardpoint:J.i[z]=LOW:HIGH, --set hardpoint:J=x,y,z): exact s' columns
+    engine = compile_engine(m)
+    sets = resolve_changes(engine, engine.reference, sets)
+    plan = addresses = None
+    if any(is_global(f.address.split("[")[0]) for f in factors):
+        values = sample_plan(factors, method, samples, seed)
+        addresses, plan = global_plan(engine, engine.reference, [f.address for f in factors], values)
     try:
         frame = run_study(
             m, factors, method=method, samples=samples, seed=seed, free=tuple(free or ["q"]), sets=sets,
             outputs=out_names, tol=tol, max_iter=max_iter, chunk_size=chunk_size, output=output, resume=resume,
-            scheduler=scheduler, progress=not as_json,
+            scheduler=scheduler, progress=not as_json, plan=plan, addresses=addresses,
         )  # fmt: skip
+        if plan is not None:  # the global factor values beside the s' columns they set
+            for k, f in enumerate(factors):
+                frame[f.address] = values[frame["variant"].to_numpy(), k]
     except KeyboardInterrupt:
         err.print(f"interrupted: finished chunks are kept in {escape(str(output))}; run again with --resume")
         raise typer.Exit(EXIT_INTERRUPTED) from None

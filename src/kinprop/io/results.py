@@ -34,7 +34,8 @@ def coordinates_json(model) -> dict[str, list[float]]:
 def propagation_json(prop: Propagation) -> dict[str, Any]:
     """The solve, the resulting coordinates and design, and where the joints sit afterwards:
     ``hardpoints`` (``"JOINT.i"``/``"JOINT.j"`` -> global [x, y, z], see
-    :func:`kinprop.analysis.points.joint_hardpoints`) and ``points`` (named body points)."""
+    :func:`kinprop.analysis.points.joint_hardpoints`), ``points`` (named body points),
+    ``bodies`` (global poses) and ``joint_values`` (:mod:`kinprop.propagation.poses`)."""
     r = prop.result
     return {
         "status": r.status,
@@ -50,7 +51,19 @@ def propagation_json(prop: Propagation) -> dict[str, Any]:
         "changed": prop.changed_variables(),
         "hardpoints": joint_hardpoints(prop.after),
         "points": named_points(prop.after),
+        "bodies": bodies_json(prop),
+        "joint_values": joint_values_json(prop),
     }
+
+
+def bodies_json(prop: Propagation) -> dict[str, dict[str, Any]]:
+    """Every body's global pose after the propagation: ``{BODY: {"R": 3x3 rows, "t": [x, y, z]}}``."""
+    return {b: {"R": p["R"].tolist(), "t": p["t"].tolist()} for b, p in prop.bodies.items()}
+
+
+def joint_values_json(prop: Propagation) -> dict[str, dict[str, Any]]:
+    """Every joint's relative value, cut joints included (radians, model length unit)."""
+    return {j: {k: _num(v) for k, v in vals.items()} for j, vals in prop.joint_values.items()}
 
 
 def variable_rows(prop: Propagation) -> list[dict[str, Any]]:

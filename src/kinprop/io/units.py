@@ -8,6 +8,7 @@ import numpy as np
 
 from kinprop.engine import compile as compile_engine
 from kinprop.model import Model, parse_address
+from kinprop.propagation.hardpoints import is_global
 
 
 def angle_indices(model: Model, joint: str) -> list[int]:
@@ -27,8 +28,11 @@ def changes_to_internal(model: Model, changes: Mapping[str, np.ndarray]) -> dict
         return dict(changes)
     out: dict[str, np.ndarray] = {}
     for text, value in changes.items():
-        addr = parse_address(text)
         v = np.array(value, dtype=float)
+        if is_global(text.split("[")[0]):  # global points and axes: model length unit, no angles
+            out[text] = v
+            continue
+        addr = parse_address(text)
         if addr.field == "q" and addr.joint in model.mechanism._joints:
             idx = angle_indices(model, addr.joint)
             if addr.index is None:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -17,6 +18,8 @@ from kinprop.engine import Engine, Solution, compile
 from kinprop.errors import SingularityWarning
 from kinprop.model.model import Model
 from kinprop.propagation.conditioning import SINGULAR_RTOL, conditioning
+from kinprop.propagation.hardpoints import free_addresses, free_weights, resolve_changes
+from kinprop.propagation.poses import body_poses, joint_values
 from kinprop.solver.newton import RANK_RTOL
 from kinprop.solver.result import SolveResult, rank_of
 from kinprop.spatial import Array
@@ -61,6 +64,19 @@ class Propagation:
     @property
     def converged(self) -> bool:
         return self.result.converged
+
+    @cached_property
+    def bodies(self) -> dict[str, dict[str, Array]]:
+        """Every body's global pose after the propagation: ``{BODY: {"R": (3, 3), "t": (3,)}}``."""
+        eng = engine_for(self.after, self.engine)
+        return body_poses(eng, eng.state_of(self.after))
+
+    @cached_property
+    def joint_values(self) -> dict[str, dict[str, float | Array]]:
+        """Every joint's relative value after the propagation, cut joints included
+        (:mod:`kinprop.propagation.poses`; radians, model length unit)."""
+        eng = engine_for(self.after, self.engine)
+        return joint_values(eng, eng.state_of(self.after))
 
     def changed_variables(self, atol: float = 0.0) -> list[str]:
         """Layout keys whose value differs between before and after."""
@@ -122,12 +138,24 @@ def propagate(
     Newton, which may land on another branch; docs/analysis/continuation.md).
 
     ``free`` holds groups (``q``, ``s``, ``C``, ``l``) and/or addresses (``J.s_i``, ``J.q``,
-    ``J.s_i[2]``). ``weights`` maps addresses or groups to positive weights of a weighted
+    ``J.s_i[2]``, and ``hardpoint:J[.i|.j]`` / ``axis:J[.i|.j]`` for those design variables).
+    ``changes`` may use global addresses ``hardpoint:J.i=x,y,z``, ``hardpoint:J``, ``axis:J``
+    (:mod:`kinprop.propagation.hardpoints`), converted exactly at the model's current assembly.
+    ``weights`` maps addresses or groups to positive weights of a weighted
     minimum-norm step (a larger weight lets a variable move more).
     """
     eng = engine_for(model, engine)
     start = eng.reference if eng.model is model else eng.state_of(model)
-    sol = eng.propagate(changes or {}, free, start=start, weights=weights, tol=tol, max_iter=max_iter, branch=branch)
+    changes = resolve_changes(eng, start, changes or {})
+    sol = eng.propagate(
+        changes,
+        free_addresses(eng, free),
+        start=start,
+        weights=free_weights(eng, weights),
+        tol=tol,
+        max_iter=max_iter,
+        branch=branch,
+    )
     return propagation_of(eng, model, sol, free)
 
 

@@ -1,0 +1,521 @@
+"""Targets in the designer's terms: parse target specs, build configurations, solve, report.
+
+A target spec (CLI ``--target``, Python ``propagate_targets(model, [...])``)::
+
+    [slope:]OUTPUT[@CONDITION[&CONDITION...]]=VALUE[UNIT][:WEIGHT]
+
+* ``OUTPUT``: any scalar output of :mod:`kinprop.analysis.outputs` (``metric:camber``,
+  ``camber``, ``point:upright.wheel_centre[z]``, ``hardpoint:UBJ.j[x]``, ``distance:A,B``,
+  ``O4.q``, ``P.q[2]``, ``L1.length``) or a joint's relative value ``joint:JOINT.NAME``
+  (``joint:UBJ.euler[1]``, ``joint:B.displacement``; :mod:`kinprop.propagation.poses`).
+* ``CONDITION`` puts the target in a configuration of its own; conditions hold exactly:
+  ``JOINT.q=V`` / ``JOINT.q[k]=V`` holds a coordinate (not free there);
+  ``travel=V`` is the wheel travel (``metric:WHEEL.wheel_centre_dz = V``: the suspension's free
+  coordinates move until the wheel centre is V above its reference); any other ``OUTPUT=V`` is
+  a condition row of its own. Targets with the same conditions share a configuration; a
+  target without conditions lives in the base configuration (every coordinate free).
+* ``slope:OUTPUT@COND=A..B=V``: the slope ``(OUTPUT(B) - OUTPUT(A)) / (B - A)`` over a single
+  condition's range (e.g. bump steer ``slope:toe@travel=-50..50=0``), unit output per condition.
+* ``VALUE``: a number with an optional unit: ``deg``/``rad`` for angles, ``mm``/``cm``/``m``/``in``
+  for lengths, ``deg/m``-style for slopes. Without a unit: metric angles in degrees, coordinate
+  and joint angles in the model's angle unit, lengths in the model's length unit.
+* ``WEIGHT`` (default 1) multiplies the target's residual in the least-squares compromise when
+  targets conflict (a miss of 1/WEIGHT units counts as one).
+
+:func:`propagate_targets` solves by :func:`kinprop.propagation.targets.solve_targets` (the
+minimum-(weighted-)norm change of the ``free`` design variables: ``hardpoint:J[.i|.j]``,
+``axis:J``, ``J.s_i``, ``J.length``, groups ``s C l``). Output Jacobians are analytic for
+points, hardpoints, distances, coordinates, design variables and the camber, toe and
+wheel-centre metrics (:func:`_config_jacobian`); caster, KPI, scrub radius, trail and joint
+values use central differences of the output map.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from kinprop.analysis.context import HARD, POINT
+from kinprop.analysis.metrics import ANGLE_METRICS, METRIC_ALIASES, resolve_metric, wheel_bodies
+from kinprop.analysis.outputs import _distance_ends, expand_outputs, output_function
+from kinprop.engine import Engine, State
+from kinprop.errors import AddressError
+from kinprop.model import Model
+from kinprop.model.design import parse_address
+from kinprop.propagation.hardpoints import body_rotation, free_addresses, free_weights, resolve_changes
+from kinprop.propagation.point_jacobians import PointJacobians, PointSpec
+from kinprop.propagation.poses import joint_values
+from kinprop.propagation.propagate import Propagation, engine_for, propagation_of
+from kinprop.propagation.targets import Configuration, Row, TargetResult, output_jacobian, solve_targets
+from kinprop.spatial import Array
+
+LENGTHS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "inch": 0.0254}
+ANGLES = {"deg": 1.0, "rad": 180.0 / math.pi}
+_NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/]*)\s*$")
+_JOINT_OUT = re.compile(r"^joint:(?P<joint>[^.\s]+)\.(?P<name>[a-z_0-9]+)(\[(?P<k>\d)\])?$")
+
+
+@dataclass(frozen=True)
+class Condition:
+    output: str  # scalar output name, or a coordinate address when ``held``
+    value: float  # internal units
+    held: bool
+
+
+@dataclass(frozen=True)
+class TargetSpec:
+    """A parsed target (internal units: metric angles deg, coordinate angles rad, lengths model unit)."""
+
+    text: str
+    output: str
+    value: float
+    conditions: tuple[Condition, ...] = ()
+    #: for a slope: the two condition sets and the range
+    slope: tuple[tuple[Condition, ...], tuple[Condition, ...], float] | None = None
+    weight: float = 1.0
+    unit: str = ""
+
+
+def _kind(model: Model, output: str) -> str:
+    """``deg`` (metric angle, degrees), ``rad`` (coordinate/joint angle, radians), ``length``, ``none``."""
+    if output.startswith("joint:"):
+        m = _JOINT_OUT.match(output)
+        name = m["name"] if m else ""
+        return "rad" if "angle" in name else "none" if name in ("euler", "rotation_vector") else "length"
+    if output.startswith(("point:", "hardpoint:", "distance:")):
+        return "length"
+    if output.startswith("metric:") or "." not in output:
+        _, metric = resolve_metric(model, output)
+        return "deg" if METRIC_ALIASES.get(metric, metric) in ANGLE_METRICS else "length"
+    addr = parse_address(output)
+    if addr.field == "q":
+        idx = model.mechanism.joint(addr.joint).jtype.angle_indices
+        return "rad" if (addr.index or 0) in idx else "length"
+    return "length"
+
+
+def _unit_factor(model: Model, kind: str, unit: str, where: str) -> float:
+    """Factor from ``unit`` to the internal unit of ``kind`` (no unit: the display unit)."""
+    length_unit = model.units.get("length", "m")
+    if kind == "deg":
+        if not unit:
+            return 1.0
+        if unit in ANGLES:
+            return ANGLES[unit]
+    elif kind == "rad":
+        if not unit:
+            return math.pi / 180 if model.units.get("angle") == "deg" else 1.0
+        if unit in ANGLES:
+            return ANGLES[unit] * math.pi / 180
+    elif kind == "length":
+        if not unit:
+            return 1.0
+        if unit in LENGTHS and length_unit in LENGTHS:
+            return LENGTHS[unit] / LENGTHS[length_unit]
+    elif not unit:
+        return 1.0
+    raise AddressError(f"{where}: unit {unit!r} does not fit this output ({kind}; model length unit {length_unit})")
+
+
+def _number(text: str, where: str) -> tuple[float, str]:
+    m = _NUMBER.match(text)
+    if not m:
+        raise AddressError(f"{where}: {text!r} is not a number with an optional unit (e.g. -1.5deg, 50mm)")
+    return float(m[1]), m[2]
+
+
+def _travel(model: Model, where: str) -> str:
+    wheels = wheel_bodies(model)
+    if len(wheels) != 1:
+        raise AddressError(f"{where}: 'travel' needs exactly one wheel body, found {len(wheels)}; "
+                           "write metric:WHEEL.wheel_centre_dz=V")  # fmt: skip
+    return f"metric:{wheels[0]}.wheel_centre_dz"
+
+
+def _metric_name(model: Model, name: str) -> str:
+    """``metric:NAME`` (one wheel) -> ``metric:WHEEL.NAME``; other names unchanged."""
+    if name.startswith("metric:") and "." not in name:
+        wheel, metric = resolve_metric(model, name[len("metric:") :])
+        return f"metric:{wheel}.{metric}"
+    if "." not in name and name not in ("travel",) and ":" not in name:
+        wheel, metric = resolve_metric(model, name)
+        return f"metric:{wheel}.{metric}"
+    return name
+
+
+def _condition(model: Model, text: str, where: str, value_text: str | None = None) -> Condition:
+    name, _, val = text.partition("=")
+    name, val = name.strip(), value_text if value_text is not None else val
+    if not name or not val.strip():
+        raise AddressError(f"{where}: condition {text!r}: expected NAME=VALUE (e.g. travel=50mm, O2.q=40)")
+    name = _travel(model, where) if name == "travel" else _metric_name(model, name)
+    kind = _kind(model, name)
+    v, unit = _number(val, where)
+    v *= _unit_factor(model, kind, unit, where)
+    held = False
+    if not name.startswith(("metric:", "point:", "hardpoint:", "distance:", "joint:")) and "." in name:
+        addr = parse_address(name)
+        held = addr.field == "q"
+    return Condition(name, v, held)
+
+
+def parse_target(model: Model, text: str) -> TargetSpec:
+    """Parse one target spec (module docstring); raises :class:`AddressError` with the spec."""
+    where = f"--target {text!r}"
+    body, sep, value = text.rpartition("=")
+    if not sep or not body:
+        raise AddressError(f"{where}: expected OUTPUT[@CONDITION]=VALUE (e.g. metric:camber@travel=50mm=-1.5deg)")
+    weight = 1.0
+    if ":" in value:
+        value, _, w = value.partition(":")
+        try:
+            weight = float(w)
+        except ValueError:
+            raise AddressError(f"{where}: weight {w!r} is not a number") from None
+        if not weight > 0:
+            raise AddressError(f"{where}: weight must be positive, found {weight:g}")
+    out, _, conds = body.partition("@")
+    is_slope = out.startswith("slope:")
+    out = out[len("slope:") :] if is_slope else out
+    out = out.strip()
+    out = _travel(model, where) if out == "travel" else _metric_name(model, out)
+    if not out.startswith("joint:"):
+        names = expand_outputs(model, [out])
+        if names != [out]:
+            raise AddressError(f"{where}: {out!r} is not a scalar output; name a component, e.g. {names[0]}")
+    kind = _kind(model, out)
+    v, unit = _number(value, where)
+    parts = [c for c in conds.split("&") if c.strip()] if conds else []
+    if any("=" not in c for c in parts):
+        raise AddressError(
+            f"{where}: expected OUTPUT@CONDITION=VALUE with CONDITION as NAME=VALUE (target value missing?)"
+        )
+    if is_slope:
+        if len(parts) != 1 or ".." not in parts[0]:
+            raise AddressError(f"{where}: a slope needs one condition range, e.g. slope:toe@travel=-50..50=0")
+        name, _, rng = parts[0].partition("=")
+        a_text, _, b_text = rng.partition("..")
+        a_unit, b_unit = _number(a_text, where)[1], _number(b_text, where)[1]
+        if b_unit and not a_unit:  # "-50..50mm": the unit written once, at the end, is both ends'
+            a_text += b_unit
+        ca, cb = _condition(model, name, where, a_text), _condition(model, name, where, b_text)
+        if ca.value == cb.value:
+            raise AddressError(f"{where}: the slope's range is empty")
+        num_unit, _, den_unit = unit.partition("/")
+        v *= _unit_factor(model, kind, num_unit, where)
+        v /= _unit_factor(model, _kind(model, ca.output), den_unit, where)
+        return TargetSpec(text, out, v, (), ((ca,), (cb,), cb.value - ca.value), weight=weight)
+    v *= _unit_factor(model, kind, unit, where)
+    return TargetSpec(text, out, v, tuple(_condition(model, c, where) for c in parts), weight=weight)
+
+
+def _joint_output(engine: Engine, name: str) -> Callable[[State], float]:
+    m = _JOINT_OUT.match(name)
+    if not m or m["joint"] not in engine.joint_index:
+        raise AddressError(f"output {name!r}: expected joint:JOINT.VALUE with a joint of this model")
+    probe = joint_values(engine, engine.reference if engine.reference is not None else engine.default_state())
+    vals = probe[m["joint"]]
+    if m["name"] not in vals:
+        raise AddressError(f"output {name!r}: joint {m['joint']!r} has values {', '.join(vals)}")
+    k = int(m["k"]) if m["k"] is not None else None
+    if k is None and np.ndim(vals[m["name"]]) > 0:
+        raise AddressError(f"output {name!r} is a vector; name a component, e.g. {name}[0]")
+
+    def f(st: State) -> float:
+        v = joint_values(engine, st)[m["joint"]][m["name"]]
+        return float(v if k is None else np.asarray(v)[k])
+
+    return f
+
+
+def _config_outputs(model: Model, engine: Engine, names: list[str]) -> Callable[[State], Array]:
+    """One configuration's output map ``state -> values`` of ``names``."""
+    std = [n for n in names if not n.startswith("joint:")]
+    jf = {n: _joint_output(engine, n) for n in names if n.startswith("joint:")}
+    f, _ = output_function(model, std, engine=engine) if std else (None, [])
+    pos = {n: i for i, n in enumerate(std)}
+
+    def outputs(st: State) -> Array:
+        vals = f(engine.model_of(st, model)) if f is not None else np.zeros(0)
+        return np.array([vals[pos[n]] if n in pos else jf[n](st) for n in names])
+
+    return outputs
+
+
+_DEG = 180.0 / math.pi
+_XYZ = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
+
+
+def _point_spec(model: Model, engine: Engine, spec: str) -> PointSpec:
+    """A ``point:BODY.NAME`` / ``hardpoint:JOINT.i|j`` spec (no component) as a :class:`PointSpec`."""
+    m = POINT.match(spec)
+    if m:
+        return PointSpec(m["body"], tuple(float(x) for x in dict(model.mechanism.body(m["body"]).points)[m["name"]]))
+    m = HARD.match(spec)
+    j = model.mechanism.joint(m["joint"])  # type: ignore[index]
+    side = 0 if m["side"] == "i" else 1  # type: ignore[index]
+    return PointSpec(j.body_i if side == 0 else j.body_j, joint=j.name, side=side)
+
+
+def _analytic_rows(model: Model, engine: Engine, names: list[str]) -> tuple[list[PointSpec], dict[str, Callable]]:
+    """Point specs and, per output name with an analytic derivative, ``row(P, G, cols) -> dy/dx``
+    from the points ``P`` (n, 3) and their Jacobians ``G`` (n, 3, ncols)."""
+    specs: list[PointSpec] = []
+
+    def idx(spec: PointSpec) -> int:
+        if spec not in specs:
+            specs.append(spec)
+        return specs.index(spec)
+
+    rows: dict[str, Callable] = {}
+    for name in names:
+        if name.startswith(("point:", "hardpoint:")):
+            m = POINT.match(name) or HARD.match(name)
+            base = name[: name.index("[")] if m and m["c"] is not None else None
+            if base is None:
+                continue
+            k, c = idx(_point_spec(model, engine, base)), _XYZ[m["c"]]  # type: ignore[index]
+            rows[name] = lambda P, G, cols, k=k, c=c: G[k, c]
+        elif name.startswith("distance:"):
+            a, b = (idx(_point_spec(model, engine, e)) for e in _distance_ends(name))
+
+            def dist(P, G, cols, a=a, b=b):
+                d = P[a] - P[b]
+                return (d / np.linalg.norm(d)) @ (G[a] - G[b])
+
+            rows[name] = dist
+        elif name.startswith("metric:"):
+            wheel, metric = resolve_metric(model, name)
+            pts = dict(model.mechanism.body(wheel).points)
+            centre = idx(PointSpec(wheel, tuple(float(x) for x in pts["wheel_centre"])))
+            spin = idx(PointSpec(wheel, tuple(float(x) for x in pts["spin_axis"])))
+            if metric == "camber":
+
+                def camber(P, G, cols, c=centre, s=spin):
+                    a = P[s] - P[c]
+                    n = np.linalg.norm(a)
+                    u = a / n
+                    du = ((np.eye(3) - np.outer(u, u)) / n) @ (G[s] - G[c])
+                    return -_DEG * du[2] / math.sqrt(max(1.0 - u[2] ** 2, 1e-300))
+
+                rows[name] = camber
+            elif metric == "toe":
+
+                def toe(P, G, cols, c=centre, s=spin):
+                    a, da = P[s] - P[c], G[s] - G[c]
+                    sy = 1.0 if a[1] >= 0 else -1.0
+                    return _DEG * (abs(a[1]) * da[0] - a[0] * sy * da[1]) / (a[0] ** 2 + a[1] ** 2)
+
+                rows[name] = toe
+            elif metric in ("wheel_centre_dx", "wheel_centre_dy", "wheel_centre_dz"):
+                k = "xyz".index(metric[-1])
+                rows[name] = lambda P, G, cols, c=centre, k=k: G[c, k]
+        elif not name.startswith("joint:"):
+            addr = parse_address(name)
+            if addr.field in ("C_i", "C_j") or addr.key not in engine.layout:
+                continue
+            col = engine.layout[addr.key].start + (addr.index or 0)
+            rows[name] = lambda P, G, cols, col=col: (np.asarray(cols) == col).astype(float)
+    return specs, rows
+
+
+def _config_jacobian(model: Model, engine: Engine, names: list[str]) -> Callable[[State, Array], Array]:
+    """``(state, cols) -> d outputs / d x``: analytic rows (:func:`_analytic_rows`, the kernel's
+    partials via :class:`PointJacobians`), central differences of the output map for the rest."""
+    specs, rows = _analytic_rows(model, engine, names)
+    pj = PointJacobians(engine, specs) if specs else None
+    fd_names = [n for n in names if n not in rows]
+    f_fd = _config_outputs(model, engine, fd_names) if fd_names else None
+
+    def jacobian(st: State, cols: Array) -> Array:
+        cols = np.asarray(cols, np.int64)
+        P, G = pj.evaluate(st, cols) if pj is not None else (np.zeros((0, 3)), np.zeros((0, 3, cols.size)))
+        fd = output_jacobian(engine, f_fd, st, cols) if f_fd is not None else None
+        out = np.zeros((len(names), cols.size))
+        for r, n in enumerate(names):
+            out[r] = rows[n](P, G, cols) if n in rows else fd[fd_names.index(n)]  # type: ignore[index]
+        return out
+
+    return jacobian
+
+
+@dataclass(frozen=True)
+class TargetPropagation:
+    """The outcome of :func:`propagate_targets`: the solver's :class:`TargetResult`, the specs,
+    and models before/after per configuration. ``propagation`` is the base configuration's
+    (the first configuration's when every target has conditions) before/after record, with
+    body poses and joint values."""
+
+    model: Model
+    specs: tuple[TargetSpec, ...]
+    result: TargetResult
+    engine: Engine = field(repr=False)
+    configuration_names: tuple[str, ...] = ()
+
+    @property
+    def converged(self) -> bool:
+        return self.result.converged
+
+    @property
+    def status(self) -> str:
+        return self.result.status
+
+    def before_model(self, k: int = 0) -> Model:
+        return self.engine.model_of(self.result.before[k], self.model)
+
+    def after_model(self, k: int = 0) -> Model:
+        return self.engine.model_of(self.result.after[k], self.model)
+
+    @cached_property
+    def propagation(self) -> Propagation:
+        """The model before and the changed design re-assembled at the model's own coordinates
+        (only coordinates free), with body poses and joint values."""
+        orig, new = self.engine.state_of(self.model), self.result.after[0]
+        sol = self.engine.solve(State(orig.Q.copy(), new.S.copy(), new.C.copy(), new.L.copy()), ("q",))
+        return propagation_of(self.engine, self.model, sol, ("q",))
+
+    @property
+    def after(self) -> Model:
+        """The changed design, re-assembled at the model's own coordinates."""
+        return self.propagation.after
+
+    def unit(self, spec: TargetSpec) -> str:
+        """The display unit of a target's values (a slope: per model length unit)."""
+        length = self.model.units.get("length", "")
+        names = {"deg": "deg", "rad": self.model.units.get("angle", "rad"), "length": length, "none": ""}
+        u = names[_kind(self.model, spec.output)]
+        if spec.slope is not None:
+            if u == "deg" and _kind(self.model, spec.output) == "rad":
+                u = "rad"
+            return f"{u or '1'}/{names[_kind(self.model, spec.slope[0][0].output)] or '1'}"
+        return u
+
+    def table(self) -> list[dict[str, Any]]:
+        """One row per target: spec, output, wanted, before, achieved, residual (display units:
+        metric angles deg, coordinate/joint angles in the model's angle unit, lengths model unit)."""
+        rows = []
+        deg = self.model.units.get("angle") == "deg"
+        for spec, t in zip(self.specs, self.result.targets, strict=True):
+            k = 1.0
+            if _kind(self.model, spec.output) == "rad" and deg and spec.slope is None:
+                k = 180 / math.pi
+            row = {"target": spec.text, "output": spec.output, "unit": self.unit(spec)}
+            rows.append(row | {n: t[n] * k for n in ("value", "before", "achieved", "residual")})
+        return rows
+
+    @property
+    def design_change(self) -> dict[str, Array]:
+        return self.result.design_change
+
+    def joint_positions(self, k: int = 0) -> dict[str, tuple[Array, Array]]:
+        """Global joint origins ``J.i``/``J.j`` -> (before, after) in configuration ``k``
+        (both designs solved there: where the joints actually sit, model length unit)."""
+        _, _, P0, _ = self.engine.poses(self.result.before[k])
+        _, _, P1, _ = self.engine.poses(self.result.after[k])
+        return {f"{j.name}.{'ij'[s]}": (P0[n, s].copy(), P1[n, s].copy())
+                for n, j in enumerate(self.engine.mechanism.joints) for s in (0, 1)}  # fmt: skip
+
+    def hardpoint_moves(self) -> dict[str, Array]:
+        """Global displacement of every changed joint attachment (``J.i``/``J.j`` -> [dx, dy, dz],
+        model length unit): ``A (s'_after - s'_before)`` with the body's orientation ``A`` at the
+        first configuration before the change (where the designer moves the point)."""
+        st = self.result.before[0]
+        out: dict[str, Array] = {}
+        for key, d in self.result.design_change.items():
+            joint, _, fld = key.partition(".")
+            if fld not in ("s_i", "s_j"):
+                continue
+            k, side = self.engine.joint_index[joint], 0 if fld == "s_i" else 1
+            out[f"{joint}.{'ij'[side]}"] = body_rotation(self.engine, st, k, side) @ d
+        return out
+
+
+def propagate_targets(
+    model: Model,
+    targets: Sequence[str | TargetSpec],
+    free: Sequence[str],
+    *,
+    changes: Mapping[str, object] | None = None,
+    weights: Mapping[str, float] | None = None,
+    coordinates: Sequence[str] = ("q",),
+    engine: Engine | None = None,
+    tol: float = 1e-9,
+    target_tol: float = 1e-6,
+    max_iter: int = 60,
+    analytic: bool = True,
+) -> TargetPropagation:
+    """Find the minimum-(weighted-)norm change of the ``free`` design variables that meets the
+    ``targets`` (specs, module docstring) with every configuration assembled.
+
+    ``changes`` (addresses, global hardpoints too) are applied first, at the model's assembly.
+    ``weights``: ``{address or group: w}``, a larger weight lets a variable move more.
+    ``analytic``: analytic output Jacobians where available (False: central differences of the
+    output map for every output; :mod:`kinprop.propagation.targets`).
+    """
+    eng = engine_for(model, engine)
+    start = eng.state_of(model)
+    st, _, _ = eng.apply(start, resolve_changes(eng, start, changes or {}))
+    specs = tuple(t if isinstance(t, TargetSpec) else parse_target(model, t) for t in targets)
+    if not specs:
+        raise AddressError("no targets given")
+    # configurations keyed by their conditions
+    keys: dict[tuple, int] = {}
+    conds: list[tuple[Condition, ...]] = []
+    outs: list[list[str]] = []
+
+    def config(cs: tuple[Condition, ...]) -> int:
+        key = tuple(sorted((c.output, c.value) for c in cs))
+        if key not in keys:
+            keys[key] = len(conds)
+            conds.append(cs)
+            outs.append([c.output for c in cs if not c.held])
+        return keys[key]
+
+    def slot(k: int, name: str) -> int:
+        if name not in outs[k]:
+            outs[k].append(name)
+        return outs[k].index(name)
+
+    for s in specs:
+        if s.slope is None:
+            config(s.conditions)
+        else:
+            config(s.slope[0])
+            config(s.slope[1])
+    rows: list[Row] = []
+    for k, cs in enumerate(conds):
+        for c in cs:
+            if not c.held:
+                rows.append(Row(f"{c.output}={c.value:g}", c.value, ((k, slot(k, c.output), 1.0),), hard=True))
+    for s in specs:
+        if s.slope is None:
+            k = config(s.conditions)
+            rows.append(Row(s.text, s.value, ((k, slot(k, s.output), 1.0),), scale=1.0 / s.weight))
+        else:
+            ka, kb = config(s.slope[0]), config(s.slope[1])
+            span = s.slope[2]
+            terms = ((ka, slot(ka, s.output), -1.0 / span), (kb, slot(kb, s.output), 1.0 / span))
+            rows.append(Row(s.text, s.value, terms, scale=1.0 / s.weight))
+    names = tuple(" & ".join(f"{c.output}={c.value:g}" for c in cs) or "base" for cs in conds)
+    configurations = [
+        Configuration(
+            names[k],
+            _config_outputs(model, eng, outs[k]),
+            {c.output: [c.value] for c in cs if c.held},
+            _config_jacobian(model, eng, outs[k]) if analytic else None,
+        )
+        for k, cs in enumerate(conds)
+    ]
+    opts = {"tol": tol, "target_tol": target_tol, "max_iter": max_iter}
+    res = solve_targets(eng, st, configurations, rows, free_addresses(eng, free), coordinates=coordinates,
+                        weights=free_weights(eng, weights), **opts)  # fmt: skip
+    return TargetPropagation(model, specs, res, eng, names)
+
+
+__all__ = ["TargetPropagation", "TargetSpec", "parse_target", "propagate_targets"]
