@@ -200,10 +200,14 @@ def solve_targets(
     if set(pcols.tolist()) & qset:
         raise AddressError("targets: --free names design variables (hardpoints, s, C, l); coordinates move anyway")
     states, qcols = [], []
-    for cfg in configurations:
+    conditioned = {int(k) for r in rows if r.hard for k, _, _ in r.terms}
+    for n, cfg in enumerate(configurations):
         st, _, keys = engine.apply(start, cfg.held)
         states.append(st)
-        qcols.append(engine.columns(coordinates, keys))
+        # the declared inputs are held, unless a condition of this configuration drives them
+        # (e.g. wheel travel sets the lower arm's angle)
+        sel = [*coordinates, "inputs"] if n in conditioned and "q" in coordinates else coordinates
+        qcols.append(engine.columns(sel, keys))
     wfull = np.ones(engine.n_columns)
     for sel, w in (weights or {}).items():
         if not (float(w) > 0 and np.isfinite(float(w))):
