@@ -1,13 +1,17 @@
 """Sweeps: drive joint coordinates over a range, each step re-assembled from the previous one.
 
 A drive ``JOINT=START:STOP:STEPS`` sets the coordinate to ``STEPS + 1`` evenly spaced
-values from START to STOP (both included), in the model's units (degrees when the file says
-``angle: deg`` and the coordinate is an angle). Several drives move together (lockstep) and
-must have the same STEPS. Step k is a design propagation (section 5) from the last
-successful state with the driven coordinates set (never free) and the ``free`` variables
-moving; step 0 goes from the model's estimates (assembled first) to the start values, with
-the ``--set`` changes, by continuation (:mod:`kinprop.propagation.continuation`), so that it
-stays on the estimates' assembly branch.
+values from START to STOP (both included), ``JOINT=v1,v2,...`` to the listed values and
+``JOINT=@FILE.csv[:COLUMN]`` to a CSV column, in the model's units (degrees when the file says
+``angle: deg`` and the coordinate is an angle; lists and columns of angles are unwrapped).
+Several drives move together (lockstep) and must have the same number of values. Step k is
+a design propagation (section 5) from the last successful step with the driven coordinates
+set (never free) and the ``free`` variables moving, followed on that step's assembly branch
+(:func:`kinprop.solver.newton.follow`: a step too large to follow safely is subdivided; a
+step that cannot be followed, e.g. past a toggle, fails and the next step restarts from the
+last good one); step 0 goes from the model's estimates to the start values, with the
+``--set`` changes, by continuation (:mod:`kinprop.propagation.continuation`), so that it stays
+on the estimates' assembly branch.
 
 Each step gives one row: ``step``, the drive values, ``status`` (``converged`` /
 ``failed``), ``iterations``, ``residual_norm``, ``sv_ratio`` (unit-independent
@@ -52,6 +56,8 @@ from kinprop.spatial import Array
 
 _DRIVE = re.compile(r"^(?P<joint>[^\s=\[\].]+)(\.q)?(\[(?P<index>\d+)\])?=(?P<range>.+)$")
 
+#: at most this many steps in one drive (bounded work and memory)
+MAX_STEPS = 100_000
 #: columns before the coordinates and outputs
 META = ("step", "status", "iterations", "residual_norm", "sv_ratio", "near_singular")
 
@@ -90,21 +96,72 @@ def _coordinate_info(model: Model, joint: str) -> tuple[int, tuple[int, ...]]:
     return size, tuple(angles) if model.units.get("angle") == "deg" else ()
 
 
+def _drive_values(text: str, spec: str) -> Array:
+    """The values of a drive: ``START:STOP:STEPS``, a list ``v1,v2,...`` or a CSV column
+    ``@FILE.csv`` (first column) / ``@FILE.csv:COLUMN`` (by header name or 0-based index)."""
+    if spec.startswith("@"):
+        path, _, col = spec[1:].partition(":")
+        try:
+            with open(path, newline="", encoding="utf-8") as f:
+                rows = [r for r in csv.reader(f) if r and any(c.strip() for c in r)]
+        except OSError as exc:
+            raise AddressError(f"--drive {text!r}: cannot read {path!r}: {exc.strerror or exc}") from None
+        if not rows:
+            raise AddressError(f"--drive {text!r}: {path!r} has no rows")
+        header = [c.strip() for c in rows[0]]
+        has_header = any(not _is_number(c) for c in header)
+        if col == "":
+            k = 0
+        elif col in header and has_header:
+            k = header.index(col)
+        elif col.isdigit():
+            k = int(col)
+        else:
+            raise AddressError(f"--drive {text!r}: no column {col!r} in {path!r}; columns: {', '.join(header)}")
+        body = rows[1:] if has_header else rows
+        values = []
+        for n, r in enumerate(body, start=2 if has_header else 1):
+            if k >= len(r) or not _is_number(r[k]):
+                raise AddressError(f"--drive {text!r}: {path!r} line {n}, column {k}: expected a number")
+            values.append(float(r[k]))
+        out = np.array(values)
+    elif ":" in spec:
+        parts = spec.split(":")
+        if len(parts) != 3:
+            raise AddressError(f"--drive {text!r}: expected START:STOP:STEPS, found {spec!r}")
+        try:
+            start, stop, steps = float(parts[0]), float(parts[1]), int(parts[2])
+        except ValueError:
+            raise AddressError(f"--drive {text!r}: START and STOP must be numbers and STEPS an integer") from None
+        if not 1 <= steps <= MAX_STEPS:
+            raise AddressError(f"--drive {text!r}: STEPS must be in 1..{MAX_STEPS}, found {steps}")
+        out = np.linspace(start, stop, steps + 1)
+    else:
+        try:
+            out = np.array([float(v) for v in spec.replace(";", ",").split(",") if v.strip()])
+        except ValueError:
+            raise AddressError(f"--drive {text!r}: expected START:STOP:STEPS, a list v1,v2,... or @FILE.csv") from None
+    if out.size == 0 or out.size > MAX_STEPS + 1 or not np.all(np.isfinite(out)):
+        raise AddressError(f"--drive {text!r}: expected 1..{MAX_STEPS + 1} finite values, found {out.size}")
+    return out
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def parse_drive(model: Model, text: str) -> Drive:
-    """``JOINT=START:STOP:STEPS`` (also ``JOINT[k]=...``, ``JOINT.q[k]=...``) -> :class:`Drive`."""
+    """``JOINT=VALUES`` (also ``JOINT[k]=...``, ``JOINT.q[k]=...``) -> :class:`Drive`; VALUES
+    is ``START:STOP:STEPS``, a list ``v1,v2,...`` or a CSV column ``@FILE.csv[:COLUMN]``, in
+    the model's units. Angles in a list or a CSV column are unwrapped along the sequence (a
+    jump of more than half a turn between neighbours is taken the short way)."""
     m = _DRIVE.match(text.strip())
     if not m:
         raise AddressError(f"--drive {text!r}: expected JOINT=START:STOP:STEPS (e.g. O2=0:360:360)")
-    parts = m.group("range").split(":")
-    if len(parts) != 3:
-        raise AddressError(f"--drive {text!r}: expected START:STOP:STEPS, found {m.group('range')!r}")
-    try:
-        start, stop = float(parts[0]), float(parts[1])
-        steps = int(parts[2])
-    except ValueError:
-        raise AddressError(f"--drive {text!r}: START and STOP must be numbers and STEPS an integer") from None
-    if steps < 1 or not (math.isfinite(start) and math.isfinite(stop)):
-        raise AddressError(f"--drive {text!r}: STEPS must be >= 1 and START, STOP finite")
     joint = m.group("joint")
     size, angles = _coordinate_info(model, joint)
     index = int(m.group("index") or 0)
@@ -112,7 +169,19 @@ def parse_drive(model: Model, text: str) -> Drive:
         raise AddressError(f"--drive {text!r}: joint {joint!r} has {size} coordinates; say which, e.g. {joint}[0]=...")
     if index >= size:
         raise AddressError(f"--drive {text!r}: joint {joint!r} has {size} coordinate(s), index {index} is out of range")
-    return Drive(joint, index, np.linspace(start, stop, steps + 1), index in angles, size)
+    spec = m.group("range").strip()
+    values = _drive_values(text, spec)
+    angle = index in angles
+    if ":" not in spec or spec.startswith("@"):
+        is_angle = angle or (index in _angle_indices(model, joint))
+        if is_angle:
+            values = np.unwrap(values, period=360.0 if angle else 2 * math.pi)
+    return Drive(joint, index, values, angle, size)
+
+
+def _angle_indices(model: Model, joint: str) -> tuple[int, ...]:
+    """Indices of a tree joint's angular coordinates, whatever the model's angle unit."""
+    return tuple(model.mechanism.joint(joint).jtype.angle_indices)
 
 
 def coordinate_columns(model: Model) -> list[tuple[str, str, int, bool]]:
@@ -270,9 +339,7 @@ def sweep(
         raise AddressError("a sweep needs at least one --drive")
     n = {d.values.size for d in dr}
     if len(n) != 1:
-        raise AddressError(
-            f"--drive: all drives move together and need the same STEPS, found {sorted(k - 1 for k in n)}"
-        )
+        raise AddressError(f"--drive: all drives move together and need the same number of values, found {sorted(n)}")
     n_steps = n.pop()
     seen = [d.address for d in dr]
     if len(set(seen)) != len(seen):
