@@ -98,7 +98,7 @@ def test_lockstep_drives_with_free_lengths_is_inverse_kinematics():
         R = euler_to_matrix([row[f"P.q[{k}]"] for k in range(3, 7)])
         assert np.abs(np.array([row[f"{n}.length"] for n in legs]) - stewart_ik(a, b, p, R)).max() < 1e-10
     assert np.allclose(platform_pose(res.last)[0], [0.05, m.coordinates["P"][1], 0.45])
-    with pytest.raises(AddressError, match="same STEPS"):
+    with pytest.raises(AddressError, match="same number of values"):
         sweep(m, ["P[0]=0:0.05:5", "P[2]=0.4:0.45:4"], free=("l",))
 
 
