@@ -362,12 +362,9 @@ def sweep(
     try:
         for k in range(n_steps):
             step_changes: dict[str, object] = dict(changes or {}) if k == 0 else {}
-            for d in dr:
-                key = f"{d.joint}.q"  # two drives may move coordinates of one joint
-                cur = np.array(step_changes.get(key, good.coordinates[d.joint]), dtype=float)
+            for d in dr:  # one component each: a joint's other coordinates may follow
                 v = d.values[k]
-                cur[d.index] = math.radians(v) if d.angle else v
-                step_changes[key] = cur
+                step_changes[d.address] = math.radians(v) if d.angle else v
             mode = "continuation" if k == 0 else "fallback" if continuation else "newton"
             prop, note = _solve_step(engine, good, step_changes, free, tol, max_iter, mode)
             r = prop.result

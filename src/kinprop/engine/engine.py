@@ -266,6 +266,16 @@ class Engine:
         """Layout columns of groups (``q s C l``) and addresses, minus the ``exclude`` variable keys."""
         return self.layout.columns(list(selectors), exclude=set(exclude)).astype(np.int64)
 
+    def free_columns(self, free: Iterable[str], changed: Iterable[str]) -> Array:
+        """Columns of ``free`` minus what ``changed`` (addresses) sets: a changed design variable
+        is never free as a whole; a changed coordinate component (``J.q[k]``) only itself, so a
+        joint's other coordinates may follow (PAPER-NOTES 7)."""
+        targets = [self.target(a) for a in changed]
+        keys = {t.key for t in targets if t.group != "q" or t.index is None}
+        cols = self.columns(free, keys)
+        held = [t.start + t.index for t in targets if t.group == "q" and t.index is not None]
+        return cols[~np.isin(cols, held)] if held else cols
+
     def plan(self, free: Array, weights: Array | None = None) -> Plan:
         """The linear-solve plan of a free column set (computed once per set)."""
         key = (free.tobytes(), None if weights is None else np.asarray(weights, float).tobytes())
@@ -590,11 +600,11 @@ class Engine:
             raise ValueError("this engine was compiled from a Mechanism: pass start=engine.pack(design, coordinates)")
         assembled = start.converged if isinstance(start, Solution) else self._reference_assembled if start is None \
             else None  # fmt: skip
-        goal, done, keys = self.apply(base, changes or {})
-        key = (tuple(free), frozenset(keys))
+        goal, done, _ = self.apply(base, changes or {})
+        key = (tuple(free), tuple(done))
         cols = self._free_cache.get(key)
         if cols is None:
-            cols = self._free_cache[key] = self.columns(free, keys)
+            cols = self._free_cache[key] = self.free_columns(free, done)
         return self.solve(base, cols, target=goal, weights=weights, tol=tol, max_iter=max_iter, branch=branch,
                           changes=done, assembled=assembled)  # fmt: skip
 
