@@ -9,9 +9,9 @@ a design propagation (section 5) from the last successful step with the driven c
 set (never free) and the ``free`` variables moving, followed on that step's assembly branch
 (:func:`kinprop.solver.newton.follow`: a step too large to follow safely is subdivided; a
 step that cannot be followed, e.g. past a toggle, fails and the next step restarts from the
-last good one); step 0 goes from the model's estimates to the start values, with the
-``--set`` changes, by continuation (:mod:`kinprop.propagation.continuation`), so that it stays
-on the estimates' assembly branch.
+last good one); step 0 goes from the model's state (assembled first from its estimates when
+it is not) to the start values, with the ``--set`` changes, the same way. With
+``continuation`` a failed step is diagnosed (the constraints in conflict are named).
 
 Each step gives one row: ``step``, the drive values, ``status`` (``converged`` /
 ``failed``), ``iterations``, ``residual_norm``, ``sv_ratio`` (unit-independent
@@ -365,8 +365,7 @@ def sweep(
             for d in dr:  # one component each: a joint's other coordinates may follow
                 v = d.values[k]
                 step_changes[d.address] = math.radians(v) if d.angle else v
-            mode = "continuation" if k == 0 else "fallback" if continuation else "newton"
-            prop, note = _solve_step(engine, good, step_changes, free, tol, max_iter, mode)
+            prop, note = _solve_step(engine, good, step_changes, free, tol, max_iter, continuation)
             r = prop.result
             row: dict[str, Any] = dict.fromkeys(columns, float("nan"))
             row.update({"step": k, **{d.label: float(d.values[k]) for d in dr}})
@@ -413,16 +412,16 @@ def _solve_step(
     free: Sequence[str],
     tol: float,
     max_iter: int,
-    mode: str,
+    diagnose: bool,
 ) -> tuple[Propagation, str]:
-    """``mode``: "newton" (plain), "fallback" (continuation when Newton fails) or
-    "continuation". Returns the propagation and a note (the continuation's message) or ``""``."""
-    if mode != "continuation":
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", SingularityWarning)
-            prop = propagate(good, changes, free, tol=tol, max_iter=max_iter, engine=engine)
-        if prop.converged or mode == "newton":
-            return prop, ""
+    """One step, followed on the branch of ``good``; with ``diagnose``, a failed step is
+    retried by :func:`~kinprop.propagation.continuation.propagate_continuation`, whose message
+    names the constraints in conflict. Returns the propagation and a note (or ``""``)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SingularityWarning)
+        prop = propagate(good, changes, free, tol=tol, max_iter=max_iter, engine=engine)
+    if prop.converged or not diagnose:
+        return prop, "; ".join(prop.notes)
     cont = propagate_continuation(
         good, changes, free, tol=tol, max_iter=min(max_iter, 20), min_step=1e-4, engine=engine
     )

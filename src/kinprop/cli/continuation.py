@@ -137,7 +137,7 @@ def run_propagation(
 
     def say_fallback(plain: Propagation) -> None:
         if not as_json:
-            err.print(f"plain Newton failed ({escape(plain.result.message)}); trying continuation")
+            err.print(f"{escape(plain.result.message)}; diagnosing by continuation")
 
     with shown_warnings():
         prop, res, newton_ran = solve_propagation(

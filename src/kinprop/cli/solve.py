@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.markup import escape
 from rich.table import Table
 
 from kinprop.cli.app import (
@@ -115,6 +116,8 @@ def report(
         out.print(f"free: {' '.join(prop.free)}   rank {r.rank} of {r.n_equations} equations, {r.n_free} free columns")
         out.print(f"||Phi|| history: {'  '.join(f'{x:.6g}' for x in r.residual_history)}")
         out.print(("[green]" if r.converged else "[red]") + r.message)
+        for note in prop.notes:
+            out.print(f"[yellow]note:[/yellow] {escape(note)}")
         for path in written:
             out.print(f"wrote {path}")
     if not r.converged:

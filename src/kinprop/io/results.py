@@ -45,6 +45,8 @@ def propagation_json(prop: Propagation) -> dict[str, Any]:
         "coordinates": coordinates_json(prop.after),
         "design": design_json(prop.after),
         "message": r.message,
+        "warnings": prop.notes,
+        "fraction": r.fraction,
         "rank": r.rank,
         "free": list(prop.free),
         "changes": {k: _num(v) for k, v in prop.changes.items()},

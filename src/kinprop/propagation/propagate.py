@@ -65,6 +65,15 @@ class Propagation:
     def converged(self) -> bool:
         return self.result.converged
 
+    @property
+    def notes(self) -> list[str]:
+        """One line per thing to know: the change was subdivided to stay on the branch, the
+        assembly may be another branch than the estimates, the result is near a singularity."""
+        out = list(self.result.notes)
+        if self.singularity_ratio < SINGULAR_RTOL:
+            out.append(f"near-singular configuration (toggle): singularity measure {self.singularity_ratio:.3g}")
+        return out
+
     @cached_property
     def bodies(self) -> dict[str, dict[str, Array]]:
         """Every body's global pose after the propagation: ``{BODY: {"R": (3, 3), "t": (3,)}}``."""
@@ -98,7 +107,7 @@ def result_of(engine: Engine, sol: Solution) -> tuple[SolveResult, float]:
     design, coords = sol.design, sol.coordinates
     res = SolveResult(sol.converged, sol.iterations, sol.residual, [float(h) for h in sol.history],
                       rank_of(sv, RANK_RTOL), int(sol.free.size), engine.n_rows, sv, sol.message, (design, coords), J,
-                      sol.status.value)  # fmt: skip
+                      sol.status.value, tuple(sol.notes), sol.fraction)  # fmt: skip
     ratio = conditioning(engine.row_blocks, Jf) if sol.converged and sol.free.size else float("nan")
     return res, ratio
 

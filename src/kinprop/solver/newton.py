@@ -18,6 +18,7 @@ import numpy as np
 
 from kinprop.jit import njit, prange
 from kinprop.kinematics.kernels import evaluate, retract, workspace
+from kinprop.kinematics.tables import V_COMPONENT, V_JOINT, V_KIND, V_SIDE, VAR_C, VAR_Q, VAR_S
 from kinprop.spatial import exp_so3_into, mm_into, mmT_into
 
 #: relative singular-value threshold for the rank (``s_k > RANK_RTOL * s_max``)
@@ -41,7 +42,7 @@ STATUSES = tuple(Status)
 CONVERGED, NOT_CONVERGED, DIVERGED, NO_FREE, INFEASIBLE, STEP_LIMIT = 0, 1, 2, 3, 4, 5
 #: ``follow`` flags: the change was subdivided / a sub-step left the predicted branch / the
 #: sign of det(Phi_free) flipped on a trial step (a singularity between two configurations) /
-#: the start was not assembled (estimates: one Newton solve, no branch to keep yet)
+#: the start was not assembled (estimates: assembled at its own design before the change)
 SUBDIVIDED, JUMPED, SIGN_FLIP, FROM_ESTIMATES = 1, 2, 4, 8
 #: a converged residual below this (scaled, ~ metres) is at round-off already: no polishing step
 POLISHED = 1e-14
@@ -285,22 +286,23 @@ def follow_buffers(Q, S, C, L):
     """State-shaped work arrays of :func:`follow` (start, last accepted, rotation paths)."""
     nj = S.shape[0]
     return (Q.copy(), S.copy(), C.copy(), L.copy(), Q.copy(), S.copy(), C.copy(), L.copy(), np.zeros((nj, 2, 3)),
-            np.zeros((nj, 2), np.bool_))  # fmt: skip
+            np.zeros((nj, 2), np.bool_), np.zeros(Q.shape[0], np.bool_), np.zeros((nj, 2, 3), np.bool_),
+            np.zeros((nj, 2), np.bool_), np.zeros(nj, np.bool_))  # fmt: skip
 
 
 @njit
 def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, buf, fbuf, history):
     """Follow a change from the assembled state ``Q, S, C, L`` (design p0) to the design of
-    ``Q1, S1, C1, L1`` (the entries that differ from the start; free entries are equal) on the
-    start's branch: predictor-corrector over sub-steps ``t -> t + h`` of the straight path
+    ``Q1, S1, C1, L1`` (its entries outside the free columns) on the start's branch:
+    predictor-corrector over sub-steps ``t -> t + h`` of the straight path
     (geodesic for orientations).
 
     A sub-step is accepted when Newton converges, its corrections stay within ``kappa`` of
     the predictor (no jump to another branch) and det of the free Jacobian keeps its sign (no
     singularity crossed unseen); otherwise it is halved, down to ``min_step``, within
     ``max_substeps``. The state ends at the last accepted point. A start that is not assembled
-    (estimates; ``assembled`` 0, or -1: evaluate to know) has no branch yet: one Newton solve,
-    flagged when det changed sign. Returns
+    (estimates; ``assembled`` 0, or -1: evaluate to know) is assembled at its own design first
+    (flagged when det changed sign on the way), then the change is followed. Returns
     ``(status, iterations, fraction reached, sub-steps, ||scaled residual||, flags)``.
     """
     nj = S.shape[0]
@@ -315,11 +317,39 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         for i in range(Phi.shape[0]):
             r2 += (Phi[i] * row_scale[i]) ** 2
         assembled = 1 if np.sqrt(r2) < cfg.tol else 0
-    single = not cfg.branch or assembled == 0
+    single = not cfg.branch
+    flags = 0
+    if cfg.branch and assembled == 0:
+        # not assembled (estimates): assemble at the start's own design first (the assembly the
+        # estimates point at; flagged when det changed sign on the way), then follow the change
+        st, it, nr, p1, corr, s0, s1 = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, history, buf)
+        flags |= FROM_ESTIMATES
+        if s0 != 0 and s1 != 0 and s0 != s1:
+            flags |= SIGN_FLIP
+        if st != CONVERGED:
+            return st, it, 0.0, 1, nr, flags
+        Q0[:], S0[:], C0[:], L0[:] = Q, S, C, L
+    # the change is what differs between start and target outside the free columns (the free
+    # ones are the solution's: after assembling from estimates they differ from the target's)
+    fq, fs, fc, fl = fbuf[10], fbuf[11], fbuf[12], fbuf[13]
+    fq[:], fs[:], fc[:], fl[:] = False, False, False, False
+    for i in range(plan.free.shape[0]):
+        c = plan.free[i]
+        kind, j, side = tb.column[c, V_KIND], tb.column[c, V_JOINT], tb.column[c, V_SIDE]
+        if kind == VAR_Q:
+            fq[c] = True
+        elif kind == VAR_S:
+            fs[j, side, tb.column[c, V_COMPONENT]] = True
+        elif kind == VAR_C:
+            fc[j, side] = True
+        else:
+            fl[j] = True
     T = ws[6][0]
     for j in range(nj):
         for side in range(2):
             turn[j, side] = False
+            if fc[j, side]:
+                continue
             for a in range(3):
                 for b in range(3):
                     if C1[j, side, a, b] != C0[j, side, a, b]:
@@ -329,7 +359,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
                 log_so3_into(T, W[j, side])
     w, E = ws[7][5], ws[6][1]
     t, h = 0.0, 1.0
-    subs, its, flags, last = 0, 0, 0, CONVERGED
+    subs, its, last = 0, 0, CONVERGED
     status, norm = CONVERGED, 0.0
     while t < 1.0:
         if subs >= cfg.max_substeps:
@@ -338,14 +368,14 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         tn = 1.0 if t + h >= 1.0 - 1e-12 else t + h
         Qs[:], Ss[:], Cs[:], Ls[:] = Q, S, C, L
         for k in range(Q.shape[0]):
-            if Q1[k] != Q0[k]:
+            if Q1[k] != Q0[k] and not fq[k]:
                 Q[k] = Q0[k] + tn * (Q1[k] - Q0[k])
         for j in range(nj):
-            if L1[j] != L0[j]:
+            if L1[j] != L0[j] and not fl[j]:
                 L[j] = L0[j] + tn * (L1[j] - L0[j])
             for side in range(2):
                 for a in range(3):
-                    if S1[j, side, a] != S0[j, side, a]:
+                    if S1[j, side, a] != S0[j, side, a] and not fs[j, side, a]:
                         S[j, side, a] = S0[j, side, a] + tn * (S1[j, side, a] - S0[j, side, a])
                 if turn[j, side]:
                     for a in range(3):
@@ -365,10 +395,6 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         if single:  # plain Newton: one solve, its outcome
             status = st
             t = 1.0 if st == CONVERGED else 0.0
-            if flip:
-                flags |= SIGN_FLIP
-            if cfg.branch:
-                flags |= FROM_ESTIMATES
             break
         if st == CONVERGED and not jump and not flip:
             t = tn

@@ -26,6 +26,10 @@ class SolveResult:
     #: the full Jacobian at the final state (every column, not only the free ones)
     jacobian: Array | None = field(repr=False, default=None)
     status_name: str = ""
+    #: one line per thing a user should know (subdivided change, ambiguous branch)
+    notes: tuple[str, ...] = ()
+    #: fraction of the change followed on the start's branch (1 when converged)
+    fraction: float = 1.0
 
     @property
     def status(self) -> str:
