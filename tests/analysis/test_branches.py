@@ -64,6 +64,8 @@ def test_spherical_closed_form_is_the_axis_angle():
 
 def test_spherical_example_is_assembled_on_the_closed_form():
     m = load_solved("spherical_fourbar.yaml")
+    mob = kp.mobility(m)
+    assert mob.mobility == 1 and mob.n_constraints == 2 and not mob.redundant
     t, phi = m.coordinates["O2"][0], m.coordinates["O4"][0]
     assert np.degrees(abs(wrap(phi - spherical_phi(t)))) < TOL_DEG
     # the coupler's axis from kinprop's kinematics (the cut's point) is the closed form's u3
@@ -73,60 +75,96 @@ def test_spherical_example_is_assembled_on_the_closed_form():
     assert np.allclose(kin.A["output"] @ m.design["B.C_j"][:, 2], u3[0], atol=1e-10)
 
 
+def test_offset_slider_example_is_assembled_on_the_closed_form():
+    m = load_solved("slider_crank_offset.yaml")
+    mob = kp.mobility(m)
+    assert mob.mobility == 1 and mob.n_constraints == 2 and not mob.redundant
+    t, x, psi = m.coordinates["O2"][0], m.coordinates["P"][0], m.coordinates["A"][0]
+    r, l, e = OFFSET_SLIDER
+    assert abs(x - slider_x(t)) < 1e-12
+    # the rod's end B = A + l (cos, sin)(theta + psi) is on the slider line y = e at x
+    B = r * np.array([np.cos(t), np.sin(t)]) + l * np.array([np.cos(t + psi), np.sin(t + psi)])
+    assert np.allclose(B, [x, e], atol=1e-12)
+
+
 # --- default-mode sweeps at coarse steps -------------------------------------------------------
+def _fr(lengths, br):
+    return lambda t: freudenstein(*lengths, t, branch=br)
+
+
 SWEEPS = {
-    # name: (model file, drive joint, range, output column, closed form, other root)
-    "crank-rocker": ("fourbar.yaml", "O2", (0, 360), "O4.q",
-                     lambda t: freudenstein(*CRANK_ROCKER, t), lambda t: freudenstein(*CRANK_ROCKER, t, branch=+1)),
-    "double-rocker": ("fourbar_double_rocker.yaml", "O2", (-135, 135), "O4.q",
-                      lambda t: freudenstein(*DOUBLE_ROCKER, t), lambda t: freudenstein(*DOUBLE_ROCKER, t, branch=+1)),
+    # name: (model file or None for the RSSR builder, drive joint, range [deg], output column,
+    #        closed form, other root, smallest distance to the other root [deg or m])
+    "crank-rocker": ("fourbar.yaml", "O2", (0, 360), "O4.q", _fr(CRANK_ROCKER, -1), _fr(CRANK_ROCKER, +1), 10.0),
+    "double-rocker": ("fourbar_double_rocker.yaml", "O2", (-135, 135), "O4.q", _fr(DOUBLE_ROCKER, -1),
+                      _fr(DOUBLE_ROCKER, +1), 10.0),
     "spherical": ("spherical_fourbar.yaml", "O2", (0, 360), "O4.q", spherical_phi,
-                  lambda t: spherical_phi(t, branch=+1)),
-    "bennett": ("bennett.yaml", "J1", (-180, 180), "J2.q", bennett_theta2, None),
+                  lambda t: spherical_phi(t, branch=+1), 30.0),
+    "bennett": ("bennett.yaml", "J1", (-180, 180), "J2.q", bennett_theta2, None, 0.0),
+    "slider": ("slider_crank_offset.yaml", "O2", (0, 360), "P.q", slider_x, lambda t: slider_x(t, branch=-1), 0.5),
+    "rssr": (None, "crank", (0, 360), "rocker.q", lambda t: _rssr(t, _rssr_length(rssr())),
+             lambda t: _rssr(t, _rssr_length(rssr()), -1), 60.0),
 }  # fmt: skip
 
+SWEEP_JUMP = (
+    "engine bug: a default sweep step (kp.propagate from the last good step) is accepted whole and lands on "
+    "the crossed branch; same cause as the large-turn failures (follow's det-sign and jump tests are taken "
+    "at the unassembled predictor point, not at the assembled start). "
+)
+XFAIL_SWEEPS = {
+    ("crank-rocker", "down", 45): "O2 360 -> 0 by 45 deg: the step 135 -> 90 lands 127.93 deg off the open "
+    "branch, and the sweep stays crossed (163.04 at 45, 174.27 at 0).",
+    ("double-rocker", "down", 30): "O2 135 -> -135 by 30 deg: the first step 135 -> 105 lands 65.65 deg off "
+    "the open branch (then 102.32, 137.67, 170.70 ...).",
+    ("double-rocker", "down", 45): "O2 135 -> -135 by 45 deg: the first step 135 -> 90 lands 84.35 deg off "
+    "the open branch (then 137.67, 177.95 ...).",
+}
 
-@pytest.mark.parametrize("step", [30, 45])
-@pytest.mark.parametrize("name", list(SWEEPS))
-def test_coarse_sweep_stays_on_the_start_branch(name, step):
-    file, joint, (lo, hi), col, exact, other = SWEEPS[name]
+
+def _sweep_params():
+    out = []
+    for name in SWEEPS:
+        for direction in ("up", "down"):
+            for step in (30, 45):
+                key = (name, direction, step)
+                marks = (
+                    [pytest.mark.xfail(strict=True, reason=SWEEP_JUMP + XFAIL_SWEEPS[key])]
+                    if key in XFAIL_SWEEPS
+                    else []
+                )
+                out.append(pytest.param(*key, marks=marks, id=f"{name}-{direction}-{step}"))
+    return out
+
+
+@pytest.mark.parametrize(("name", "direction", "step"), _sweep_params())
+def test_coarse_sweep_stays_on_the_start_branch(name, direction, step):
+    """kp.sweep in default mode by 30 and 45 deg steps, up and down: every step on the closed
+    form's root of the start configuration (the model file's estimates), the other root far."""
+    file, joint, (lo, hi), col, exact, other, gap = SWEEPS[name]
     n = round((hi - lo) / step)
     hi = lo + n * step
-    res = kp.sweep(load_model(EXAMPLES / file), [f"{joint}={lo}:{hi}:{n}"], outputs=[], tol=1e-12)
-    df = res.frame
-    assert res.ok and len(df) == n + 1
-    t, out = np.radians(df[f"{joint}.q"]), np.radians(df[col])
-    err = np.degrees(np.abs(wrap(out - exact(t))))
-    assert err.max() < TOL_DEG, (name, step, err.max())
+    if direction == "down":
+        lo, hi = hi, lo
+    if file is None:  # the RSSR builder's model is in radians
+        res = kp.sweep(
+            rssr(), [f"{joint}={float(np.radians(lo))!r}:{float(np.radians(hi))!r}:{n}"], outputs=[], tol=1e-12
+        )
+        t, out = res.frame[f"{joint}.q"], res.frame[col]
+    else:
+        res = kp.sweep(load_model(EXAMPLES / file), [f"{joint}={lo}:{hi}:{n}"], outputs=[], tol=1e-12)
+        t = np.radians(res.frame[f"{joint}.q"])
+        out = res.frame[col] if name == "slider" else np.radians(res.frame[col])
+    assert res.ok and len(res.frame) == n + 1
+
+    def dist(x, y):
+        return np.abs(x - y) if name == "slider" else np.degrees(np.abs(wrap(x - y)))
+
+    err = dist(out, exact(t))
+    assert err.max() < (1e-12 if name == "slider" else TOL_DEG), (name, direction, step, np.round(err, 3).tolist())
     if other is not None:  # the other root is far at every step: a branch switch cannot pass
-        assert np.degrees(np.abs(wrap(out - other(t)))).min() > 10.0
+        assert dist(out, other(t)).min() > gap
     if name == "bennett":  # theta3 = -theta1 on the same circuit
-        assert np.degrees(np.abs(wrap(np.radians(df["J3.q"]) + t))).max() < TOL_DEG
-
-
-@pytest.mark.parametrize("step", [30, 45])
-def test_coarse_sweep_offset_slider_crank(step):
-    res = kp.sweep(
-        load_model(EXAMPLES / "slider_crank_offset.yaml"), [f"O2=0:360:{360 // step}"], outputs=[], tol=1e-12
-    )
-    df = res.frame
-    assert res.ok
-    t = np.radians(df["O2.q"])
-    assert np.abs(df["P.q"] - slider_x(t)).max() < 1e-12
-    assert np.abs(df["P.q"] - slider_x(t, branch=-1)).min() > 0.5  # the other root: slider on the left
-
-
-@pytest.mark.parametrize("step", [30, 45])
-def test_coarse_sweep_rssr(step):
-    m = rssr()
-    n = 360 // step
-    res = kp.sweep(m, [f"crank=0:{2 * np.pi!r}:{n}"], outputs=[], tol=1e-12)
-    df = res.frame
-    assert res.ok and len(df) == n + 1
-    L = _rssr_length(m)
-    err = np.degrees(np.abs(wrap(df["rocker.q"] - _rssr(df["crank.q"], L))))
-    assert err.max() < TOL_DEG
-    assert np.degrees(np.abs(wrap(df["rocker.q"] - _rssr(df["crank.q"], L, -1)))).min() > 60.0  # measured 83.7
+        assert np.degrees(np.abs(wrap(np.radians(res.frame["J3.q"]) + t))).max() < TOL_DEG
 
 
 # --- large single propagations ------------------------------------------------------------------
