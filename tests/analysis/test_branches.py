@@ -294,6 +294,25 @@ def test_forty_percent_link_change_four_bar(crank_deg, key, index, factor):
     assert np.degrees(abs(wrap(got - freudenstein(*lengths, t, branch=+1)))) > 10.0
 
 
+@pytest.mark.parametrize(
+    ("file", "lengths", "other_deg"),
+    [("fourbar.yaml", CRANK_ROCKER, 61.36), ("fourbar_double_rocker.yaml", DOUBLE_ROCKER, 137.14)],
+)
+def test_forty_percent_ground_change_plain_newton_jumps_the_default_does_not(file, lengths, other_deg):
+    """Input at -20 deg, ground link d 40 % shorter in one call: the paper's plain Newton lands on
+    Freudenstein's crossed root (``other_deg`` away), the default on the open one."""
+    m = set_input(load_solved(file), "O2", -20.0, ("A.q", "O4.q"))
+    new = (*lengths[:3], 0.6 * lengths[3])
+    t = m.coordinates["O2"][0]
+    plain = kp.propagate(m, {"O4.s_i[0]": new[3]}, ("A.q", "O4.q"), tol=1e-12, branch=False)
+    default = kp.propagate(m, {"O4.s_i[0]": new[3]}, ("A.q", "O4.q"), tol=1e-12)
+    assert plain.converged and default.converged
+    p, d = plain.after.coordinates["O4"][0], default.after.coordinates["O4"][0]
+    assert np.degrees(abs(wrap(p - freudenstein(*new, t)))) == pytest.approx(other_deg, abs=0.01)
+    assert np.degrees(abs(wrap(p - freudenstein(*new, t, branch=+1)))) < TOL_DEG
+    assert np.degrees(abs(wrap(d - freudenstein(*new, t)))) < TOL_DEG
+
+
 def test_forty_percent_changes_spherical_slider_rssr():
     # spherical: coupler arc alpha3 50 -> 70 deg and 50 -> 30 deg (the cut's point on the coupler)
     m = load_solved("spherical_fourbar.yaml")
