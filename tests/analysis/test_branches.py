@@ -106,20 +106,6 @@ SWEEPS = {
              lambda t: _rssr(t, _rssr_length(rssr()), -1), 60.0),
 }  # fmt: skip
 
-SWEEP_JUMP = (
-    "engine bug: a default sweep step (kp.propagate from the last good step) is accepted whole and lands on "
-    "the crossed branch; same cause as the large-turn failures (follow's det-sign and jump tests are taken "
-    "at the unassembled predictor point, not at the assembled start). "
-)
-XFAIL_SWEEPS = {
-    ("crank-rocker", "down", 45): "O2 360 -> 0 by 45 deg: the step 135 -> 90 lands 127.93 deg off the open "
-    "branch, and the sweep stays crossed (163.04 at 45, 174.27 at 0).",
-    ("double-rocker", "down", 30): "O2 135 -> -135 by 30 deg: the first step 135 -> 105 lands 65.65 deg off "
-    "the open branch (then 102.32, 137.67, 170.70 ...).",
-    ("double-rocker", "down", 45): "O2 135 -> -135 by 45 deg: the first step 135 -> 90 lands 84.35 deg off "
-    "the open branch (then 137.67, 177.95 ...).",
-}
-
 
 def _sweep_params():
     out = []
@@ -127,12 +113,7 @@ def _sweep_params():
         for direction in ("up", "down"):
             for step in (30, 45):
                 key = (name, direction, step)
-                marks = (
-                    [pytest.mark.xfail(strict=True, reason=SWEEP_JUMP + XFAIL_SWEEPS[key])]
-                    if key in XFAIL_SWEEPS
-                    else []
-                )
-                out.append(pytest.param(*key, marks=marks, id=f"{name}-{direction}-{step}"))
+                out.append(pytest.param(*key, id=f"{name}-{direction}-{step}"))
     return out
 
 
@@ -206,18 +187,6 @@ def _distance(name: str, a: float, b: float) -> float:
     return abs(a - b) if name == "slider" else float(np.degrees(abs(wrap(a - b))))
 
 
-JUMP = (
-    "engine bug: kinprop.solver.newton.follow's branch tests are relative to the first Newton step taken "
-    "from the unassembled predictor point (old free coordinates with the new input): sign0 is det(Phi_free) "
-    "there, not at the assembled start, and the jump test compares the corrections with that first step, "
-    "which is itself huge; so the full step is accepted in one sub-step and plain Newton's other root is kept"
-)
-XFAIL_TURNS = {
-    ("crank-rocker", -150): "O4 lands 127.93 deg off Freudenstein's open branch, 0 deg from the crossed one. ",
-    ("double-rocker", -120): "O4 lands 120.02 deg off the open branch, on the crossed one. ",
-    ("spherical", -90): "O4 lands 156.43 deg off the start's root, on the other one. ",
-    ("slider", 150): "the slider lands 0.671 m off x(theta) (on the left root). ",
-}
 TURNS = [
     ("crank-rocker", 150), ("crank-rocker", -150), ("crank-rocker", 120), ("double-rocker", -150),
     ("double-rocker", -120), ("spherical", 150), ("spherical", -90), ("spherical", 170), ("slider", 90),
@@ -227,12 +196,7 @@ TURNS = [
 
 @pytest.mark.parametrize(
     ("name", "delta"),
-    [
-        pytest.param(n, d, marks=pytest.mark.xfail(strict=True, reason=XFAIL_TURNS[(n, d)] + JUMP))
-        if (n, d) in XFAIL_TURNS
-        else (n, d)
-        for n, d in TURNS
-    ],
+    TURNS,
 )
 def test_large_input_turn_in_one_call_lands_on_the_start_branch(name, delta):
     """The input turned by ``delta`` degrees in ONE kp.propagate call (default mode)."""
@@ -359,17 +323,7 @@ def test_impossible_spherical_change_is_infeasible_not_a_jump():
     "step",
     [
         30,
-        pytest.param(
-            45,
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="engine bug (same cause as the large-turn failures): re-entry step 135 -> 90 deg (start "
-                "2.87 deg from the toggle at 137.87) is accepted whole in 5 iterations and lands on the crossed "
-                "branch: theta4 = 191.21 deg vs Freudenstein's open 106.86 (84.35 deg off); the next step 90 -> "
-                "45 stays crossed (212.45 vs 74.78). The failing steps themselves are right (fraction 0.0638561 "
-                "= (137.87 - 135) / 45) and the first re-entry (135, 0 iterations) is on the open branch",
-            ),
-        ),
+        45,
     ],
 )
 def test_double_rocker_out_past_the_limit_and_back_resumes_on_the_same_branch(step):
@@ -401,13 +355,6 @@ def test_double_rocker_out_past_the_limit_and_back_resumes_on_the_same_branch(st
     assert np.degrees(np.abs(wrap(t4 - freudenstein(*DOUBLE_ROCKER, t2, branch=+1)))).min() > 10.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="engine bug (same cause as the large-turn failures): double rocker at theta2 = 30 deg (open branch, "
-    "theta4 = 70.45 deg) driven to 0 deg in one default kp.propagate call: converged in 7 iterations onto the "
-    "crossed branch, theta4 = 628.98 deg = -91.02 (mod 360), 177.95 deg off Freudenstein's open branch "
-    "(-268.98 = 91.02 deg); the first scaled residual is 20.8, the step is taken whole, no sub-step",
-)
 def test_double_rocker_thirty_degree_step_down_to_zero():
     m = set_crank(load_solved("fourbar_double_rocker.yaml"), 30.0)
     prop = kp.propagate(m, {"O2.q": [0.0]}, ("A.q", "O4.q"), tol=1e-12)

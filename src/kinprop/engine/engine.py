@@ -40,8 +40,9 @@ from kinprop.topology import Topology, build_topology
 ROUNDOFF = 16.0
 #: metres per length unit a model may declare
 METRES_PER_UNIT = {"m": 1.0, "mm": 1e-3}
-#: branch keeping (kinprop.solver.newton.follow): jump test, smallest sub-step, sub-step cap
-KAPPA, JUMP_ATOL, MIN_STEP, MAX_SUBSTEPS = 0.5, 1e-9, 1e-6, 200
+#: branch keeping (kinprop.solver.newton.follow): jump test, trust radius of the predictor
+#: (radians, or lengths over the model's length scale), smallest sub-step, sub-step cap
+KAPPA, JUMP_ATOL, TRUST, MIN_STEP, MAX_SUBSTEPS = 0.5, 1e-9, 0.35, 1e-6, 200
 #: at most this many Newton iterations per solve; a solve asked for tol <= POLISH_TOL takes one
 #: more step after converging (kept when it lowers the residual: results to round-off)
 MAX_ITER, POLISH_TOL = 10_000, 1e-8
@@ -534,7 +535,7 @@ class Engine:
         if not (isinstance(max_iter, int | np.integer) and 0 <= max_iter <= MAX_ITER):
             raise ValueError(f"max_iter must be an integer in 0..{MAX_ITER}, found {max_iter}")
         target = max(tol, self.roundoff_floor(state))
-        return newton.Settings(target, int(max_iter), divergence, KAPPA, JUMP_ATOL, MIN_STEP if branch else 1.0,
+        return newton.Settings(target, int(max_iter), divergence, KAPPA, JUMP_ATOL, TRUST, MIN_STEP if branch else 1.0,
                                MAX_SUBSTEPS if branch else 1, bool(tol <= POLISH_TOL), bool(branch))  # fmt: skip
 
     # --- solving -----------------------------------------------------------------------------

@@ -56,6 +56,7 @@ class Settings(NamedTuple):
     divergence: float  # stop when the residual grows beyond this factor of the first
     kappa: float  # jump test: corrections <= kappa |predictor| + jump_atol (col-scaled)
     jump_atol: float
+    trust: float  # a predictor step longer than this (col-scaled: rad, or lengths / L) is subdivided
     min_step: float  # smallest sub-step (fraction of the change) before a change is infeasible
     max_substeps: int  # cap on the sub-steps of one change (bounded work on any input)
     polish: bool  # one more step after convergence (to round-off) when it lowers the residual
@@ -291,6 +292,17 @@ def follow_buffers(Q, S, C, L):
 
 
 @njit
+def _sign_at(tb, plan, Q, S, C, L, buf):
+    """Sign of det of the free Jacobian at a state (0: not square or singular); no step taken."""
+    Phi, vals, store, dx, ws = buf[0], buf[1], buf[2], buf[3], buf[6]
+    if plan.free.shape[0] == 0:
+        return 0
+    dummy = np.zeros(0, np.int64)
+    evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, dummy, dummy, False)
+    return newton_step(plan, Phi, vals, store, dx)
+
+
+@njit
 def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, buf, fbuf, history):
     """Follow a change from the assembled state ``Q, S, C, L`` (design p0) to the design of
     ``Q1, S1, C1, L1`` (its entries outside the free columns) on the start's branch:
@@ -306,7 +318,8 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
     ``(status, iterations, fraction reached, sub-steps, ||scaled residual||, flags)``.
     """
     nj = S.shape[0]
-    Q0, S0, C0, L0, Qs, Ss, Cs, Ls, W, turn = fbuf
+    Q0, S0, C0, L0, Qs, Ss, Cs, Ls = fbuf[0], fbuf[1], fbuf[2], fbuf[3], fbuf[4], fbuf[5], fbuf[6], fbuf[7]
+    W, turn = fbuf[8], fbuf[9]
     Q0[:], S0[:], C0[:], L0[:] = Q, S, C, L
     ws = buf[6]
     if cfg.branch and assembled < 0:  # is the start assembled? (no Jacobian entries needed)
@@ -318,7 +331,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
             r2 += (Phi[i] * row_scale[i]) ** 2
         assembled = 1 if np.sqrt(r2) < cfg.tol else 0
     single = not cfg.branch
-    flags = 0
+    flags, its0 = 0, 0
     if cfg.branch and assembled == 0:
         # not assembled (estimates): assemble at the start's own design first (the assembly the
         # estimates point at; flagged when det changed sign on the way), then follow the change
@@ -326,8 +339,9 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         flags |= FROM_ESTIMATES
         if s0 != 0 and s1 != 0 and s0 != s1:
             flags |= SIGN_FLIP
-        if st != CONVERGED:
+        if st != CONVERGED and st != NO_FREE:
             return st, it, 0.0, 1, nr, flags
+        its0 = it
         Q0[:], S0[:], C0[:], L0[:] = Q, S, C, L
     # the change is what differs between start and target outside the free columns (the free
     # ones are the solution's: after assembling from estimates they differ from the target's)
@@ -344,6 +358,8 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
             fc[j, side] = True
         else:
             fl[j] = True
+    # det sign of the free Jacobian at the assembled start: the reference of the branch test
+    sign_ref = _sign_at(tb, plan, Q, S, C, L, buf)
     T = ws[6][0]
     for j in range(nj):
         for side in range(2):
@@ -359,7 +375,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
                 log_so3_into(T, W[j, side])
     w, E = ws[7][5], ws[6][1]
     t, h = 0.0, 1.0
-    subs, its, last = 0, 0, CONVERGED
+    subs, its, last = 0, its0, CONVERGED
     status, norm = CONVERGED, 0.0
     while t < 1.0:
         if subs >= cfg.max_substeps:
@@ -382,7 +398,8 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
                         w[a] = tn * W[j, side, a]
                     exp_so3_into(w, E)
                     mm_into(E, C0[j, side], C[j, side])
-        st, it, nr, p1, corr, s0, s1 = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, history, buf)
+        hist = history[min(its0, history.shape[0]) :]  # after the assembly's residuals
+        st, it, nr, p1, corr, s0, s1 = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, hist, buf)
         last = st
         its += it
         subs += 1
@@ -390,14 +407,17 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         if st == NO_FREE:
             status = NO_FREE
             break
-        jump = corr > cfg.kappa * p1 + cfg.jump_atol
-        flip = s0 != 0 and s1 != 0 and s0 != s1
+        jump = corr > cfg.kappa * p1 + cfg.jump_atol or p1 > cfg.trust
+        # the sign at the last step taken (next to the solution) against the accepted state's
+        flip = sign_ref != 0 and s1 != 0 and sign_ref != s1
         if single:  # plain Newton: one solve, its outcome
             status = st
             t = 1.0 if st == CONVERGED else 0.0
             break
         if st == CONVERGED and not jump and not flip:
             t = tn
+            if s1 != 0:
+                sign_ref = s1
             if it <= 3:
                 h = min(2.0 * h, 1.0)
             continue
