@@ -9,6 +9,7 @@ import json
 import sys
 from collections.abc import Callable
 from functools import wraps
+from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
@@ -17,6 +18,8 @@ from rich.console import Console
 from rich.markup import escape
 
 from kinprop.errors import AddressError, ModelError
+from kinprop.io import load_model
+from kinprop.model import Model
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_INVALID = 0, 1, 2
 
@@ -53,6 +56,30 @@ def handles_user_errors(fn: F) -> F:
             fail(str(exc.args[0]) if exc.args else str(exc))
 
     return wrapper  # type: ignore[return-value]
+
+
+#: model files larger than this show a progress line on a terminal while they load
+PROGRESS_BYTES = 512 * 1024
+
+
+def load_model_cli(path: Path) -> Model:
+    """:func:`kinprop.io.load_model`, with a live status line on stderr for a large file.
+
+    A 20,000-body model takes a few seconds to parse, validate and cut into a tree; a terminal
+    user sees what is happening (a pipe or CI log gets nothing extra)."""
+    try:
+        size = path.stat().st_size
+    except OSError:
+        size = 0
+    if size < PROGRESS_BYTES or not err.is_terminal:
+        return load_model(path)
+    with err.status(f"loading {escape(str(path))} ({size / 1e6:.1f} MB): parsing, validating, building the tree"):
+        model = load_model(path)
+    err.print(
+        f"loaded {escape(str(path))}: {len(model.mechanism.bodies)} bodies, {len(model.mechanism.joints)} joints",
+        highlight=False,
+    )
+    return model
 
 
 def parse_assignment(text: str) -> tuple[str, np.ndarray]:

@@ -10,8 +10,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from kinprop.analysis.mobility import MobilityReport, mobility, row_names
-from kinprop.cli.app import EXIT_NOT_CONVERGED, app, fail, handles_user_errors, out, print_json
-from kinprop.io import load_model
+from kinprop.cli.app import EXIT_NOT_CONVERGED, app, fail, handles_user_errors, load_model_cli, out, print_json
 from kinprop.kinematics.assembly import Assembly
 from kinprop.model import Model
 from kinprop.propagation import assemble
@@ -42,6 +41,10 @@ def check_json(model: Model, rep: MobilityReport, evaluated_at: str) -> dict[str
     topo = asm.topology
     tree = set(topo.tree_joints)
     rows = joint_rows(asm)
+    at_body: dict[str, list[str]] = {b.name: [] for b in mech.bodies}
+    for j in mech.joints:
+        at_body[j.body_i].append(j.name)
+        at_body[j.body_j].append(j.name)
     return {
         "model": model.source,
         "name": mech.name,
@@ -50,7 +53,7 @@ def check_json(model: Model, rep: MobilityReport, evaluated_at: str) -> dict[str
             {
                 "name": b.name,
                 "fixed": b.fixed,
-                "joints": [j.name for j in mech.joints if b.name in (j.body_i, j.body_j)],
+                "joints": at_body[b.name],
                 "points": [p for p, _ in b.points],
             }
             for b in mech.bodies
@@ -184,7 +187,7 @@ def check_cmd(
     gruebler, n_coordinates, n_constraints, rank, tree_joints, cut_joints, loops, redundant,
     residual_norm, assembled, bodies, joints.
     """
-    m = load_model(model)
+    m = load_model_cli(model)
     evaluated_at = "the model's coordinates as given"
     if assemble_first:
         prop = assemble(m)

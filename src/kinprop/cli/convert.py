@@ -11,8 +11,8 @@ from typing import Annotated, Any
 import typer
 import yaml
 
-from kinprop.cli.app import app, err, handles_user_errors, out
-from kinprop.io import load_model, model_to_data
+from kinprop.cli.app import app, err, handles_user_errors, load_model_cli, out
+from kinprop.io import model_to_data
 from kinprop.io.hardpoints import joint_mismatch, model_to_hardpoints
 from kinprop.io.writer import atomic_write
 
@@ -53,7 +53,7 @@ def convert(
     coordinates (run ``kinprop assemble -o`` first if the model is not assembled). To frames,
     body frames, s', C and zero coordinates are derived from the hardpoints.
     """
-    m = load_model(model)
+    m = load_model_cli(model)
     if to is Style.hardpoints:
         gaps = {k: v for k, v in joint_mismatch(m).items() if v > MISMATCH_TOL}
         for joint, gap in gaps.items():

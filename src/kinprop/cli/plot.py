@@ -9,8 +9,7 @@ import numpy as np
 import typer
 from rich.markup import escape
 
-from kinprop.cli.app import app, err, handles_user_errors, out
-from kinprop.io import load_model
+from kinprop.cli.app import app, err, handles_user_errors, load_model_cli, out
 from kinprop.model import Model
 from kinprop.propagation.propagate import assembly_for
 
@@ -63,11 +62,11 @@ def plot_cmd(
     from kinprop.plot import save_plot
 
     cam = parse_view(view)
-    m = load_model(model)
+    m = load_model_cli(model)
     note_if_unassembled(m, model)
     before = None
     if compare is not None:
-        before = load_model(compare)
+        before = load_model_cli(compare)
         note_if_unassembled(before, compare)
     save_plot(
         output,

@@ -11,9 +11,18 @@ from rich.markup import escape
 from rich.table import Table
 
 from kinprop.analysis.sensitivity import RESIDUAL_WARN, design_sensitivity, output_sensitivity
-from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, fail, handles_user_errors, out, parse_weight, print_json
+from kinprop.cli.app import (
+    EXIT_NOT_CONVERGED,
+    app,
+    err,
+    fail,
+    handles_user_errors,
+    load_model_cli,
+    out,
+    parse_weight,
+    print_json,
+)
 from kinprop.cli.continuation import shown_warnings
-from kinprop.io import load_model
 from kinprop.propagation import assemble
 
 if TYPE_CHECKING:
@@ -53,7 +62,7 @@ def sensitivity_cmd(
     The model is assembled first (free: q), then the implicit-function theorem gives the free
     variables' response with the same weighted minimum-norm inverse as `propagate`.
     """
-    m = load_model(model)
+    m = load_model_cli(model)
     free_set = tuple(free or ["q"])
     weights = dict(parse_weight(w) for w in (weight or [])) or None
     with shown_warnings():  # a near-singular assembly is one "warning:" line on stderr

@@ -13,13 +13,14 @@ from kinprop.cli.app import (
     app,
     err,
     handles_user_errors,
+    load_model_cli,
     out,
     parse_assignment,
     parse_weight,
     print_json,
 )
 from kinprop.cli.continuation import run_propagation, shown_warnings
-from kinprop.io import dump_model, load_model
+from kinprop.io import dump_model
 from kinprop.io.results import comparison_rows, point_rows, propagation_json, variable_rows
 from kinprop.io.units import changes_to_internal
 from kinprop.io.writer import atomic_write
@@ -126,7 +127,7 @@ def assemble(
     plot: Plot = None,
 ) -> None:
     """Solve for the joint coordinates from the model's estimates."""
-    m = load_model(model)
+    m = load_model_cli(model)
     with shown_warnings():
         prop = propagate(m, {}, tuple(free or ["q"]), tol=tol, max_iter=max_iter)
     report(prop, f"assemble {model}", output, as_json, csv, plot)
@@ -151,7 +152,7 @@ def propagate_cmd(
     ] = None,
 ) -> None:
     """Change design variables and re-assemble, moving only the free variables."""
-    m = load_model(model)
+    m = load_model_cli(model)
     changes = changes_to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
     weights = dict(parse_weight(w) for w in (weight or [])) or None
     # continuation (explicit, or the fallback when Newton fails) and singularity warnings: cli/continuation.py

@@ -14,9 +14,17 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, handles_user_errors, out, parse_assignment, print_json
+from kinprop.cli.app import (
+    EXIT_NOT_CONVERGED,
+    app,
+    err,
+    handles_user_errors,
+    load_model_cli,
+    out,
+    parse_assignment,
+    print_json,
+)
 from kinprop.errors import AddressError
-from kinprop.io import load_model
 
 Free = Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")]
 EXIT_INTERRUPTED = 130
@@ -57,7 +65,7 @@ def study_cmd(
     """Run a design study: every variant re-assembled, inputs and results streamed to Parquet."""
     from kinprop.analysis.study import Factor, parse_vary, run_study  # pandas/pyarrow only when used
 
-    m = load_model(model)
+    m = load_model_cli(model)
     sets = _to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
     factors = []
     for text in vary:
@@ -120,7 +128,7 @@ def tolerance_cmd(
     from kinprop.analysis.tolerance import monte_carlo, tolerance_analysis
     from kinprop.propagation import propagate
 
-    m = load_model(model)
+    m = load_model_cli(model)
     sets = _to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
     tols = {}
     for text in tolerance:

@@ -15,8 +15,16 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from kinprop.analysis.sweep import parse_drive, plot_sweep, sweep
-from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, handles_user_errors, out, parse_assignment, print_json
-from kinprop.io import load_model
+from kinprop.cli.app import (
+    EXIT_NOT_CONVERGED,
+    app,
+    err,
+    handles_user_errors,
+    load_model_cli,
+    out,
+    parse_assignment,
+    print_json,
+)
 from kinprop.io.units import changes_to_internal
 
 #: show a progress bar from this many steps on
@@ -143,7 +151,7 @@ def sweep_cmd(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="no table, no progress bar")] = False,
 ) -> None:
     """Drive joint coordinates over a range; each step is solved from the previous one."""
-    m = load_model(model)
+    m = load_model_cli(model)
     drives = [parse_drive(m, d) for d in drive]
     changes = changes_to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
     if baseline and not changes:
