@@ -106,7 +106,7 @@ def test_named_points_in_json(examples) -> None:
 
 
 def test_csv_before_after(examples, tmp_path) -> None:
-    csv = tmp_path / "out" / "sc.csv"
+    csv = tmp_path / "sc.csv"  # the directory must exist: outputs never create one (issue 11)
     r = run("propagate", examples / "slider_crank.yaml", "--set", SET, "--csv", csv, "--json")
     assert r.exit_code == 0, r.output
     obj = json.loads(r.stdout)  # --csv keeps stdout one JSON object

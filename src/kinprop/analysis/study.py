@@ -44,6 +44,9 @@ from kinprop.spatial import Array
 
 METHODS = ("grid", "lhs", "mc")
 MANIFEST = "_study.json"
+#: the most variants one study may plan (a grid grows as samples**factors): 10^7 rows of results
+#: are already gigabytes; a larger plan is refused up front with its count
+MAX_VARIANTS = 10_000_000
 
 
 @dataclass(frozen=True)
@@ -78,6 +81,13 @@ def sample_plan(factors: Sequence[Factor], method: str = "lhs", samples: int = 1
         raise AddressError(f"method {method!r}: expected one of {', '.join(METHODS)}")
     if F == 0 or samples < 1:
         raise AddressError("a study needs at least one --vary factor and --samples >= 1")
+    count = samples**F if method == "grid" else samples  # exact (Python int): no overflow
+    if count > MAX_VARIANTS:
+        plan = f"{samples}^{F} = {count:.3g}" if method == "grid" else f"{count:.3g}"
+        raise AddressError(
+            f"--method {method} with --samples {samples} plans {plan} variants; the limit is {MAX_VARIANTS:,}: "
+            f"lower --samples" + (" (levels per factor)" if method == "grid" else "")
+        )
     lo = np.array([f.low for f in factors])
     hi = np.array([f.high for f in factors])
     if method == "grid":

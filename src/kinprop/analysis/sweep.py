@@ -86,6 +86,10 @@ def _coordinate_info(model: Model, joint: str) -> tuple[int, tuple[int, ...]]:
     return size, tuple(angles) if model.units.get("angle") == "deg" else ()
 
 
+#: the most steps one sweep may take (each is a Newton solve and a row of results)
+MAX_STEPS = 10_000_000
+
+
 def parse_drive(model: Model, text: str) -> Drive:
     """``JOINT=START:STOP:STEPS`` (also ``JOINT[k]=...``, ``JOINT.q[k]=...``) -> :class:`Drive`."""
     m = _DRIVE.match(text.strip())
@@ -101,6 +105,8 @@ def parse_drive(model: Model, text: str) -> Drive:
         raise AddressError(f"--drive {text!r}: START and STOP must be numbers and STEPS an integer") from None
     if steps < 1 or not (math.isfinite(start) and math.isfinite(stop)):
         raise AddressError(f"--drive {text!r}: STEPS must be >= 1 and START, STOP finite")
+    if steps > MAX_STEPS:
+        raise AddressError(f"--drive {text!r}: {steps:,} steps; the limit is {MAX_STEPS:,}")
     joint = m.group("joint")
     size, angles = _coordinate_info(model, joint)
     index = int(m.group("index") or 0)

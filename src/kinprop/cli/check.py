@@ -6,7 +6,6 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.markup import escape
 from rich.table import Table
 
 from kinprop.analysis.mobility import MobilityReport, mobility, row_names
@@ -115,7 +114,7 @@ def _tables(obj: dict[str, Any]) -> list[Table]:
             j["bodies"][1],
             j["role"],
             str(j["n_coordinates"]),
-            escape(" ".join(r.split(":", 1)[1] for r in j["rows"])),
+            " ".join(r.split(":", 1)[1] for r in j["rows"]),
             style="cyan" if j["role"] == "cut" else None,
         )
     loops = Table(title="loops (one per cut joint)", title_justify="left")
@@ -136,7 +135,7 @@ def _tables(obj: dict[str, Any]) -> list[Table]:
 def print_report(obj: dict[str, Any], path: Path) -> None:
     """Rich tables and a summary for a human reader."""
     units = obj["units"]
-    out.print(escape(f"check {path}: {obj['name']}  (units: {units.get('length')}, {units.get('angle')})"))
+    out.print(f"check {path}: {obj['name']}  (units: {units.get('length')}, {units.get('angle')})")
     for t in _tables(obj):
         out.print(t)
     if obj["loops"]:
@@ -145,11 +144,12 @@ def print_report(obj: dict[str, Any], path: Path) -> None:
     n, m, rank = obj["n_coordinates"], obj["n_constraints"], obj["rank"]
     out.print(f"coordinates n = {n}, constraint rows m = {m}, rank of Phi_q = {rank}")
     out.print(f"Gruebler-Kutzbach count: {obj['gruebler']}")
-    out.print(f"[bold]mobility (n - rank): {obj['mobility']}[/bold]")
+    out.print(f"mobility (n - rank): {obj['mobility']}", style="bold")
     if obj["redundant"]:
         out.print(
-            f"[yellow]redundant constraint rows ({len(obj['redundant'])}): {escape(' '.join(obj['redundant']))}"
-            f"  (joints: {escape(' '.join(obj['redundant_joints']))})[/yellow]"
+            f"redundant constraint rows ({len(obj['redundant'])}): {' '.join(obj['redundant'])}"
+            f"  (joints: {' '.join(obj['redundant_joints'])})",
+            style="yellow",
         )
         if obj["mobility"] > obj["gruebler"]:
             out.print(
@@ -159,12 +159,13 @@ def print_report(obj: dict[str, Any], path: Path) -> None:
     else:
         out.print("redundant constraint rows: none")
     res = obj["residual_norm"]
-    out.print(f"evaluated at {escape(obj['evaluated_at'])}: ||Phi|| = {res:.3g}")
+    out.print(f"evaluated at {obj['evaluated_at']}: ||Phi|| = {res:.3g}")
     if not obj["assembled"]:
         out.print(
-            f"[yellow]note: not assembled (||Phi|| >= {ASSEMBLED_TOL:g}); the rank, mobility and redundant rows "
+            f"note: not assembled (||Phi|| >= {ASSEMBLED_TOL:g}); the rank, mobility and redundant rows "
             "hold at this configuration only. Assemble first: "
-            f"kinprop assemble {escape(str(path))} -o assembled.yaml (or kinprop check --assemble)[/yellow]",
+            f"kinprop assemble {path!s} -o assembled.yaml (or kinprop check --assemble)",
+            style="yellow",
             soft_wrap=True,
         )
 

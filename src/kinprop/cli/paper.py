@@ -6,6 +6,7 @@ from typing import Annotated
 
 import typer
 from rich.table import Table
+from rich.text import Text
 
 from kinprop.cli.app import EXIT_NOT_CONVERGED, app, out, print_json
 from kinprop.reference import TABLES
@@ -35,7 +36,7 @@ def paper(
         t = TABLES[name]
         report[name] = []
         if not as_json:
-            out.rule(f"[bold]{t.title}")
+            out.print(Text(t.title, style="bold"))
         for col, prop in reproduce(t, tol):
             rows = compare_column(prop, col)
             rt = Table(title=f"column: {col.name}   (free: {' '.join(col.free)})", title_justify="left")
@@ -49,7 +50,7 @@ def paper(
                     c.label,
                     printed if len(c.printed) == 1 else f"[{printed}]",
                     _fmt(c.ours),
-                    "[green]yes" if c.ok else "[red]NO",
+                    Text("yes", style="green") if c.ok else Text("NO", style="red"),
                     c.note,
                     style="yellow" if c.note.startswith(("typo", "label typo")) else None,
                 )
@@ -72,7 +73,7 @@ def paper(
         print_json({"agree": agree, "total": total, "tables": report})
     else:
         out.print(
-            f"\n[bold]{agree} of {total} printed quantities agree[/bold] (within one unit of the last printed digit, "
+            f"\n{agree} of {total} printed quantities agree (within one unit of the last printed digit, "
             "or to 5e-7 where the note says so — docs/paper.md; typos compared with the corrected value, "
             "marked in yellow; see kinprop.reference.paper)."
         )

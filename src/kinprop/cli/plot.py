@@ -7,7 +7,6 @@ from typing import Annotated
 
 import numpy as np
 import typer
-from rich.markup import escape
 
 from kinprop.cli.app import app, err, handles_user_errors, load_model_cli, out
 from kinprop.model import Model
@@ -32,10 +31,8 @@ def note_if_unassembled(model: Model, path: Path | str) -> None:
     res = float(np.linalg.norm(assembly_for(model.mechanism).residual(model.design, model.coordinates)))
     if res > DRAW_NOTE_TOL:
         err.print(
-            escape(
-                f"note: {path} is drawn at its coordinates as given, not assembled (||Phi|| = {res:.3g}); "
-                "run kinprop assemble first for an assembled picture"
-            ),
+            f"note: {path} is drawn at its coordinates as given, not assembled (||Phi|| = {res:.3g}); "
+            "run kinprop assemble first for an assembled picture",
             soft_wrap=True,
         )
 
@@ -77,4 +74,4 @@ def plot_cmd(
         title=title,
         view=cam,
     )
-    out.print(escape(f"wrote {output}"))
+    out.print(f"wrote {output}")

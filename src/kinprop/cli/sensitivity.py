@@ -7,7 +7,6 @@ from typing import TYPE_CHECKING, Annotated
 
 import numpy as np
 import typer
-from rich.markup import escape
 from rich.table import Table
 
 from kinprop.analysis.sensitivity import RESIDUAL_WARN, design_sensitivity, output_sensitivity
@@ -33,13 +32,13 @@ Json = Annotated[bool, typer.Option("--json", help="print one JSON object instea
 
 def sensitivity_table(frame: pd.DataFrame, title: str) -> Table:
     """A labelled matrix: one row per output, one column per design variable."""
-    t = Table(title=escape(title), title_justify="left")
+    t = Table(title=title, title_justify="left")
     t.add_column("d(output) / d(design)", style="bold")
     for c in frame.columns:
-        t.add_column(escape(str(c)), justify="right")
+        t.add_column(str(c), justify="right")
     for name, row in frame.iterrows():
         cells = [f"{x:.6g}" if abs(x) > 1e-9 * max(1.0, np.max(np.abs(row.values))) else "0" for x in row.values]
-        t.add_row(escape(str(name)), *cells)
+        t.add_row(str(name), *cells)
     return t
 
 
@@ -73,7 +72,7 @@ def sensitivity_cmd(
         fail(f"{model}: cannot assemble the model before differentiating: {r.message}", EXIT_NOT_CONVERGED)
     if initial > RESIDUAL_WARN:
         err.print(
-            escape(f"note: {model} was not assembled (||Phi|| = {initial:.3g}); assembled first: {r.message}"),
+            f"note: {model} was not assembled (||Phi|| = {initial:.3g}); assembled first: {r.message}",
             soft_wrap=True,
         )
     assembled = prop.after
@@ -97,7 +96,7 @@ def sensitivity_cmd(
     title = f"sensitivity {model}"
     out.print(sensitivity_table(frame, title))
     weights_text = "; weights " + " ".join(f"{k}={v:g}" for k, v in weights.items()) if weights else ""
-    out.print(escape(f"free: {' '.join(free_set)}{weights_text}"))
+    out.print(f"free: {' '.join(free_set)}{weights_text}")
     out.print(
         "units: output unit per design unit; coordinates in rad (or length), metric angles in deg, "
         "C columns per rad of body-frame rotation"

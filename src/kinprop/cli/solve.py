@@ -15,15 +15,23 @@ from kinprop.cli.app import (
     handles_user_errors,
     load_model_cli,
     out,
-    parse_assignment,
-    parse_weight,
     print_json,
+    require_plot,
+)
+from kinprop.cli.checks import (
+    MAX_ITER,
+    check_int,
+    check_outputs,
+    check_set_not_free,
+    check_suffix,
+    check_tol,
+    parse_assignments,
+    parse_weights,
 )
 from kinprop.cli.continuation import run_propagation, shown_warnings
-from kinprop.io import dump_model
 from kinprop.io.results import comparison_rows, point_rows, propagation_json, variable_rows
 from kinprop.io.units import changes_to_internal
-from kinprop.io.writer import atomic_write
+from kinprop.io.writer import atomic_write, csv_text, dump_model_like
 from kinprop.propagation import Propagation, propagate
 
 Tol = Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL (the paper used 1e-3)")]
@@ -59,13 +67,12 @@ def comparison_table(prop: Propagation, title: str) -> Table:
 
 
 def write_csv(prop: Propagation, path: Path) -> None:
-    """Before/after rows (:func:`comparison_rows`, then hardpoints and named points) as CSV."""
-    import pandas as pd
-
-    frame = pd.DataFrame(
-        comparison_rows(prop) + point_rows(prop), columns=["variable", "unit", "before", "after", "change", "role"]
+    """Before/after rows (:func:`comparison_rows`, then hardpoints and named points) as CSV:
+    shortest round-trip numbers, ``\\n`` line endings (no pandas needed)."""
+    atomic_write(
+        path,
+        csv_text(["variable", "unit", "before", "after", "change", "role"], comparison_rows(prop) + point_rows(prop)),
     )
-    atomic_write(path, frame.to_csv(index=False))  # shortest round-trip float text
 
 
 def write_plot(prop: Propagation, path: Path) -> None:
@@ -77,6 +84,19 @@ def write_plot(prop: Propagation, path: Path) -> None:
     save_plot(path, prop.after, prop.before, label="after", before_label="before", title=title)
 
 
+def check_report_options(
+    model: Path, output: Path | None, csv: Path | None, plot: Path | None, tol: float, max_iter: int
+) -> None:
+    """Everything about the outputs and numbers, before the model is loaded or solved."""
+    check_tol(tol)
+    check_int("--max-iter", max_iter, 1, MAX_ITER)
+    check_suffix("--plot", plot, (".png", ".html"))
+    check_suffix("-o", output, (".yaml", ".yml", ".json"))
+    check_outputs([model], [("-o", output), ("--csv", csv), ("--plot", plot)])
+    if plot is not None:
+        require_plot(plot)
+
+
 def report(
     prop: Propagation,
     title: str,
@@ -84,13 +104,12 @@ def report(
     as_json: bool,
     csv: Path | None = None,
     plot: Path | None = None,
+    source: Path | None = None,
 ) -> None:
     r = prop.result
-    if plot is not None and plot.suffix.lower() not in (".png", ".html"):
-        raise ValueError(f"--plot {str(plot)!r}: expected a name ending in .png or .html")
     written = []
     for path, write in (
-        (output, lambda p: dump_model(prop.after, p)),
+        (output, lambda p: dump_model_like(prop.after, p, source)),
         (csv, lambda p: write_csv(prop, p)),
         (plot, lambda p: write_plot(prop, p)),
     ):
@@ -107,7 +126,7 @@ def report(
         out.print(comparison_table(prop, title))
         out.print(f"free: {' '.join(prop.free)}   rank {r.rank} of {r.n_equations} equations, {r.n_free} free columns")
         out.print(f"||Phi|| history: {'  '.join(f'{x:.6g}' for x in r.residual_history)}")
-        out.print(("[green]" if r.converged else "[red]") + r.message)
+        out.print(r.message, style="green" if r.converged else "red")
         for path in written:
             out.print(f"wrote {path}")
     if not r.converged:
@@ -127,10 +146,11 @@ def assemble(
     plot: Plot = None,
 ) -> None:
     """Solve for the joint coordinates from the model's estimates."""
+    check_report_options(model, output, csv, plot, tol, max_iter)
     m = load_model_cli(model)
     with shown_warnings():
         prop = propagate(m, {}, tuple(free or ["q"]), tol=tol, max_iter=max_iter)
-    report(prop, f"assemble {model}", output, as_json, csv, plot)
+    report(prop, f"assemble {model}", output, as_json, csv, plot, source=model)
 
 
 @app.command(name="propagate")
@@ -152,9 +172,12 @@ def propagate_cmd(
     ] = None,
 ) -> None:
     """Change design variables and re-assemble, moving only the free variables."""
+    check_report_options(model, output, csv, plot, tol, max_iter)
+    given = parse_assignments("--set", set_)
+    check_set_not_free(given, free)
+    weights = parse_weights(weight)
     m = load_model_cli(model)
-    changes = changes_to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
-    weights = dict(parse_weight(w) for w in (weight or [])) or None
+    changes = changes_to_internal(m, given)
     # continuation (explicit, or the fallback when Newton fails) and singularity warnings: cli/continuation.py
     prop = run_propagation(
         m,
@@ -167,4 +190,4 @@ def propagate_cmd(
         output=output,
         as_json=as_json,
     )
-    report(prop, f"propagate {model}", output, as_json, csv, plot)
+    report(prop, f"propagate {model}", output, as_json, csv, plot, source=model)

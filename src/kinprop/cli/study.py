@@ -11,7 +11,6 @@ from typing import Annotated
 
 import numpy as np
 import typer
-from rich.markup import escape
 from rich.table import Table
 
 from kinprop.cli.app import (
@@ -82,15 +81,13 @@ def study_cmd(
             scheduler=scheduler, progress=not as_json,
         )  # fmt: skip
     except KeyboardInterrupt:
-        err.print(f"interrupted: finished chunks are kept in {escape(str(output))}; run again with --resume")
+        err.print(f"interrupted: finished chunks are kept in {output!s}; run again with --resume")
         raise typer.Exit(EXIT_INTERRUPTED) from None
     n_failed = int((~frame["converged"]).sum()) if len(frame) else 0
     if as_json:
         print_json({"variants": len(frame), "failed": n_failed, "output": str(output)})
     else:
-        out.print(
-            f"{len(frame)} variants, {n_failed} failed; wrote {escape(str(output))}/ (read with pandas.read_parquet)"
-        )
+        out.print(f"{len(frame)} variants, {n_failed} failed; wrote {output!s}/ (read with pandas.read_parquet)")
         if len(frame):
             out.print(_summary(frame, [f.address for f in factors]))
     if n_failed:
@@ -108,7 +105,7 @@ def _summary(frame, inputs: list[str]) -> Table:
     ]:
         if c in ok and len(ok):
             col = ok[c].astype(float)
-            t.add_row(escape(c), f"{col.min():.6g}", f"{col.mean():.6g}", f"{col.max():.6g}")
+            t.add_row(c, f"{col.min():.6g}", f"{col.mean():.6g}", f"{col.max():.6g}")
     return t
 
 
@@ -152,11 +149,11 @@ def tolerance_cmd(
             obj["mc_std"] = mc_std.tolist()
         print_json(obj)
         return
-    t = Table(title=f"tolerance analysis of {escape(str(model))} (linearised)", title_justify="left")
+    t = Table(title=f"tolerance analysis of {model!s} (linearised)", title_justify="left")
     for c in ("output", "nominal", "std", *(["MC std", "MC / linear"] if mc_std is not None else [])):
         t.add_column(c, justify="left" if c == "output" else "right")
     for k, name in enumerate(res.outputs):
-        cells = [escape(name), f"{res.nominal[k]:.7g}", f"{res.std[k]:.4g}"]
+        cells = [name, f"{res.nominal[k]:.7g}", f"{res.std[k]:.4g}"]
         if mc_std is not None:
             cells += [f"{mc_std[k]:.4g}", f"{mc_std[k] / res.std[k]:.3f}" if res.std[k] > 0 else "-"]
         t.add_row(*cells)

@@ -10,7 +10,6 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
@@ -40,7 +39,7 @@ def _fmt(v: object) -> str:
 def _table(frame, columns: list[str], limit: int = 24) -> Table:
     t = Table(show_lines=False, title_justify="left")
     for c in columns:
-        t.add_column(escape(c), justify="left" if c in ("status",) else "right")
+        t.add_column(c, justify="left" if c in ("status",) else "right")
     n = len(frame)
     idx = list(range(n)) if n <= limit else list(range(limit // 2)) + [-1] + list(range(n - limit // 2, n))
     for i in idx:
@@ -49,7 +48,7 @@ def _table(frame, columns: list[str], limit: int = 24) -> Table:
             continue
         row = frame.iloc[i]
         style = None if row["status"] == "converged" else "red"
-        t.add_row(*[escape(_fmt(row[c])) for c in columns], style=style)
+        t.add_row(*[_fmt(row[c]) for c in columns], style=style)
     return t
 
 
@@ -196,7 +195,7 @@ def sweep_cmd(
             )
         except KeyboardInterrupt:
             where = f"; rows computed so far are in {output}" if output is not None else ""
-            err.print(f"[yellow]interrupted[/yellow] after {done} of {n} steps ({failed} failed){where}")
+            err.print(f"interrupted after {done} of {n} steps ({failed} failed){where}")
             raise typer.Exit(130) from None
     base = None
     if baseline:
@@ -218,8 +217,8 @@ def sweep_cmd(
     if len(bad):
         first = bad.iloc[0]
         label = res.drives[0].label
-        why = escape(str(first["message"]))
-        say(f"[red]first failure at step {int(first['step'])} ({label} = {first[label]:g}): {why}")
+        why = str(first["message"])
+        say(f"first failure at step {int(first['step'])} ({label} = {first[label]:g}): {why}", style="red")
     if output is not None:
         say(f"wrote {output}")
     if plot is not None:
