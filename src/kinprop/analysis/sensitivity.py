@@ -97,6 +97,41 @@ def _step(model: Model, column: int) -> float:
     return FD_STEP * max(1.0, abs(float(value)))
 
 
+def output_sensitivity_matrix(
+    model: Model,
+    of: Sequence[str],
+    wrt: Sequence[str],
+    free: Sequence[str] = ("q",),
+    weights: Mapping[str, float] | None = None,
+    *,
+    reference: Model | None = None,
+    wheels: Mapping[str, WheelSpec] | None = None,
+) -> tuple[Array, list[str], list[str], float]:
+    """``(D, output names, design column labels, ||Phi||)`` of :func:`output_sensitivity`,
+    as plain arrays and lists (no pandas)."""
+    asm = assembly_for(model.mechanism)
+    layout = asm.layout
+    residual = float(np.linalg.norm(asm.residual(model.design, model.coordinates)))
+    if residual > RESIDUAL_WARN:
+        warnings.warn(
+            f"sensitivities at a configuration that is not assembled: ||Phi|| = {residual:.3g}",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+    sens = design_sensitivity(model, wrt, free, weights)
+    f, names = output_function(model, of, reference=reference, wheels=wheels)
+    D = np.zeros((len(names), sens.wrt_columns.size))
+    for k, col in enumerate(sens.wrt_columns):
+        direction = np.zeros(layout.n)
+        direction[col] = 1.0
+        direction[sens.free_columns] = sens.matrix[:, k]
+        h = _step(model, int(col))
+        plus = model.with_state(*retract(layout, model.design, model.coordinates, h * direction))
+        minus = model.with_state(*retract(layout, model.design, model.coordinates, -h * direction))
+        D[:, k] = (f(plus) - f(minus)) / (2.0 * h)
+    return D, list(names), list(sens.columns), residual
+
+
 def output_sensitivity(
     model: Model,
     of: Sequence[str],
@@ -114,31 +149,14 @@ def output_sensitivity(
     ``weights``. Units: output unit per design-variable unit (coordinates in radians or
     length, metric angles in degrees, C columns per radian of body-frame rotation).
     """
-    asm = assembly_for(model.mechanism)
-    layout = asm.layout
-    residual = float(np.linalg.norm(asm.residual(model.design, model.coordinates)))
-    if residual > RESIDUAL_WARN:
-        warnings.warn(
-            f"sensitivities at a configuration that is not assembled: ||Phi|| = {residual:.3g}",
-            RuntimeWarning,
-            stacklevel=2,
-        )
-    sens = design_sensitivity(model, wrt, free, weights)
-    f, names = output_function(model, of, reference=reference, wheels=wheels)
-    D = np.zeros((len(names), sens.wrt_columns.size))
-    for k, col in enumerate(sens.wrt_columns):
-        direction = np.zeros(layout.n)
-        direction[col] = 1.0
-        direction[sens.free_columns] = sens.matrix[:, k]
-        h = _step(model, int(col))
-        plus = model.with_state(*retract(layout, model.design, model.coordinates, h * direction))
-        minus = model.with_state(*retract(layout, model.design, model.coordinates, -h * direction))
-        D[:, k] = (f(plus) - f(minus)) / (2.0 * h)
+    D, names, columns, residual = output_sensitivity_matrix(
+        model, of, wrt, free, weights, reference=reference, wheels=wheels
+    )
     import pandas as pd
 
-    frame = pd.DataFrame(D, index=names, columns=sens.columns)
+    frame = pd.DataFrame(D, index=names, columns=columns)
     frame.attrs.update(residual_norm=residual, free=list(free), weights=dict(weights or {}))
     return frame
 
 
-__all__ = ["Sensitivity", "design_sensitivity", "output_sensitivity", "weight_vector"]
+__all__ = ["Sensitivity", "design_sensitivity", "output_sensitivity", "output_sensitivity_matrix", "weight_vector"]

@@ -141,7 +141,23 @@ def _model_from_payload(p: Mapping[str, Any]) -> Model:
 
 
 def _model_hash(model: Model) -> str:
-    h = hashlib.sha256(repr(model.mechanism).encode())
+    """A content hash of the model that is the same in every process (for ``resume``).
+
+    Built from plain, ordered data: names, types, connectivity, the sorted design fields of
+    each joint, fixed poses, named points, units, then the design and coordinate arrays by
+    address. (``repr(mechanism)`` is not stable: it shows frozensets, whose order changes with
+    each process's string hashing.)"""
+    mech = model.mechanism
+    structure = {
+        "name": mech.name,
+        "units": sorted(model.units.items()),
+        "bodies": [
+            [b.name, b.fixed, list(b.position), [list(r) for r in b.orientation], [[k, list(p)] for k, p in b.points]]
+            for b in mech.bodies
+        ],
+        "joints": [[j.name, j.type, j.body_i, j.body_j, sorted(j.fields), j.cut] for j in mech.joints],
+    }
+    h = hashlib.sha256(json.dumps(structure, sort_keys=True).encode())
     for k in sorted(model.design):
         h.update(k.encode() + np.ascontiguousarray(model.design[k], dtype=float).tobytes())
     for k in sorted(model.coordinates):
@@ -365,6 +381,8 @@ def run_study(
         method, samples, seed = "plan", values.shape[0], None
     if chunk_size < 1:
         raise AddressError("--chunk-size must be >= 1")
+    if engine not in ("auto", "fast", "reference"):
+        raise AddressError(f"engine {engine!r}: expected auto, fast or reference")
     # validate every address once (component, group, existence) with the reference code path
     for a in addrs:
         addr = parse_address(a)
@@ -376,6 +394,10 @@ def run_study(
     base, _, _ = apply_changes(model, dict(sets or {}))
     if len(values):
         apply_changes(base, {a: values[0, k] for k, a in enumerate(addrs)})
+    if outputs:  # unknown output names fail here, before any directory is created
+        from kinprop.analysis.outputs import expand_outputs
+
+        expand_outputs(base, list(outputs))
     spec = StudySpec(
         addresses=addrs,
         free=list(free),
@@ -391,8 +413,6 @@ def run_study(
         model_hash=_model_hash(model),
         engine=engine,
     )
-    if engine not in ("auto", "fast", "reference"):
-        raise AddressError(f"engine {engine!r}: expected auto, fast or reference")
     n_chunks = -(-len(values) // chunk_size)
     done: set[int] = set()
     directory = Path(output) if output is not None else None

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 import re
 import warnings
 from collections.abc import Callable, Mapping, Sequence
@@ -152,9 +153,8 @@ class CsvSink:
     def __init__(self, path: str | Path, columns: Sequence[str]):
         self.path = Path(path)
         self.columns = list(columns)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
         self._fh = self.path.open("w", newline="")
-        self._w = csv.DictWriter(self._fh, fieldnames=self.columns)
+        self._w = csv.DictWriter(self._fh, fieldnames=self.columns, lineterminator="\n")
         self._w.writeheader()
         self._fh.flush()
 
@@ -176,7 +176,9 @@ class ParquetSink:
 
         self._pa = pa
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        #: rows go to a hidden partial file, renamed onto ``path`` when closed (also on an
+        #: interrupt): ``path`` is always a complete Parquet file with its footer, or absent
+        self.partial = self.path.with_name(f".{self.path.name}.partial")
         ints = {"step", "iterations"}
         fields = []
         for c in columns:
@@ -193,7 +195,7 @@ class ParquetSink:
         self.schema = pa.schema(fields)
         self.row_group_size = max(1, int(row_group_size))
         self._rows: list[Mapping[str, Any]] = []
-        self._writer = pq.ParquetWriter(str(self.path), self.schema)
+        self._writer = pq.ParquetWriter(str(self.partial), self.schema)
 
     def write(self, row: Mapping[str, Any]) -> None:
         self._rows.append(dict(row))
@@ -208,9 +210,12 @@ class ParquetSink:
 
     def close(self) -> None:
         if self._writer is not None:
-            self.flush()
-            self._writer.close()
-            self._writer = None
+            try:
+                self.flush()
+            finally:
+                self._writer.close()
+                self._writer = None
+                os.replace(self.partial, self.path)
 
 
 def open_sink(path: str | Path, columns: Sequence[str], text_columns: Sequence[str] = ("status", "message")) -> Sink:

@@ -12,6 +12,7 @@ import typer
 import yaml
 
 from kinprop.cli.app import app, err, handles_user_errors, load_model_cli, out
+from kinprop.cli.checks import check_outputs, check_suffix
 from kinprop.io import model_to_data
 from kinprop.io.hardpoints import joint_mismatch, model_to_hardpoints
 from kinprop.io.writer import atomic_write
@@ -53,6 +54,8 @@ def convert(
     coordinates (run ``kinprop assemble -o`` first if the model is not assembled). To frames,
     body frames, s', C and zero coordinates are derived from the hardpoints.
     """
+    check_suffix("-o", output, (".yaml", ".yml", ".json"))
+    check_outputs([model], [("-o", output)])
     m = load_model_cli(model)
     if to is Style.hardpoints:
         gaps = {k: v for k, v in joint_mismatch(m).items() if v > MISMATCH_TOL}

@@ -8,7 +8,8 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from kinprop.cli.app import app, err, handles_user_errors, load_model_cli, out
+from kinprop.cli.app import app, err, handles_user_errors, load_model_cli, out, require_plot
+from kinprop.cli.checks import check_outputs, check_suffix
 from kinprop.model import Model
 from kinprop.propagation.propagate import assembly_for
 
@@ -56,9 +57,12 @@ def plot_cmd(
     With --compare OTHER, OTHER is drawn faded as 'before' and MODEL solid as 'after' (the
     paper's Figs. 5 and 6).
     """
+    cam = parse_view(view)
+    check_suffix("-o", output, (".png", ".html"))
+    check_outputs([model, compare], [("-o", output)])
+    require_plot(output)
     from kinprop.plot import save_plot
 
-    cam = parse_view(view)
     m = load_model_cli(model)
     note_if_unassembled(m, model)
     before = None

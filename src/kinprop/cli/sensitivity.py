@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import Annotated
 
 import numpy as np
 import typer
 from rich.table import Table
 
-from kinprop.analysis.sensitivity import RESIDUAL_WARN, design_sensitivity, output_sensitivity
+from kinprop.analysis.sensitivity import RESIDUAL_WARN, design_sensitivity, output_sensitivity_matrix
 from kinprop.cli.app import (
     EXIT_NOT_CONVERGED,
     app,
@@ -18,26 +18,24 @@ from kinprop.cli.app import (
     handles_user_errors,
     load_model_cli,
     out,
-    parse_weight,
     print_json,
 )
+from kinprop.cli.checks import check_tol, parse_weights
 from kinprop.cli.continuation import shown_warnings
 from kinprop.propagation import assemble
-
-if TYPE_CHECKING:
-    import pandas as pd
 
 Json = Annotated[bool, typer.Option("--json", help="print one JSON object instead of a table")]
 
 
-def sensitivity_table(frame: pd.DataFrame, title: str) -> Table:
+def sensitivity_table(matrix: np.ndarray, rows: list[str], columns: list[str], title: str) -> Table:
     """A labelled matrix: one row per output, one column per design variable."""
     t = Table(title=title, title_justify="left")
     t.add_column("d(output) / d(design)", style="bold")
-    for c in frame.columns:
+    for c in columns:
         t.add_column(str(c), justify="right")
-    for name, row in frame.iterrows():
-        cells = [f"{x:.6g}" if abs(x) > 1e-9 * max(1.0, np.max(np.abs(row.values))) else "0" for x in row.values]
+    for name, row in zip(rows, np.asarray(matrix), strict=True):
+        scale = max(1.0, float(np.max(np.abs(row)))) if row.size else 1.0
+        cells = [f"{x:.6g}" if abs(x) > 1e-9 * scale else "0" for x in row]
         t.add_row(str(name), *cells)
     return t
 
@@ -61,9 +59,10 @@ def sensitivity_cmd(
     The model is assembled first (free: q), then the implicit-function theorem gives the free
     variables' response with the same weighted minimum-norm inverse as `propagate`.
     """
+    check_tol(tol)
+    weights = parse_weights(weight)
     m = load_model_cli(model)
     free_set = tuple(free or ["q"])
-    weights = dict(parse_weight(w) for w in (weight or [])) or None
     with shown_warnings():  # a near-singular assembly is one "warning:" line on stderr
         prop = assemble(m, tol=tol)
     r = prop.result
@@ -77,16 +76,18 @@ def sensitivity_cmd(
         )
     assembled = prop.after
     if of:
-        frame = output_sensitivity(assembled, of, wrt, free_set, weights)
+        with shown_warnings():
+            matrix, rows, columns, _ = output_sensitivity_matrix(assembled, of, wrt, free_set, weights)
     else:
-        frame = design_sensitivity(assembled, wrt, free_set, weights).frame()
+        sens = design_sensitivity(assembled, wrt, free_set, weights)
+        matrix, rows, columns = sens.matrix, sens.rows, sens.columns
     if as_json:
         print_json(
             {
                 "model": str(model),
-                "of": [str(i) for i in frame.index],
-                "wrt": [str(c) for c in frame.columns],
-                "matrix": frame.to_numpy().tolist(),
+                "of": [str(i) for i in rows],
+                "wrt": [str(c) for c in columns],
+                "matrix": np.asarray(matrix).tolist(),
                 "free": list(free_set),
                 "weights": weights or {},
                 "assembly": {"initial_residual": initial, "residual": r.residual_norm, "iterations": r.iterations},
@@ -94,7 +95,7 @@ def sensitivity_cmd(
         )
         return
     title = f"sensitivity {model}"
-    out.print(sensitivity_table(frame, title))
+    out.print(sensitivity_table(matrix, rows, columns, title))
     weights_text = "; weights " + " ".join(f"{k}={v:g}" for k, v in weights.items()) if weights else ""
     out.print(f"free: {' '.join(free_set)}{weights_text}")
     out.print(

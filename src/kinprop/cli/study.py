@@ -20,8 +20,17 @@ from kinprop.cli.app import (
     handles_user_errors,
     load_model_cli,
     out,
-    parse_assignment,
     print_json,
+    require,
+)
+from kinprop.cli.checks import (
+    MAX_ITER,
+    MAX_SAMPLES,
+    check_int,
+    check_outputs,
+    check_set_not_free,
+    check_tol,
+    parse_assignments,
 )
 from kinprop.errors import AddressError
 
@@ -60,25 +69,50 @@ def study_cmd(
     resume: Annotated[bool, typer.Option("--resume", help="complete an interrupted study in OUTPUT")] = False,
     chunk_size: Annotated[int, typer.Option("--chunk-size", help="variants per chunk (one Parquet part each)")] = 256,
     as_json: Annotated[bool, typer.Option("--json", help="print a JSON summary")] = False,
+    engine: Annotated[
+        str, typer.Option("--engine", help="auto (compiled when possible), fast (compiled) or reference (numpy)")
+    ] = "auto",
 ) -> None:
     """Run a design study: every variant re-assembled, inputs and results streamed to Parquet."""
-    from kinprop.analysis.study import Factor, parse_vary, run_study  # pandas/pyarrow only when used
+    check_tol(tol)
+    check_int("--max-iter", max_iter, 1, MAX_ITER)
+    check_int("--samples", samples, 1, MAX_SAMPLES)
+    check_int("--chunk-size", chunk_size, 1, MAX_SAMPLES)
+    if method not in ("grid", "lhs", "mc"):
+        raise AddressError(f"--method {method!r}: expected grid, lhs or mc")
+    if engine not in ("auto", "fast", "reference"):
+        raise AddressError(f"--engine {engine!r}: expected auto, fast or reference")
+    check_outputs([model], [("-o", output)], directories=("-o",))
+    given = parse_assignments("--set", set_)
+    check_set_not_free(given, free)
+    require("pandas")
+    require("pyarrow")
+    if scheduler is not None:
+        require("distributed")
+    from kinprop.analysis.study import Factor, parse_vary, run_study, sample_plan
 
+    parsed = [parse_vary(text) for text in vary]
+    seen: dict[str, str] = {}
+    for f, text in zip(parsed, vary, strict=True):
+        if f.address in seen:
+            raise AddressError(f"--vary {text!r}: {f.address} is already varied by --vary {seen[f.address]!r}")
+        seen[f.address] = text
+        if f.address in given:
+            raise AddressError(f"--vary {text!r}: {f.address} is also given by --set")
+    if method == "grid":
+        sample_plan(parsed, method, samples, seed)  # refuses a huge grid up front, with its count
     m = load_model_cli(model)
-    sets = _to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
+    sets = _to_internal(m, given)
     factors = []
-    for text in vary:
-        f = parse_vary(text)
+    for f in parsed:
         lo = float(_to_internal(m, {f.address: np.array([f.low])})[f.address][0])
         hi = float(_to_internal(m, {f.address: np.array([f.high])})[f.address][0])
         factors.append(Factor(f.address, lo, hi))
-    if method not in ("grid", "lhs", "mc"):
-        raise AddressError(f"--method {method!r}: expected grid, lhs or mc")
     try:
         frame = run_study(
             m, factors, method=method, samples=samples, seed=seed, free=tuple(free or ["q"]), sets=sets,
             outputs=out_names, tol=tol, max_iter=max_iter, chunk_size=chunk_size, output=output, resume=resume,
-            scheduler=scheduler, progress=not as_json,
+            scheduler=scheduler, progress=not as_json, engine=engine,
         )  # fmt: skip
     except KeyboardInterrupt:
         err.print(f"interrupted: finished chunks are kept in {output!s}; run again with --resume")
@@ -125,14 +159,16 @@ def tolerance_cmd(
     from kinprop.analysis.tolerance import monte_carlo, tolerance_analysis
     from kinprop.propagation import propagate
 
-    m = load_model_cli(model)
-    sets = _to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
+    check_int("--mc", mc, 0, MAX_SAMPLES)
+    given = parse_assignments("--set", set_)
+    check_set_not_free(given, free)
     tols = {}
-    for text in tolerance:
-        addr, vals = parse_assignment(text)
+    for addr, vals in parse_assignments("--tolerance", tolerance).items():
         if vals.size != 1 or not vals[0] > 0:
-            raise AddressError(f"--tolerance {text!r}: expected one positive standard deviation")
+            raise AddressError(f"--tolerance {addr}: expected one positive standard deviation")
         tols[addr] = float(vals[0])
+    m = load_model_cli(model)
+    sets = _to_internal(m, given)
     freeset = tuple(free or ["q"])
     if sets:
         prop = propagate(m, sets, freeset)

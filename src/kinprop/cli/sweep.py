@@ -21,8 +21,17 @@ from kinprop.cli.app import (
     handles_user_errors,
     load_model_cli,
     out,
-    parse_assignment,
     print_json,
+    require,
+)
+from kinprop.cli.checks import (
+    MAX_ITER,
+    check_int,
+    check_outputs,
+    check_set_not_free,
+    check_suffix,
+    check_tol,
+    parse_assignments,
 )
 from kinprop.io.units import changes_to_internal
 
@@ -112,6 +121,17 @@ def _plot_before_after(base, res, path: Path, x: str | None, title: str) -> None
     plot_curves(ok, x, ys, units=units, title=title, path=path)
 
 
+def _check_x(model, drives, outputs: list[str] | None, x: str) -> None:
+    """``--x`` names a column the sweep will have: a drive, a coordinate or an output."""
+    from kinprop.analysis.outputs import expand_outputs
+    from kinprop.analysis.sweep import coordinate_columns, default_outputs
+
+    names = list(default_outputs(model) if outputs is None else outputs)
+    columns = [d.label for d in drives] + [c for c, *_ in coordinate_columns(model)] + expand_outputs(model, names)
+    if x not in columns:
+        raise ValueError(f"--x {x!r}: not a column of this sweep; columns: {', '.join(dict.fromkeys(columns))}")
+
+
 @app.command(name="sweep")
 @handles_user_errors
 def sweep_cmd(
@@ -150,14 +170,28 @@ def sweep_cmd(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="no table, no progress bar")] = False,
 ) -> None:
     """Drive joint coordinates over a range; each step is solved from the previous one."""
+    check_tol(tol)
+    check_int("--max-iter", max_iter, 1, MAX_ITER)
+    check_suffix("-o", output, (".csv", ".parquet", ".pq"))
+    check_suffix("--plot", plot, (".png", ".pdf", ".svg"))
+    check_outputs([model], [("-o", output), ("--plot", plot)])
+    given = parse_assignments("--set", set_)
+    check_set_not_free(given, free)
+    if baseline and not given:
+        raise ValueError("--baseline compares with the design before the --set changes: give at least one --set")
+    if x is not None and not baseline:
+        raise ValueError("--x sets the abscissa of the --baseline plot: give --baseline (and --plot) too")
+    require("pandas")
+    if output is not None and output.suffix.lower() != ".csv":
+        require("pyarrow")
+    if plot is not None:
+        require("matplotlib")
     m = load_model_cli(model)
     drives = [parse_drive(m, d) for d in drive]
-    changes = changes_to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
-    if baseline and not changes:
-        raise ValueError("--baseline compares with the design before the --set changes: give at least one --set")
+    changes = changes_to_internal(m, given)
+    if x is not None:
+        _check_x(m, drives, outputs, x)
     quiet = quiet or as_json
-    if output is not None and output.suffix.lower() not in (".csv", ".parquet", ".pq"):
-        raise ValueError(f"--output {str(output)!r}: expected a .csv or .parquet file")
     n = max(d.values.size for d in drives)
     show = not quiet and n >= PROGRESS_FROM
     progress = Progress(

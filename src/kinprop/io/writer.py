@@ -19,7 +19,8 @@ from kinprop.propagation.propagate import assembly_for
 
 def atomic_write(path: str | Path, data: str | bytes) -> None:
     """Write ``data`` to ``path`` so that readers see the old file or the new one, never half."""
-    path = Path(path)  # the directory must exist: a mistyped path is not silently created
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)  # the CLI refuses a missing directory before this
     mode = "wb" if isinstance(data, bytes) else "w"
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
