@@ -160,6 +160,8 @@ def tolerance_cmd(
     from kinprop.propagation import propagate
 
     check_int("--mc", mc, 0, MAX_SAMPLES)
+    if mc:
+        require("pandas")  # the Monte Carlo comparison runs as a design study
     given = parse_assignments("--set", set_)
     check_set_not_free(given, free)
     tols = {}
