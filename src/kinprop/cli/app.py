@@ -19,6 +19,7 @@ from typing import Any, NoReturn, TypeVar
 import numpy as np
 import typer
 from rich.console import Console, ConsoleDimensions
+from rich.table import Table
 from rich.text import Text
 from typer.core import TyperGroup
 
@@ -112,6 +113,21 @@ class _Console(Console):
     @size.setter
     def size(self, new_size: tuple[int, int]) -> None:
         Console.size.fset(self, new_size)  # type: ignore[attr-defined]
+
+    def print(self, *objects: Any, **kwargs: Any) -> None:
+        """As :meth:`rich.console.Console.print`; to a pipe a table's title is its own line
+        (rich would wrap a title longer than the table to the table's width)."""
+        if objects and not self.is_terminal:
+            for k, obj in enumerate(objects):
+                if isinstance(obj, Table) and obj.title is not None:
+                    title, obj.title = obj.title, None
+                    super().print(title, soft_wrap=True)
+                    super().print(*objects[k : k + 1], **kwargs)
+                    obj.title = title
+                else:
+                    super().print(obj, **kwargs)
+            return
+        super().print(*objects, **kwargs)
 
 
 #: the line width when output goes to a pipe or file (tables are only as wide as their cells)
