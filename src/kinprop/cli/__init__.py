@@ -1,6 +1,6 @@
 """Command-line interface. Each command lives in its own module and registers on ``app``."""
 
-from kinprop.cli import check, convert, paper, plot, sensitivity, solve, sweep  # noqa: F401  (registers commands)
+from kinprop.cli import check, convert, examples, paper, plot, sensitivity, solve, sweep  # noqa: F401  (registers commands)
 from kinprop.cli import study as _study  # noqa: F401  (kinprop study, kinprop tolerance)
 from kinprop.cli.app import app
 

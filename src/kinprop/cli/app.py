@@ -14,7 +14,7 @@ import threading
 from collections.abc import Callable
 from functools import wraps
 from pathlib import Path
-from typing import Any, NoReturn, TypeVar
+from typing import Annotated, Any, NoReturn, TypeVar
 
 import numpy as np
 import typer
@@ -99,6 +99,27 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
     cls=_Group,
 )
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            text = version("kinprop")
+        except PackageNotFoundError:  # pragma: no cover - running from an uninstalled checkout
+            from kinprop import __version__ as text
+        out.print(f"kinprop {text}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    show_version: Annotated[
+        bool, typer.Option("--version", callback=_print_version, is_eager=True, help="print the version and exit")
+    ] = False,
+) -> None:
+    """Kinematic design propagation in closed-loop mechanisms (Zou, Abdel-Malek & Wang 1997)."""
 
 
 class _Console(Console):
