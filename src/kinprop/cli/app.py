@@ -98,6 +98,7 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
     cls=_Group,
+    rich_markup_mode=None,
 )
 
 

@@ -20,7 +20,9 @@ def _fmt(values: tuple[float, ...]) -> str:
 
 @app.command()
 def paper(
-    table: Annotated[list[str] | None, typer.Option("--table", help="table4 and/or table1 (default both)")] = None,
+    table: Annotated[
+        list[str] | None, typer.Option("--table", metavar="NAME", help="table4 and/or table1 (default both)")
+    ] = None,
     tol: Annotated[float, typer.Option("--tol", help="stopping rule ||Phi|| < TOL (the paper's: 1e-3)")] = 1e-3,
     as_json: Annotated[bool, typer.Option("--json", help="print one JSON object")] = False,
 ) -> None:

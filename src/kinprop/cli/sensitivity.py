@@ -44,13 +44,24 @@ def sensitivity_table(matrix: np.ndarray, rows: list[str], columns: list[str], t
 @handles_user_errors
 def sensitivity_cmd(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
-    wrt: Annotated[list[str], typer.Option("--wrt", help="design variables: addresses (RS.s_i[2]) or groups")],
+    wrt: Annotated[
+        list[str], typer.Option("--wrt", metavar="ADDRESS", help="design variables: addresses (RS.s_i[2]) or groups")
+    ],
     of: Annotated[
         list[str] | None,
-        typer.Option("--of", help="outputs: J.q[k], J.s_i[k], point:BODY.NAME[x], hardpoint:J.i[x], metric:W.camber"),
+        typer.Option(
+            "--of",
+            metavar="NAME",
+            help="outputs: J.q[k], J.s_i[k], point:BODY.NAME[x], hardpoint:J.i[x], metric:W.camber",
+        ),
     ] = None,
-    free: Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")] = None,
-    weight: Annotated[list[str] | None, typer.Option("--weight", help="ADDRESS_OR_GROUP=W: larger moves more")] = None,
+    free: Annotated[
+        list[str] | None,
+        typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q"),
+    ] = None,
+    weight: Annotated[
+        list[str] | None, typer.Option("--weight", metavar="ADDRESS=W", help="ADDRESS_OR_GROUP=W: larger moves more")
+    ] = None,
     tol: Annotated[float, typer.Option("--tol", help="assembly tolerance on ||Phi||_2")] = 1e-10,
     as_json: Json = False,
 ) -> None:

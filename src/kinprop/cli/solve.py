@@ -139,7 +139,10 @@ def assemble(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
     tol: Tol = 1e-10,
     max_iter: MaxIter = 50,
-    free: Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")] = None,
+    free: Annotated[
+        list[str] | None,
+        typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q"),
+    ] = None,
     output: Output = None,
     as_json: Json = False,
     csv: Csv = None,
@@ -157,9 +160,17 @@ def assemble(
 @handles_user_errors
 def propagate_cmd(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
-    set_: Annotated[list[str] | None, typer.Option("--set", help="ADDRESS=VALUE, e.g. J12.s_j=-2.8,0.2,0.1")] = None,
-    free: Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")] = None,
-    weight: Annotated[list[str] | None, typer.Option("--weight", help="ADDRESS_OR_GROUP=W: larger moves more")] = None,
+    set_: Annotated[
+        list[str] | None,
+        typer.Option("--set", metavar="ADDRESS=VALUE", help="ADDRESS=VALUE, e.g. J12.s_j=-2.8,0.2,0.1"),
+    ] = None,
+    free: Annotated[
+        list[str] | None,
+        typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q"),
+    ] = None,
+    weight: Annotated[
+        list[str] | None, typer.Option("--weight", metavar="ADDRESS=W", help="ADDRESS_OR_GROUP=W: larger moves more")
+    ] = None,
     tol: Tol = 1e-10,
     max_iter: MaxIter = 50,
     output: Output = None,

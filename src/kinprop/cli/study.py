@@ -34,9 +34,13 @@ from kinprop.cli.checks import (
 )
 from kinprop.errors import AddressError
 
-Free = Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")]
+Free = Annotated[
+    list[str] | None, typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q")
+]
 EXIT_INTERRUPTED = 130
-Sets = Annotated[list[str] | None, typer.Option("--set", help="ADDRESS=VALUE applied to every variant")]
+Sets = Annotated[
+    list[str] | None, typer.Option("--set", metavar="ADDRESS=VALUE", help="ADDRESS=VALUE applied to every variant")
+]
 
 
 def _to_internal(model, changes: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -51,7 +55,10 @@ def _to_internal(model, changes: dict[str, np.ndarray]) -> dict[str, np.ndarray]
 @handles_user_errors
 def study_cmd(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
-    vary: Annotated[list[str], typer.Option("--vary", help="ADDRESS=LOW:HIGH, a scalar (component) address")],
+    vary: Annotated[
+        list[str],
+        typer.Option("--vary", metavar="ADDRESS=LOW:HIGH", help="ADDRESS=LOW:HIGH, a scalar (component) address"),
+    ],
     output: Annotated[Path, typer.Option("-o", "--output", help="result directory of Parquet parts (results.parquet)")],
     method: Annotated[str, typer.Option("--method", help="grid | lhs | mc")] = "lhs",
     samples: Annotated[int, typer.Option("--samples", help="variants (lhs, mc) or levels per factor (grid)")] = 100,
@@ -59,7 +66,7 @@ def study_cmd(
     free: Free = None,
     set_: Sets = None,
     out_names: Annotated[
-        list[str] | None, typer.Option("--output-name", help="extra outputs (point:, metric:, ...)")
+        list[str] | None, typer.Option("--output-name", metavar="NAME", help="extra outputs (point:, metric:, ...)")
     ] = None,
     tol: Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL")] = 1e-10,
     max_iter: Annotated[int, typer.Option("--max-iter")] = 50,
@@ -147,8 +154,12 @@ def _summary(frame, inputs: list[str]) -> Table:
 @handles_user_errors
 def tolerance_cmd(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
-    tolerance: Annotated[list[str], typer.Option("--tolerance", help="ADDRESS=SIGMA (standard deviation)")],
-    of: Annotated[list[str], typer.Option("--of", help="output: a coordinate (J32.q[1]) or point:/metric: name")],
+    tolerance: Annotated[
+        list[str], typer.Option("--tolerance", metavar="ADDRESS=SIGMA", help="ADDRESS=SIGMA (standard deviation)")
+    ],
+    of: Annotated[
+        list[str], typer.Option("--of", metavar="NAME", help="output: a coordinate (J32.q[1]) or point:/metric: name")
+    ],
     free: Free = None,
     set_: Sets = None,
     mc: Annotated[int, typer.Option("--mc", help="also run a Monte Carlo study of N samples to compare")] = 0,

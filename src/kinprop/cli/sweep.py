@@ -45,12 +45,16 @@ def _fmt(v: object) -> str:
     return str(v)
 
 
-def _table(frame, columns: list[str], limit: int = 24) -> Table:
+def _table(frame, columns: list[str], limit: int | None = 24) -> Table:
+    """The sweep's rows; with a ``limit`` the middle rows are elided (a terminal), else all."""
     t = Table(show_lines=False, title_justify="left")
     for c in columns:
         t.add_column(c, justify="left" if c in ("status",) else "right")
     n = len(frame)
-    idx = list(range(n)) if n <= limit else list(range(limit // 2)) + [-1] + list(range(n - limit // 2, n))
+    if limit is None or n <= limit:
+        idx = list(range(n))
+    else:
+        idx = list(range(limit // 2)) + [-1] + list(range(n - limit // 2, n))
     for i in idx:
         if i < 0:
             t.add_row(*["..."] * len(columns))
@@ -61,14 +65,17 @@ def _table(frame, columns: list[str], limit: int = 24) -> Table:
     return t
 
 
-def _shown_columns(res, limit: int = 10) -> list[str]:
-    """Step, drives, status, iterations, then the outputs and the coordinates that vary."""
+def _shown_columns(res, requested: list[str] | None, limit: int | None = 10) -> list[str]:
+    """Step, drives, the requested outputs (all of them, first), status, iterations, then the
+    default outputs and the coordinates that vary, up to ``limit`` columns (None: all)."""
     df = res.frame
-    head = ["step", *(d.label for d in res.drives), "status", "iterations"]
+    drives = [d.label for d in res.drives]
+    asked = list(res.outputs) if requested else []
+    head = ["step", *drives, *asked, "status", "iterations"]
     coords = [c for c in df.columns if ".q" in c and c not in head and not c.startswith(("point:", "metric:"))]
     rest = [c for c in res.outputs if c not in head] + coords
     varying = [c for c in rest if df[c].notna().any() and float(df[c].max() - df[c].min()) > 1e-12]
-    return head + varying[: max(0, limit - len(head))]
+    return head + (varying if limit is None else varying[: max(0, limit - len(head))])
 
 
 def _records(frame) -> list[dict]:
@@ -137,16 +144,26 @@ def _check_x(model, drives, outputs: list[str] | None, x: str) -> None:
 def sweep_cmd(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
     drive: Annotated[
-        list[str], typer.Option("--drive", help="JOINT=START:STOP:STEPS (model units; repeat to drive together)")
+        list[str],
+        typer.Option(
+            "--drive",
+            metavar="JOINT=START:STOP:STEPS",
+            help="JOINT=START:STOP:STEPS (model units; repeat to drive together)",
+        ),
     ],
     set_: Annotated[
-        list[str] | None, typer.Option("--set", help="ADDRESS=VALUE design change applied at step 0")
+        list[str] | None,
+        typer.Option("--set", metavar="ADDRESS=VALUE", help="ADDRESS=VALUE design change applied at step 0"),
     ] = None,
-    free: Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")] = None,
+    free: Annotated[
+        list[str] | None,
+        typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q"),
+    ] = None,
     outputs: Annotated[
         list[str] | None,
         typer.Option(
             "--out",
+            metavar="NAME",
             help="output names (point:BODY.NAME, metric:WHEEL.camber, J.q ...); default: named points and metrics",
         ),
     ] = None,
@@ -240,7 +257,9 @@ def sweep_cmd(
     if as_json:
         print_json(_summary(res, base, output, plot))
     if not quiet:
-        out.print(_table(df, _shown_columns(res)))
+        terminal = out.is_terminal  # a pipe gets every row and every varying column
+        shown = _shown_columns(res, outputs, 10 if terminal else None)
+        out.print(_table(df, shown, 24 if terminal else None))
     bad = df[df["status"] != "converged"]
     near = int(df["near_singular"].sum())
     say = err.print if as_json else out.print

@@ -122,3 +122,55 @@ def point_rows(prop: Propagation) -> list[dict[str, Any]]:
                     }
                 )
     return out
+
+
+#: moved variables listed by a summary before it says "... and N more"
+SUMMARY_ROWS = 8
+
+
+def _short(values: list[float]) -> str:
+    text = ", ".join(f"{x:.6g}" for x in values)
+    return text if len(values) == 1 else f"[{text}]"
+
+
+def summary_text(prop: Propagation) -> str:
+    """A compact ``repr`` of a propagation for a notebook or a REPL (a few lines, not a dump):
+    status, iterations, ``||Phi||``, the changes and the variables that moved most."""
+    r = prop.result
+    name = prop.before.mechanism.name
+    rows = [row for row in variable_rows(prop) if row["role"]]
+    rows.sort(key=lambda row: (row["role"] != "set", -row["change"]))
+    lines = [
+        f"<Propagation of {name!r}: {r.status} in {r.iterations} iterations, ||Phi|| = {r.residual_norm:.3g};"
+        f" free: {' '.join(prop.free)}>"
+    ]
+    for row in rows[:SUMMARY_ROWS]:
+        unit = f" {row['unit']}" if row["unit"] else ""
+        lines.append(f"  {row['role']:>5} {row['variable']}: {_short(row['before'])} -> {_short(row['after'])}{unit}")
+    if len(rows) > SUMMARY_ROWS:
+        lines.append(f"  ... and {len(rows) - SUMMARY_ROWS} more moved variables (prop.changed_variables())")
+    return "\n".join(lines)
+
+
+def summary_html(prop: Propagation) -> str:
+    """``_repr_html_`` of a propagation: the status line and a before/after table of the set
+    and moved variables (every one; values escaped)."""
+    from html import escape
+
+    r = prop.result
+    head = (
+        f"<p><b>Propagation</b> of {escape(prop.before.mechanism.name)}: {escape(r.status)} in {r.iterations} "
+        f"iterations, ||Phi|| = {r.residual_norm:.3g}; free: {escape(' '.join(prop.free))}</p>"
+    )
+    cells = "".join(
+        "<tr>"
+        + "".join(
+            f"<td>{escape(str(x))}</td>"
+            for x in (row["role"], row["variable"], row["unit"], _short(row["before"]), _short(row["after"]))
+        )
+        + f"<td>{row['change']:.3g}</td></tr>"
+        for row in variable_rows(prop)
+        if row["role"]
+    )
+    header = "".join(f"<th>{h}</th>" for h in ("role", "variable", "unit", "before", "after", "max |change|"))
+    return f"{head}<table><thead><tr>{header}</tr></thead><tbody>{cells}</tbody></table>"
