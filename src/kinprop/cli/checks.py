@@ -58,7 +58,8 @@ def parse_weights(texts: Iterable[str] | None) -> dict[str, float] | None:
     out = {}
     for addr, values in parse_assignments("--weight", texts).items():
         if values.size != 1 or not values[0] > 0:
-            raise AddressError(f"--weight {addr}: expected one positive number, found {', '.join(map(str, values))}")
+            found = ", ".join(map(str, values))
+            raise AddressError(f"--weight {addr}: expected one number, and weights must be positive; found {found}")
         out[addr] = float(values[0])
     return out or None
 
