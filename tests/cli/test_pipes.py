@@ -36,7 +36,7 @@ def test_piped_sweep_table_is_whole_and_requested_first(examples) -> None:
     lines = p.stdout.splitlines()
     header = next(x for x in lines if "step" in x)
     cols = [c.strip() for c in header.strip("┃│ ").replace("┃", "│").split("│")]
-    assert cols[:4] == ["step", "O2.q", "point:coupler.P[y]", "status"]
+    assert cols[:4] == ["step", "O2.q [deg]", "point:coupler.P[y] [m]", "status"]
     body = [x for x in lines if x.startswith("│")]
     assert len(body) == 41 and not any("..." in x for x in body)
 

@@ -122,6 +122,9 @@ class StudySpec:
     model_hash: str = ""
     #: "auto" (compiled batched Newton when the mechanism compiles), "fast" or "reference"
     engine: str = "auto"
+    #: column -> factor from solver units (radians) to the stored units; a factor's plan values
+    #: are in the stored units and divided by it before solving (kinprop study: the model's units)
+    scale: dict[str, float] = field(default_factory=dict)
 
 
 # --- model transport (Design holds read-only mapping proxies, which do not pickle) ---------------
@@ -221,6 +224,8 @@ def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, s
     rows: dict[str, Any] = {"variant": np.arange(start, start + n, dtype=np.int64)}
     for k, a in enumerate(spec.addresses):
         rows[a] = values[:, k]
+    # the plan is in the stored units (e.g. degrees); the solver takes solver units (radians)
+    solver_values = values / np.array([spec.scale.get(a, 1.0) for a in spec.addresses])[None, :]
     comp = None
     if spec.engine != "reference":
         try:
@@ -249,7 +254,7 @@ def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, s
         for k, a in enumerate(spec.addresses):
             c = comp.column(a)
             kind, j, side, x = comp.colinfo[c]
-            v = values[:, k]
+            v = solver_values[:, k]
             if kind == 0:
                 st.Q[:, c] = v
             elif kind == 1:
@@ -276,7 +281,7 @@ def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, s
                 states[i] = unpack(comp, res.state, int(i))
     else:
         for i in range(n):
-            changes: dict[str, object] = {**spec.sets, **{a: values[i, k] for k, a in enumerate(spec.addresses)}}
+            changes: dict[str, object] = {**spec.sets, **{a: solver_values[i, k] for k, a in enumerate(spec.addresses)}}
             try:
                 prop = propagate(model, changes, tuple(spec.free), tol=spec.tol, max_iter=spec.max_iter)
             except AddressError:
@@ -306,7 +311,7 @@ def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, s
     rows["residual"] = resid
     for c in range(nq):
         if labels[c] not in rows:
-            rows[labels[c]] = Q[:, c]
+            rows[labels[c]] = Q[:, c] * spec.scale.get(labels[c], 1.0)
     for k, (_, _, name) in enumerate(points):
         for x, ax in enumerate("xyz"):
             rows[f"{name}[{ax}]"] = P[:, k, x]
@@ -358,6 +363,7 @@ def run_study(
     progress: bool = False,
     on_chunk: Callable[[int], None] | None = None,
     engine: str = "auto",
+    scale: Mapping[str, float] | None = None,
 ) -> pd.DataFrame:
     """Run a design study and return one row per variant (see the module docstring).
 
@@ -367,6 +373,9 @@ def run_study(
     (the manifest must match). ``scheduler``: a Dask scheduler address (``tcp://host:8786``)
     or a ``distributed.Client``. ``on_chunk(index)`` is called after each chunk is stored.
     ``engine``: ``"auto"`` (compiled when possible), ``"fast"`` or ``"reference"`` (numpy).
+    ``scale``: column -> factor from solver units to the units the plan is given in and the
+    rows are stored in (``kinprop study`` passes 180/pi for angle columns of a degree model, so
+    inputs and coordinates are in the model's units; default: solver units, radians).
     Raises :class:`AddressError` / :class:`ValueError` for invalid input.
     """
     if plan is None:
@@ -412,6 +421,7 @@ def run_study(
         plan_hash=hashlib.sha256(np.ascontiguousarray(values).tobytes()).hexdigest()[:16],
         model_hash=_model_hash(model),
         engine=engine,
+        scale=dict(scale or {}),
     )
     n_chunks = -(-len(values) // chunk_size)
     done: set[int] = set()

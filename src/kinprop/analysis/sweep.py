@@ -332,6 +332,8 @@ def sweep(
             if r.converged:
                 good = prop.after
                 for col, joint, idx, deg in coord_cols:
+                    if col in drive_cols:
+                        continue  # the driven value exactly as given (not degrees -> radians -> degrees)
                     val = float(np.atleast_1d(good.coordinates[joint])[idx])
                     row[col] = math.degrees(val) if deg else val
                 try:

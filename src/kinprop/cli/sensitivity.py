@@ -22,6 +22,7 @@ from kinprop.cli.app import (
 )
 from kinprop.cli.checks import check_tol, parse_weights
 from kinprop.cli.continuation import shown_warnings
+from kinprop.io.units import derivative_scale, unit_of
 from kinprop.propagation import assemble
 
 Json = Annotated[bool, typer.Option("--json", help="print one JSON object instead of a table")]
@@ -38,6 +39,13 @@ def sensitivity_table(matrix: np.ndarray, rows: list[str], columns: list[str], t
         cells = [f"{x:.6g}" if abs(x) > 1e-9 * scale else "0" for x in row]
         t.add_row(str(name), *cells)
     return t
+
+
+def _per(model, name: str) -> str:
+    """The unit of a design column: a C column is per angle of body-frame rotation."""
+    if ".C_" in name:
+        return model.units.get("angle", "rad")
+    return unit_of(model, name)
 
 
 @app.command(name="sensitivity")
@@ -92,6 +100,12 @@ def sensitivity_cmd(
     else:
         sens = design_sensitivity(assembled, wrt, free_set, weights)
         matrix, rows, columns = sens.matrix, sens.rows, sens.columns
+    # in the model's units: d(out)/d(in) * scale(out) / scale(in) (docs/units.md)
+    so = np.array([derivative_scale(assembled, str(name)) for name in rows])
+    si = np.array([derivative_scale(assembled, str(name)) for name in columns])
+    matrix = np.asarray(matrix) * so[:, None] / si[None, :]
+    units_of = [unit_of(assembled, str(name)) for name in rows]
+    units_wrt = [_per(assembled, str(name)) for name in columns]
     if as_json:
         print_json(
             {
@@ -99,6 +113,7 @@ def sensitivity_cmd(
                 "of": [str(i) for i in rows],
                 "wrt": [str(c) for c in columns],
                 "matrix": np.asarray(matrix).tolist(),
+                "units": {"of": units_of, "wrt": units_wrt, "matrix": "unit of the row per unit of the column"},
                 "free": list(free_set),
                 "weights": weights or {},
                 "assembly": {"initial_residual": initial, "residual": r.residual_norm, "iterations": r.iterations},
@@ -106,11 +121,14 @@ def sensitivity_cmd(
         )
         return
     title = f"sensitivity {model}"
-    out.print(sensitivity_table(matrix, rows, columns, title))
+    labelled_rows = [f"{r} [{u}]" if u else str(r) for r, u in zip(rows, units_of, strict=True)]
+    labelled_cols = [f"{c} [{u}]" if u else str(c) for c, u in zip(columns, units_wrt, strict=True)]
+    out.print(sensitivity_table(matrix, labelled_rows, labelled_cols, title))
     weights_text = "; weights " + " ".join(f"{k}={v:g}" for k, v in weights.items()) if weights else ""
     out.print(f"free: {' '.join(free_set)}{weights_text}")
+    angle = assembled.units.get("angle", "rad")
     out.print(
-        "units: output unit per design unit; coordinates in rad (or length), metric angles in deg, "
-        "C columns per rad of body-frame rotation"
+        f"units: [row unit] per [column unit], the model's units ({assembled.units.get('length')}, {angle}); "
+        f"C columns per {angle} of body-frame rotation"
     )
     out.print(f"assembled: {r.message}")

@@ -33,6 +33,7 @@ from kinprop.cli.checks import (
     parse_assignments,
 )
 from kinprop.errors import AddressError
+from kinprop.io.units import derivative_scale, to_solver_units, unit_of
 
 Free = Annotated[
     list[str] | None, typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q")
@@ -49,6 +50,24 @@ def _to_internal(model, changes: dict[str, np.ndarray]) -> dict[str, np.ndarray]
     except ImportError:  # pragma: no cover
         return changes
     return changes_to_internal(model, changes)
+
+
+def _model_unit_scale(model, factors) -> dict[str, float]:
+    """Column -> factor from radians to the model's angle unit, for the varied addresses and the
+    coordinate columns, so a study's inputs and outputs are in the model's units."""
+    from kinprop.kinematics.layout import column_labels
+    from kinprop.propagation.propagate import assembly_for
+
+    layout = assembly_for(model.mechanism).layout
+    labels = [f.address for f in factors] + [
+        lab for lab, col in zip(column_labels(layout), range(layout.n), strict=True) if _is_q(layout, col)
+    ]
+    scale = {lab: derivative_scale(model, lab) for lab in labels}
+    return {k: v for k, v in scale.items() if v != 1.0}
+
+
+def _is_q(layout, col: int) -> bool:
+    return any(v.group == "q" and v.start <= col < v.start + v.size for v in layout.variables)
 
 
 @app.command(name="study")
@@ -96,7 +115,7 @@ def study_cmd(
     require("pyarrow")
     if scheduler is not None:
         require("distributed")
-    from kinprop.analysis.study import Factor, parse_vary, run_study, sample_plan
+    from kinprop.analysis.study import parse_vary, run_study, sample_plan
 
     parsed = [parse_vary(text) for text in vary]
     seen: dict[str, str] = {}
@@ -110,16 +129,12 @@ def study_cmd(
         sample_plan(parsed, method, samples, seed)  # refuses a huge grid up front, with its count
     m = load_model_cli(model)
     sets = _to_internal(m, given)
-    factors = []
-    for f in parsed:
-        lo = float(_to_internal(m, {f.address: np.array([f.low])})[f.address][0])
-        hi = float(_to_internal(m, {f.address: np.array([f.high])})[f.address][0])
-        factors.append(Factor(f.address, lo, hi))
+    factors = parsed  # in the model's units, as given; stored as given (scale below)
     try:
         frame = run_study(
             m, factors, method=method, samples=samples, seed=seed, free=tuple(free or ["q"]), sets=sets,
             outputs=out_names, tol=tol, max_iter=max_iter, chunk_size=chunk_size, output=output, resume=resume,
-            scheduler=scheduler, progress=not as_json, engine=engine,
+            scheduler=scheduler, progress=not as_json, engine=engine, scale=_model_unit_scale(m, factors),
         )  # fmt: skip
     except KeyboardInterrupt:
         err.print(f"interrupted: finished chunks are kept in {output!s}; run again with --resume")
@@ -182,6 +197,7 @@ def tolerance_cmd(
         tols[addr] = float(vals[0])
     m = load_model_cli(model)
     sets = _to_internal(m, given)
+    tols = {a: float(to_solver_units(m, a, v)) for a, v in tols.items()}  # sigmas in the model's units
     freeset = tuple(free or ["q"])
     if sets:
         prop = propagate(m, sets, freeset)
@@ -191,18 +207,26 @@ def tolerance_cmd(
         m = prop.after
     res = tolerance_analysis(m, tols, of, free=freeset, fixed=tuple(sets))
     mc_std = monte_carlo(m, tols, res.outputs, n=mc, seed=seed, free=freeset, fixed=tuple(sets)) if mc else None
+    # everything reported in the model's units (docs/units.md)
+    so = np.array([derivative_scale(m, name) for name in res.outputs])
+    si = np.array([derivative_scale(m, name) for name in res.inputs])
+    nominal, std, cov, sigma = res.nominal * so, res.std * so, res.covariance * np.outer(so, so), res.sigma * si
+    mc_std = None if mc_std is None else mc_std * so
+    units = [unit_of(m, name) for name in res.outputs]
     if as_json:
-        obj = {"outputs": res.outputs, "nominal": res.nominal.tolist(), "std": res.std.tolist(),
-               "covariance": res.covariance.tolist(), "inputs": res.inputs, "sigma": res.sigma.tolist()}  # fmt: skip
+        obj = {"outputs": res.outputs, "nominal": nominal.tolist(), "std": std.tolist(),
+               "covariance": cov.tolist(), "inputs": res.inputs, "sigma": sigma.tolist(),
+               "units": {"outputs": units, "inputs": [unit_of(m, name) for name in res.inputs],
+                         "length": m.units.get("length"), "angle": m.units.get("angle")}}  # fmt: skip
         if mc_std is not None:
             obj["mc_std"] = mc_std.tolist()
         print_json(obj)
         return
     t = Table(title=f"tolerance analysis of {model!s} (linearised)", title_justify="left")
-    for c in ("output", "nominal", "std", *(["MC std", "MC / linear"] if mc_std is not None else [])):
-        t.add_column(c, justify="left" if c == "output" else "right")
+    for c in ("output", "unit", "nominal", "std", *(["MC std", "MC / linear"] if mc_std is not None else [])):
+        t.add_column(c, justify="left" if c in ("output", "unit") else "right")
     for k, name in enumerate(res.outputs):
-        cells = [name, f"{res.nominal[k]:.7g}", f"{res.std[k]:.4g}"]
+        cells = [name, units[k], f"{nominal[k] + 0.0:.7g}", f"{std[k]:.4g}"]  # + 0.0: no "-0"
         if mc_std is not None:
             cells += [f"{mc_std[k]:.4g}", f"{mc_std[k] / res.std[k]:.3f}" if res.std[k] > 0 else "-"]
         t.add_row(*cells)

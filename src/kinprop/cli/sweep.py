@@ -33,7 +33,7 @@ from kinprop.cli.checks import (
     check_tol,
     parse_assignments,
 )
-from kinprop.io.units import changes_to_internal
+from kinprop.io.units import changes_to_internal, unit_of
 
 #: show a progress bar from this many steps on
 PROGRESS_FROM = 50
@@ -48,8 +48,9 @@ def _fmt(v: object) -> str:
 def _table(frame, columns: list[str], limit: int | None = 24) -> Table:
     """The sweep's rows; with a ``limit`` the middle rows are elided (a terminal), else all."""
     t = Table(show_lines=False, title_justify="left")
+    units = frame.attrs.get("column_units", {})
     for c in columns:
-        t.add_column(c, justify="left" if c in ("status",) else "right")
+        t.add_column(f"{c} [{units[c]}]" if units.get(c) else c, justify="left" if c in ("status",) else "right")
     n = len(frame)
     if limit is None or n <= limit:
         idx = list(range(n))
@@ -98,6 +99,7 @@ def _summary(res, base, output: Path | None, plot: Path | None) -> dict:
         "output_file": None if output is None else str(output),
         "plot_file": None if plot is None else str(plot),
         "rows": _records(df),
+        "units": {c: u for c, u in df.attrs.get("column_units", {}).items() if u},
     }
     if base is not None:
         obj["baseline_rows"] = _records(base.frame)
@@ -137,6 +139,10 @@ def _check_x(model, drives, outputs: list[str] | None, x: str) -> None:
     columns = [d.label for d in drives] + [c for c, *_ in coordinate_columns(model)] + expand_outputs(model, names)
     if x not in columns:
         raise ValueError(f"--x {x!r}: not a column of this sweep; columns: {', '.join(dict.fromkeys(columns))}")
+
+
+#: sweep columns that are counts, flags or text
+_NO_UNIT = {"step", "status", "iterations", "residual_norm", "sv_ratio", "near_singular", "message"}
 
 
 @app.command(name="sweep")
@@ -254,6 +260,9 @@ def sweep_cmd(
             m, drives, free=tuple(free or ["q"]), outputs=outputs, tol=tol, max_iter=max_iter, continuation=continuation
         )
     df = res.frame
+    df.attrs["column_units"] = {c: unit_of(m, c) for c in df.columns if c not in _NO_UNIT}
+    if base is not None:
+        base.frame.attrs["column_units"] = df.attrs["column_units"]
     if as_json:
         print_json(_summary(res, base, output, plot))
     if not quiet:

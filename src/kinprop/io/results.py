@@ -27,14 +27,35 @@ def design_json(model) -> dict[str, Any]:
 
 
 def coordinates_json(model) -> dict[str, list[float]]:
-    """Joint coordinates in radians and model length units."""
-    return {k: np.asarray(v, dtype=float).tolist() for k, v in model.coordinates.items()}
+    """Joint coordinates in the model's units (angles in ``units.angle``; docs/units.md)."""
+    from kinprop.io.units import from_solver_units
+
+    return {k: from_solver_units(model, f"{k}.q", v).tolist() for k, v in model.coordinates.items()}
+
+
+def units_json(model) -> dict[str, Any]:
+    """The ``units`` object of every JSON output: the model's length and angle units, and the
+    unit of each joint coordinate component (``deg``/``rad``, the length unit, or ``""`` for
+    Euler parameters)."""
+    from kinprop.io.units import unit_of
+
+    coords = {
+        k: [unit_of(model, f"{k}.q[{i}]") for i in range(np.asarray(v).size)] for k, v in model.coordinates.items()
+    }
+    return {
+        "length": model.units.get("length", "m"),
+        "angle": model.units.get("angle", "rad"),
+        "coordinates": coords,
+        "design": "s_i, s_j, length in the length unit; C_i, C_j rotation matrices (no unit)",
+    }
 
 
 def propagation_json(prop: Propagation) -> dict[str, Any]:
     """The solve, the resulting coordinates and design, and where the joints sit afterwards:
     ``hardpoints`` (``"JOINT.i"``/``"JOINT.j"`` -> global [x, y, z], see
     :func:`kinprop.analysis.points.joint_hardpoints`) and ``points`` (named body points)."""
+    from kinprop.io.units import from_solver_units
+
     r = prop.result
     return {
         "status": r.status,
@@ -46,40 +67,42 @@ def propagation_json(prop: Propagation) -> dict[str, Any]:
         "message": r.message,
         "rank": r.rank,
         "free": list(prop.free),
-        "changes": {k: _num(v) for k, v in prop.changes.items()},
+        "changes": {k: _num(from_solver_units(prop.before, k, v)) for k, v in prop.changes.items()},
         "changed": prop.changed_variables(),
         "hardpoints": joint_hardpoints(prop.after),
         "points": named_points(prop.after),
+        "units": units_json(prop.after),
     }
 
 
 def variable_rows(prop: Propagation) -> list[dict[str, Any]]:
-    """One row per variable: before and after values (angles in degrees), role, max change.
+    """One row per variable: before and after values, their unit, role, max change.
 
-    ``C`` variables report the rotation angle [deg] of after relative to before.
+    Values in the model's units (docs/units.md); ``C`` variables report the rotation angle of
+    after relative to before, in the model's angle unit.
     """
     asm = assembly_for(prop.before.mechanism)
     layout = asm.layout
     changed = set(prop.changed_variables())
     set_keys = {k.split("[")[0] for k in prop.changes}
+    from kinprop.io.units import from_solver_units, unit_of
+
+    model = prop.before
+    angle = model.units.get("angle", "rad")
     rows: list[dict[str, Any]] = []
     for v in layout.variables:
         role = "set" if v.key in set_keys else ("moved" if v.key in changed else "")
         if v.group == "C":
             Cb, Ca = prop.before.design[v.key], prop.after.design[v.key]
-            ang = 0.0 if np.array_equal(Ca, Cb) else float(np.degrees(np.linalg.norm(log_so3(Ca @ Cb.T))))
+            ang = 0.0 if np.array_equal(Ca, Cb) else float(np.linalg.norm(log_so3(Ca @ Cb.T)))
+            ang = float(np.degrees(ang)) if angle == "deg" else ang
             rows.append(
-                {"variable": v.key, "unit": "deg", "before": [0.0], "after": [ang], "change": ang, "role": role}
+                {"variable": v.key, "unit": angle, "before": [0.0], "after": [ang], "change": ang, "role": role}
             )
             continue
-        b = read(layout, prop.before.design, prop.before.coordinates, v.key).copy()
-        a = read(layout, prop.after.design, prop.after.coordinates, v.key).copy()
-        unit = ""
-        if v.group == "q" and v.joint in asm.topology.tree_joints:
-            idx = list(prop.before.mechanism.joint(v.joint).jtype.angle_indices)
-            if idx:
-                b[idx], a[idx] = np.degrees(b[idx]), np.degrees(a[idx])
-                unit = "deg" if len(idx) == v.size else "deg/len"
+        b = from_solver_units(model, v.key, read(layout, prop.before.design, prop.before.coordinates, v.key))
+        a = from_solver_units(model, v.key, read(layout, prop.after.design, prop.after.coordinates, v.key))
+        unit = unit_of(model, v.key)
         change = float(np.max(np.abs(a - b))) if a.size else 0.0
         rows.append(
             {"variable": v.key, "unit": unit, "before": b.tolist(), "after": a.tolist(), "change": change, "role": role}
