@@ -6,7 +6,7 @@ from kinprop.cli.app import app
 
 
 def main() -> None:
-    app()
+    app(prog_name="kinprop")
 
 
 __all__ = ["app", "main"]
