@@ -41,6 +41,8 @@ BAD = [
     (["check", "{tmp}/missing.yaml"], "missing.yaml"),
     (["convert", "{ex}/fourbar.yaml", "--to", "frames", "-o", "{tmp}/x.txt"], "-o"),
     (["plot", "{ex}/fourbar.yaml", "-o", "{tmp}/x.gif"], "-o"),
+    (["paper", "--table", "table9"], "--table 'table9'"),
+    (["examples", "--copy", "{ex}"], "would overwrite"),
 ]
 
 

@@ -8,7 +8,7 @@ import typer
 from rich.table import Table
 from rich.text import Text
 
-from kinprop.cli.app import EXIT_NOT_CONVERGED, app, out, print_json
+from kinprop.cli.app import EXIT_NOT_CONVERGED, app, fail, out, print_json
 from kinprop.reference import TABLES
 from kinprop.reference.paper import compare_column, reproduce
 
@@ -30,8 +30,7 @@ def paper(
     names = table or ["table4", "table1"]
     unknown = [n for n in names if n not in TABLES]
     if unknown:
-        out.print(f"unknown table {unknown}; choose from {list(TABLES)}")
-        raise typer.Exit(2)
+        fail(f"--table {unknown[0]!r}: unknown table; choose from {', '.join(TABLES)}")
     report: dict[str, list[dict]] = {}
     total = agree = 0
     for name in names:
