@@ -119,14 +119,16 @@ def _check_point(model: Model, name: str, m: re.Match[str]) -> None:
     if name.startswith("point:"):
         body, point = m.group("body"), m.group("name")
         if body not in mech.body_names:
-            raise AddressError(f"output {name!r}: no body {body!r}")
+            raise AddressError(f"output {name!r}: unknown body {body!r}; bodies are {', '.join(mech.body_names)}")
         known = [p for p, _ in mech.body(body).points]
         if point not in known:
             raise AddressError(
                 f"output {name!r}: body {body!r} has no named point {point!r}; its points: {', '.join(known) or 'none'}"
             )
     elif m.group("joint") not in mech.joint_names:
-        raise AddressError(f"output {name!r}: no joint {m.group('joint')!r}")
+        raise AddressError(
+            f"output {name!r}: unknown joint {m.group('joint')!r}; joints are {', '.join(mech.joint_names)}"
+        )
 
 
 def _parse_variable(model: Model, name: str) -> Address:
