@@ -46,3 +46,30 @@ def test_flags_show_as_flags_in_help() -> None:
     assert p.returncode == 0
     assert "<bool>" not in p.stdout
     assert "--set ADDRESS=VALUE" in p.stdout and "--continuation / --no-continuation" in p.stdout
+
+
+def test_large_load_shows_progress_on_a_terminal(tmp_path, monkeypatch, capsys) -> None:
+    """A large model file shows a status line while it loads, and what it loaded — on a
+    terminal only (a pipe or CI log stays clean)."""
+    import importlib
+    import io
+
+    cli_app = importlib.import_module("kinprop.cli.app")  # the module (kinprop.cli.app is also the Typer app's name)
+
+    path = tmp_path / "chain.yaml"
+    lines = ["kinprop: 1", "name: chain", "units: {length: m, angle: rad}", "bodies:", "  ground: {fixed: true}"]
+    lines += [f"  b{k}: {{}}" for k in range(8000)]
+    lines.append("joints:")
+    lines += [
+        f"  R{k}: {{type: revolute, bodies: [{'ground' if k == 0 else f'b{k - 1}'}, b{k}], s_i: [0.001, 0, 0]}}"
+        for k in range(8000)
+    ]
+    path.write_text("\n".join(lines) + "\n")
+    assert path.stat().st_size > cli_app.PROGRESS_BYTES
+    buf = io.StringIO()
+    monkeypatch.setattr(cli_app.err, "file", buf)
+    model = cli_app.load_model_cli(path)  # a pipe: nothing on stderr
+    assert len(model.mechanism.bodies) == 8001 and buf.getvalue() == ""
+    monkeypatch.setattr(cli_app.err, "_force_terminal", True)
+    cli_app.load_model_cli(path)
+    assert f"loaded {path}: 8001 bodies, 8000 joints" in buf.getvalue()
