@@ -232,7 +232,8 @@ def load_model_cli(path: Path) -> Model:
         return load_model(path)
     with err.status(f"loading {path} ({size / 1e6:.1f} MB): parsing, validating, building the tree"):
         model = load_model(path)
-    err.print(f"loaded {path}: {len(model.mechanism.bodies)} bodies, {len(model.mechanism.joints)} joints")
+    mech = model.mechanism
+    err.print(f"loaded {path}: {len(mech.bodies)} bodies, {len(mech.joints)} joints", soft_wrap=True)
     return model
 
 
