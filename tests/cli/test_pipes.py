@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import re
 
 from cli_run import run_kinprop
 
@@ -67,9 +68,12 @@ def test_large_load_shows_progress_on_a_terminal(tmp_path, monkeypatch, capsys) 
     path.write_text("\n".join(lines) + "\n")
     assert path.stat().st_size > cli_app.PROGRESS_BYTES
     buf = io.StringIO()
-    monkeypatch.setattr(cli_app.err, "file", buf)
+    monkeypatch.setattr(cli_app, "err", cli_app._Console(file=buf, markup=False, emoji=False, highlight=False))
     model = cli_app.load_model_cli(path)  # a pipe: nothing on stderr
     assert len(model.mechanism.bodies) == 8001 and buf.getvalue() == ""
-    monkeypatch.setattr(cli_app.err, "_force_terminal", True)
+    terminal = cli_app._Console(file=buf, markup=False, emoji=False, highlight=False, force_terminal=True)
+    monkeypatch.setattr(cli_app, "err", terminal)
     cli_app.load_model_cli(path)
-    assert f"loaded {path}: 8001 bodies, 8000 joints" in " ".join(buf.getvalue().split())
+    shown = " ".join(re.sub(r"\x1b\[[0-9;?]*[a-zA-Z]", "", buf.getvalue()).split())
+    assert f"loading {path} (0.7 MB): parsing, validating, building the tree" in shown
+    assert f"loaded {path}: 8001 bodies, 8000 joints" in shown

@@ -71,7 +71,7 @@ class _Group(TyperGroup):
         except click.exceptions.ClickException as exc:
             _error_line(exc.format_message())
             sys.exit(exc.exit_code)
-        except (click.exceptions.Abort, KeyboardInterrupt):
+        except (typer.Abort, KeyboardInterrupt):
             err.print("interrupted")
             sys.exit(EXIT_INTERRUPTED)
         finally:
