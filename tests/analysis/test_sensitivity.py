@@ -128,8 +128,11 @@ def test_cli_json_matches_api(slider_crank):
     assert obj["of"] == ["J01.q", "hardpoint:J12.i[x]", "hardpoint:J12.i[y]", "hardpoint:J12.i[z]"]
     assert obj["wrt"] == ["J12.s_j[0]", "J12.s_j[1]", "J12.s_j[2]"]
     assert obj["assembly"]["initial_residual"] > 1e-4  # the file is not assembled: it says so
-    D = output_sensitivity(slider_crank, ["J01.q", "hardpoint:J12.i"], ["J12.s_j"])
-    np.testing.assert_allclose(obj["matrix"], D.to_numpy(), atol=1e-8)
+    D = output_sensitivity(slider_crank, ["J01.q", "hardpoint:J12.i"], ["J12.s_j"]).to_numpy().copy()
+    # the CLI reports the model's units (docs/units.md): the J01.q row in deg per m, not rad per m
+    assert obj["units"]["of"] == ["deg", "m", "m", "m"] and obj["units"]["wrt"] == ["m", "m", "m"]
+    D[0] = np.degrees(D[0])
+    np.testing.assert_allclose(obj["matrix"], D, atol=1e-8)
 
 
 def test_cli_table_and_default_outputs():

@@ -66,7 +66,14 @@ def test_json_hardpoints_match_hand_computation(examples) -> None:
     obj = json.loads(r.stdout)
     hp = obj["hardpoints"]
     assert list(hp) == ["J01.i", "J01.j", "J03.i", "J03.j", "J32.i", "J32.j", "J12.i", "J12.j"]
-    want = slider_crank_by_hand(obj["coordinates"], [-2.8, 0.2, 0.1])
+    # JSON is in the model's units (docs/units.md): the angles in degrees, as obj["units"] says
+    units = obj["units"]["coordinates"]
+    rad = {
+        j: [math.radians(x) if u == "deg" else x for x, u in zip(v, units[j], strict=True)]
+        for j, v in obj["coordinates"].items()
+    }
+    assert units == {"J01": ["deg"], "J03": ["m"], "J32": ["deg", "deg"]}
+    want = slider_crank_by_hand(rad, [-2.8, 0.2, 0.1])
     for key, v in want.items():
         assert len(hp[key]) == 3 and all(isinstance(x, float) for x in hp[key])
         np.testing.assert_allclose(hp[key], v, atol=1e-12, err_msg=key)
@@ -106,7 +113,7 @@ def test_named_points_in_json(examples) -> None:
 
 
 def test_csv_before_after(examples, tmp_path) -> None:
-    csv = tmp_path / "out" / "sc.csv"
+    csv = tmp_path / "sc.csv"  # the directory must exist: outputs never create one (issue 11)
     r = run("propagate", examples / "slider_crank.yaml", "--set", SET, "--csv", csv, "--json")
     assert r.exit_code == 0, r.output
     obj = json.loads(r.stdout)  # --csv keeps stdout one JSON object
@@ -117,7 +124,7 @@ def test_csv_before_after(examples, tmp_path) -> None:
     assert rows.loc["J12.s_j[0]", "before"] == -2.828 and rows.loc["J12.s_j[0]", "after"] == -2.8
     assert rows.loc["J12.s_j[1]", "role"] == "set"
     assert rows.loc["J01.q", "unit"] == "deg" and rows.loc["J01.q", "before"] == pytest.approx(45.0)
-    assert rows.loc["J01.q", "after"] == pytest.approx(math.degrees(obj["coordinates"]["J01"][0]), abs=1e-12)
+    assert rows.loc["J01.q", "after"] == obj["coordinates"]["J01"][0]  # both in the model's degrees
     assert rows.loc["J01.q", "role"] == "moved"
     np.testing.assert_allclose(df["change"], df["after"] - df["before"], atol=1e-12)
     # the variable rows are exactly comparison_rows, at full precision

@@ -38,7 +38,8 @@ def test_propagate_json_contract(examples) -> None:
     assert isinstance(obj["residual_norm"], float) and obj["residual_norm"] == pytest.approx(1.26576e-05, rel=1e-5)
     assert len(obj["residual_history"]) == 3 and all(isinstance(x, float) for x in obj["residual_history"])
     assert set(obj["coordinates"]) == {"J01", "J03", "J32"}
-    assert obj["coordinates"]["J01"][0] == pytest.approx(np.radians(44.893707), abs=5e-7)  # radians
+    assert obj["coordinates"]["J01"][0] == pytest.approx(44.893707, abs=np.degrees(5e-7))  # the model unit: deg
+    assert obj["units"]["angle"] == "deg" and obj["units"]["coordinates"]["J01"] == ["deg"]
     m = load_model(examples / "slider_crank.yaml")
     assert set(obj["design"]) == set(m.design)  # every design variable of the model
     for k, v in obj["design"].items():

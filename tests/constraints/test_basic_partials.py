@@ -8,7 +8,7 @@ closed forms of the paper's Table 1:
   frame (``R <- exp(tilde(w)) R``).
 * body level (Table 1): ``Phi(r_i, A_i, s'_ij, C_ij, r_j, A_j, s'_ji, C_ji, l)`` with
   ``d_ij = r_j + A_j s'_ji - r_i - A_i s'_ij`` and ``R_i = A_i C_ij``, ``R_j = A_j C_ji``. The
-  chain rule is the one of ``kinprop.kinematics.assembly``: ``Phi_r_i = -Phi_d``,
+  chain rule is the one of ``kinprop.kinematics.kernels``: ``Phi_r_i = -Phi_d``,
   ``Phi_r_j = Phi_d``, ``Phi_pi_i = Phi_d tilde(s_ij) + Phi_wi``, ``Phi_pi_j = -Phi_d tilde(s_ji)
   + Phi_wj``, ``Phi_s'_ij = -Phi_d A_i``, ``Phi_s'_ji = Phi_d A_j``, ``Phi_xi_ij = Phi_wi``,
   ``Phi_xi_ji = Phi_wj``, where ``s_ij = A_i s'_ij`` is global.

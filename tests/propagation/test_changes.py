@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from kinprop import load_model
@@ -21,10 +22,15 @@ def test_several_components_of_one_variable(examples) -> None:
 
 
 def test_cli_set_coordinates_in_model_angle_unit(examples) -> None:
-    """The four-bar file uses degrees: --set O2.q=30 means 30 degrees."""
+    """The four-bar file uses degrees: --set O2.q=30 means 30 degrees, and the JSON is in the
+    model's units too (docs/units.md): 30 again, to the last bit of the deg -> rad -> deg trip."""
     r = CliRunner().invoke(app, ["propagate", str(examples / "fourbar.yaml"), "--set", "O2.q=30", "--json"])
     assert r.exit_code == 0, r.output
-    assert json.loads(r.stdout)["coordinates"]["O2"][0] == np.radians(30)
+    obj = json.loads(r.stdout)
+    assert obj["coordinates"]["O2"][0] == pytest.approx(30.0, rel=1e-15) and obj["units"]["coordinates"]["O2"] == [
+        "deg"
+    ]
+    assert obj["coordinates"]["O2"][0] == np.degrees(np.radians(30))
 
 
 def test_models_pickle_for_distributed_studies(examples) -> None:

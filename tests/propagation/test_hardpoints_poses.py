@@ -172,12 +172,15 @@ def test_bad_global_addresses_are_located():
 def test_sensitivity_per_global_millimetre_matches_re_solved_differences():
     """d(toe)/d(tie-rod inner point, global) by the implicit-function theorem and the exact
     conversion, against central differences of full propagations of the global hardpoint."""
-    from kinprop.cli.sensitivity import global_frame
+    import pandas as pd
+
+    from kinprop.cli.sensitivity import sensitivities
 
     m = solved(EXAMPLES / "double_wishbone.yaml")
-    frame = global_frame(
+    sens = sensitivities(
         m, ["hardpoint:TR.i", "hardpoint:UBJ.j[z]", "hardpoint:UBJ[z]"], ["metric:upright.toe"], ("q",), None
     )
+    frame = pd.DataFrame(sens.matrix, index=sens.rows, columns=sens.columns)
     assert list(frame.columns) == [f"hardpoint:TR.i[{c}]" for c in "xyz"] + ["hardpoint:UBJ.j[z]", "hardpoint:UBJ[z]"]
     eng = compile(m)
     base = {"TR.i": np.array(joint_hardpoints(m)["TR.i"]), "UBJ.j": np.array(joint_hardpoints(m)["UBJ.j"])}

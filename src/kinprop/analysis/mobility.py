@@ -105,7 +105,9 @@ def mobility(model: Model, rtol: float = RANK_RTOL, free: Sequence[str] = ("q", 
     Jq = J[:, cols]
     m, n = Jq.shape
     if Jq.size:
-        U, sv, _ = np.linalg.svd(Jq)
+        # U must span R^m (the left null space names dependent rows); V^T is never used, so
+        # skip its n x n square when there are more columns than rows (a long chain)
+        U, sv, _ = np.linalg.svd(Jq, full_matrices=m > n)
     else:
         U, sv = np.eye(m), np.zeros(0)
     rank = numerical_rank(sv, rtol)

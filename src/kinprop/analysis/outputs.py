@@ -69,6 +69,7 @@ def expand_outputs(model: Model, names: Sequence[str]) -> list[str]:
                 raise AddressError(
                     f"bad output {name!r}: expected point:BODY.NAME[x|y|z] or hardpoint:JOINT.i|j[x|y|z]"
                 )
+            _check_point(model, name, m)
             out += [name] if m.group("c") is not None else _vector_name(name, 3, True)
         elif name.startswith("metric:") or "." not in name:
             resolve_metric(model, name)  # a wheel body and a known metric
@@ -78,6 +79,24 @@ def expand_outputs(model: Model, names: Sequence[str]) -> list[str]:
             size = _variable_size(model, addr.key)
             out += [name] if addr.index is not None or size == 1 else _vector_name(name, size, False)
     return out
+
+
+def _check_point(model: Model, name: str, m: re.Match[str]) -> None:
+    """The body and its named point (or the joint) of a point output exist."""
+    mech = model.mechanism
+    if name.startswith("point:"):
+        body, point = m.group("body"), m.group("name")
+        if body not in mech.body_names:
+            raise AddressError(f"output {name!r}: unknown body {body!r}; bodies are {', '.join(mech.body_names)}")
+        known = [p for p, _ in mech.body(body).points]
+        if point not in known:
+            raise AddressError(
+                f"output {name!r}: body {body!r} has no named point {point!r}; its points: {', '.join(known) or 'none'}"
+            )
+    elif m.group("joint") not in mech.joint_names:
+        raise AddressError(
+            f"output {name!r}: unknown joint {m.group('joint')!r}; joints are {', '.join(mech.joint_names)}"
+        )
 
 
 def _parse_variable(model: Model, name: str) -> Address:

@@ -28,6 +28,7 @@ from kinprop.engine import Engine
 from kinprop.model import Model
 from kinprop.propagation.propagate import engine_for
 from kinprop.propagation.sensitivity import Sensitivity, design_sensitivity, weight_vector
+from kinprop.spatial import Array
 
 if TYPE_CHECKING:  # pandas (the 'data' extra) is imported only when a frame is built
     import pandas as pd
@@ -45,6 +46,42 @@ def _step(engine: Engine, model: Model, column: int) -> float:
         return FD_STEP
     value = engine.get(engine.state_of(model), v.key)[column - v.start]
     return FD_STEP * max(1.0, abs(float(value)))
+
+
+def output_sensitivity_matrix(
+    model: Model,
+    of: Sequence[str],
+    wrt: Sequence[str],
+    free: Sequence[str] = ("q",),
+    weights: Mapping[str, float] | None = None,
+    *,
+    reference: Model | None = None,
+    wheels: Mapping[str, WheelSpec] | None = None,
+    engine: Engine | None = None,
+) -> tuple[Array, list[str], list[str], float]:
+    """``(D, output names, design column labels, ||Phi||)`` of :func:`output_sensitivity`,
+    as plain arrays and lists (no pandas)."""
+    engine = engine_for(model, engine)
+    state = engine.state_of(model)
+    residual = float(np.linalg.norm(engine.residual(state)))
+    if residual > RESIDUAL_WARN:
+        warnings.warn(
+            f"sensitivities at a configuration that is not assembled: ||Phi|| = {residual:.3g}",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+    sens = design_sensitivity(model, wrt, free, weights, engine=engine)
+    f, names = output_function(model, of, reference=reference, wheels=wheels, engine=engine)
+    D = np.zeros((len(names), sens.wrt_columns.size))
+    for k, col in enumerate(sens.wrt_columns):
+        direction = np.zeros(engine.n_columns)
+        direction[col] = 1.0
+        direction[sens.free_columns] = sens.matrix[:, k]
+        h = _step(engine, model, int(col))
+        plus = engine.model_of(engine.retract(state, h * direction), model)
+        minus = engine.model_of(engine.retract(state, -h * direction), model)
+        D[:, k] = (f(plus) - f(minus)) / (2.0 * h)
+    return D, list(names), list(sens.columns), residual
 
 
 def output_sensitivity(
@@ -65,32 +102,14 @@ def output_sensitivity(
     ``weights``. Units: output unit per design-variable unit (coordinates in radians or
     length, metric angles in degrees, C columns per radian of body-frame rotation).
     """
-    engine = engine_for(model, engine)
-    layout = engine.layout
-    state = engine.state_of(model)
-    residual = float(np.linalg.norm(engine.residual(state)))
-    if residual > RESIDUAL_WARN:
-        warnings.warn(
-            f"sensitivities at a configuration that is not assembled: ||Phi|| = {residual:.3g}",
-            RuntimeWarning,
-            stacklevel=2,
-        )
-    sens = design_sensitivity(model, wrt, free, weights, engine=engine)
-    f, names = output_function(model, of, reference=reference, wheels=wheels, engine=engine)
-    D = np.zeros((len(names), sens.wrt_columns.size))
-    for k, col in enumerate(sens.wrt_columns):
-        direction = np.zeros(layout.n)
-        direction[col] = 1.0
-        direction[sens.free_columns] = sens.matrix[:, k]
-        h = _step(engine, model, int(col))
-        plus = engine.model_of(engine.retract(state, h * direction), model)
-        minus = engine.model_of(engine.retract(state, -h * direction), model)
-        D[:, k] = (f(plus) - f(minus)) / (2.0 * h)
+    D, names, columns, residual = output_sensitivity_matrix(
+        model, of, wrt, free, weights, reference=reference, wheels=wheels, engine=engine
+    )
     import pandas as pd
 
-    frame = pd.DataFrame(D, index=names, columns=sens.columns)
+    frame = pd.DataFrame(D, index=names, columns=columns)
     frame.attrs.update(residual_norm=residual, free=list(free), weights=dict(weights or {}))
     return frame
 
 
-__all__ = ["Sensitivity", "design_sensitivity", "output_sensitivity", "weight_vector"]
+__all__ = ["Sensitivity", "design_sensitivity", "output_sensitivity", "output_sensitivity_matrix", "weight_vector"]

@@ -10,7 +10,7 @@ every coordinate (layout labels ``J01.q``, ``J32.q[1]``), every named point
 (``point:BODY.NAME[x]``) and the outputs of :func:`kinprop.analysis.outputs.evaluate_outputs`
 (by default the suspension metrics of wheel bodies, if any).
 
-Variants run in chunks. Locally the compiled batched Newton (:mod:`kinprop.fast`) solves a
+Variants run in chunks. Locally the compiled engine (:meth:`kinprop.Engine.solve_batch`) solves a
 chunk in one call (the numpy reference when the mechanism cannot be compiled); with a
 ``scheduler`` address the chunks go to a Dask distributed cluster. Finished chunks are
 streamed to the output as one Parquet file per chunk in a directory
@@ -48,6 +48,9 @@ from kinprop.spatial import Array
 
 METHODS = ("grid", "lhs", "mc")
 MANIFEST = "_study.json"
+#: the most variants one study may plan (a grid grows as samples**factors): 10^7 rows of results
+#: are already gigabytes; a larger plan is refused up front with its count
+MAX_VARIANTS = 10_000_000
 
 
 @dataclass(frozen=True)
@@ -82,6 +85,13 @@ def sample_plan(factors: Sequence[Factor], method: str = "lhs", samples: int = 1
         raise AddressError(f"method {method!r}: expected one of {', '.join(METHODS)}")
     if F == 0 or samples < 1:
         raise AddressError("a study needs at least one --vary factor and --samples >= 1")
+    count = samples**F if method == "grid" else samples  # exact (Python int): no overflow
+    if count > MAX_VARIANTS:
+        plan = f"{samples}^{F} = {count:.3g}" if method == "grid" else f"{count:.3g}"
+        raise AddressError(
+            f"--method {method} with --samples {samples} plans {plan} variants; the limit is {MAX_VARIANTS:,}: "
+            f"lower --samples" + (" (levels per factor)" if method == "grid" else "")
+        )
     lo = np.array([f.low for f in factors])
     hi = np.array([f.high for f in factors])
     if method == "grid":
@@ -116,6 +126,9 @@ class StudySpec:
     model_hash: str = ""
     #: "auto" (compiled batched Newton when the mechanism compiles), "fast" or "reference"
     engine: str = "auto"
+    #: column -> factor from solver units (radians) to the stored units; a factor's plan values
+    #: are in the stored units and divided by it before solving (kinprop study: the model's units)
+    scale: dict[str, float] = field(default_factory=dict)
 
 
 # --- model transport (Design holds read-only mapping proxies, which do not pickle) ---------------
@@ -135,7 +148,23 @@ def _model_from_payload(p: Mapping[str, Any]) -> Model:
 
 
 def _model_hash(model: Model) -> str:
-    h = hashlib.sha256(repr(model.mechanism).encode())
+    """A content hash of the model that is the same in every process (for ``resume``).
+
+    Built from plain, ordered data: names, types, connectivity, the sorted design fields of
+    each joint, fixed poses, named points, units, then the design and coordinate arrays by
+    address. (``repr(mechanism)`` is not stable: it shows frozensets, whose order changes with
+    each process's string hashing.)"""
+    mech = model.mechanism
+    structure = {
+        "name": mech.name,
+        "units": sorted(model.units.items()),
+        "bodies": [
+            [b.name, b.fixed, list(b.position), [list(r) for r in b.orientation], [[k, list(p)] for k, p in b.points]]
+            for b in mech.bodies
+        ],
+        "joints": [[j.name, j.type, j.body_i, j.body_j, sorted(j.fields), j.cut] for j in mech.joints],
+    }
+    h = hashlib.sha256(json.dumps(structure, sort_keys=True).encode())
     for k in sorted(model.design):
         h.update(k.encode() + np.ascontiguousarray(model.design[k], dtype=float).tobytes())
     for k in sorted(model.coordinates):
@@ -184,6 +213,8 @@ def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, s
     rows: dict[str, Any] = {"variant": np.arange(start, start + n, dtype=np.int64)}
     for k, a in enumerate(spec.addresses):
         rows[a] = values[:, k]
+    # the plan is in the stored units (e.g. degrees); the solver takes solver units (radians)
+    solver_values = values / np.array([spec.scale.get(a, 1.0) for a in spec.addresses])[None, :]
     eng = compile_engine(model)
     base = eng.reference
     if spec.sets:
@@ -193,7 +224,7 @@ def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, s
     for i in range(n):
         try:
             for k, a in enumerate(spec.addresses):
-                eng.set(st[i], a, values[i, k])
+                eng.set(st[i], a, solver_values[i, k])
         except AddressError:
             ok[i] = False
     changed = {parse_address(a).key for a in spec.addresses} | {parse_address(a).key for a in spec.sets}
@@ -224,7 +255,7 @@ def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, s
     rows["residual"] = resid
     for c in range(nq):
         if labels[c] not in rows:
-            rows[labels[c]] = Q[:, c]
+            rows[labels[c]] = Q[:, c] * spec.scale.get(labels[c], 1.0)
     for k, (_, _, name) in enumerate(points):
         for x, ax in enumerate("xyz"):
             rows[f"{name}[{ax}]"] = P[:, k, x]
@@ -276,6 +307,7 @@ def run_study(
     progress: bool = False,
     on_chunk: Callable[[int], None] | None = None,
     engine: str = "auto",
+    scale: Mapping[str, float] | None = None,
 ) -> pd.DataFrame:
     """Run a design study and return one row per variant (see the module docstring).
 
@@ -285,6 +317,9 @@ def run_study(
     (the manifest must match). ``scheduler``: a Dask scheduler address (``tcp://host:8786``)
     or a ``distributed.Client``. ``on_chunk(index)`` is called after each chunk is stored.
     ``engine``: ``"auto"`` (compiled when possible), ``"fast"`` or ``"reference"`` (numpy).
+    ``scale``: column -> factor from solver units to the units the plan is given in and the
+    rows are stored in (``kinprop study`` passes 180/pi for angle columns of a degree model, so
+    inputs and coordinates are in the model's units; default: solver units, radians).
     Raises :class:`AddressError` / :class:`ValueError` for invalid input.
     """
     if plan is None:
@@ -299,6 +334,8 @@ def run_study(
         method, samples, seed = "plan", values.shape[0], None
     if chunk_size < 1:
         raise AddressError("--chunk-size must be >= 1")
+    if engine not in ("auto", "fast", "reference"):
+        raise AddressError(f"engine {engine!r}: expected auto, fast or reference")
     # validate every address once (component, group, existence) with the reference code path
     for a in addrs:
         addr = parse_address(a)
@@ -310,6 +347,10 @@ def run_study(
     base, _, _ = apply_changes(model, dict(sets or {}))
     if len(values):
         apply_changes(base, {a: values[0, k] for k, a in enumerate(addrs)})
+    if outputs:  # unknown output names fail here, before any directory is created
+        from kinprop.analysis.outputs import expand_outputs
+
+        expand_outputs(base, list(outputs))
     spec = StudySpec(
         addresses=addrs,
         free=list(free),
@@ -324,9 +365,8 @@ def run_study(
         plan_hash=hashlib.sha256(np.ascontiguousarray(values).tobytes()).hexdigest()[:16],
         model_hash=_model_hash(model),
         engine=engine,
+        scale=dict(scale or {}),
     )
-    if engine not in ("auto", "fast", "reference"):
-        raise AddressError(f"engine {engine!r}: expected auto, fast or reference")
     n_chunks = -(-len(values) // chunk_size)
     done: set[int] = set()
     directory = Path(output) if output is not None else None

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 import re
 import warnings
 from collections.abc import Callable, Mapping, Sequence
@@ -56,8 +57,8 @@ from kinprop.spatial import Array
 
 _DRIVE = re.compile(r"^(?P<joint>[^\s=\[\].]+)(\.q)?(\[(?P<index>\d+)\])?=(?P<range>.+)$")
 
-#: at most this many steps in one drive (bounded work and memory)
-MAX_STEPS = 100_000
+#: the most steps one sweep may take (each is a Newton solve and a row of results)
+MAX_STEPS = 10_000_000
 #: columns before the coordinates and outputs
 META = ("step", "status", "iterations", "residual_norm", "sv_ratio", "near_singular")
 
@@ -133,8 +134,10 @@ def _drive_values(text: str, spec: str) -> Array:
             start, stop, steps = float(parts[0]), float(parts[1]), int(parts[2])
         except ValueError:
             raise AddressError(f"--drive {text!r}: START and STOP must be numbers and STEPS an integer") from None
-        if not 1 <= steps <= MAX_STEPS:
-            raise AddressError(f"--drive {text!r}: STEPS must be in 1..{MAX_STEPS}, found {steps}")
+        if steps < 1:
+            raise AddressError(f"--drive {text!r}: STEPS must be >= 1")
+        if steps > MAX_STEPS:
+            raise AddressError(f"--drive {text!r}: {steps:,} steps; the limit is {MAX_STEPS:,}")
         out = np.linspace(start, stop, steps + 1)
     else:
         try:
@@ -215,9 +218,8 @@ class CsvSink:
     def __init__(self, path: str | Path, columns: Sequence[str]):
         self.path = Path(path)
         self.columns = list(columns)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
         self._fh = self.path.open("w", newline="")
-        self._w = csv.DictWriter(self._fh, fieldnames=self.columns)
+        self._w = csv.DictWriter(self._fh, fieldnames=self.columns, lineterminator="\n")
         self._w.writeheader()
         self._fh.flush()
 
@@ -239,7 +241,9 @@ class ParquetSink:
 
         self._pa = pa
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        #: rows go to a hidden partial file, renamed onto ``path`` when closed (also on an
+        #: interrupt): ``path`` is always a complete Parquet file with its footer, or absent
+        self.partial = self.path.with_name(f".{self.path.name}.partial")
         ints = {"step", "iterations"}
         fields = []
         for c in columns:
@@ -256,7 +260,7 @@ class ParquetSink:
         self.schema = pa.schema(fields)
         self.row_group_size = max(1, int(row_group_size))
         self._rows: list[Mapping[str, Any]] = []
-        self._writer = pq.ParquetWriter(str(self.path), self.schema)
+        self._writer = pq.ParquetWriter(str(self.partial), self.schema)
 
     def write(self, row: Mapping[str, Any]) -> None:
         self._rows.append(dict(row))
@@ -271,9 +275,12 @@ class ParquetSink:
 
     def close(self) -> None:
         if self._writer is not None:
-            self.flush()
-            self._writer.close()
-            self._writer = None
+            try:
+                self.flush()
+            finally:
+                self._writer.close()
+                self._writer = None
+                os.replace(self.partial, self.path)
 
 
 def open_sink(path: str | Path, columns: Sequence[str], text_columns: Sequence[str] = ("status", "message")) -> Sink:
@@ -383,6 +390,8 @@ def sweep(
             if r.converged:
                 good = prop.after
                 for col, joint, idx, deg in coord_cols:
+                    if col in drive_cols:
+                        continue  # the driven value exactly as given (not degrees -> radians -> degrees)
                     val = float(np.atleast_1d(good.coordinates[joint])[idx])
                     row[col] = math.degrees(val) if deg else val
                 try:

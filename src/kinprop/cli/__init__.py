@@ -1,6 +1,6 @@
 """Command-line interface. Each command lives in its own module and registers on ``app``."""
 
-from kinprop.cli import check, convert, paper, plot, sensitivity, solve, sweep  # noqa: F401  (registers commands)
+from kinprop.cli import check, convert, examples, paper, plot, sensitivity, solve, sweep  # noqa: F401  (registers commands)
 from kinprop.cli import importer as _importer  # noqa: F401  (kinprop import)
 from kinprop.cli import serve as _serve  # noqa: F401  (kinprop serve)
 from kinprop.cli import study as _study  # noqa: F401  (kinprop study, kinprop tolerance)
@@ -8,7 +8,7 @@ from kinprop.cli.app import app
 
 
 def main() -> None:
-    app()
+    app(prog_name="kinprop")
 
 
 __all__ = ["app", "main"]

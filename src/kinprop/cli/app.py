@@ -5,20 +5,91 @@ Exit codes: 0 success, 1 the solver did not converge, 2 invalid input.
 
 from __future__ import annotations
 
+import importlib
 import json
+import math
+import signal
 import sys
+import threading
 from collections.abc import Callable
 from functools import wraps
-from typing import Any, TypeVar
+from pathlib import Path
+from typing import Annotated, Any, NoReturn, TypeVar
 
 import numpy as np
 import typer
-from rich.console import Console
-from rich.markup import escape
+from rich.console import Console, ConsoleDimensions
+from rich.table import Table
+from rich.text import Text
+from typer.core import TyperGroup
+
+try:  # typer >= 0.20 carries its own copy of click; its exceptions are the ones raised
+    from typer import _click as click
+except ImportError:  # pragma: no cover - older typer on the real click
+    import click  # type: ignore[no-redef]
 
 from kinprop.errors import AddressError, ModelError
+from kinprop.io import load_model
+from kinprop.model import Model
 
-EXIT_OK, EXIT_NOT_CONVERGED, EXIT_INVALID = 0, 1, 2
+EXIT_OK, EXIT_NOT_CONVERGED, EXIT_INVALID, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+#: optional modules -> the extra that installs them (``pip install 'kinprop[EXTRA]'``)
+EXTRAS = {
+    "pandas": "data",
+    "pyarrow": "data",
+    "matplotlib": "plot",
+    "plotly": "plot",
+    "dask": "dask",
+    "distributed": "dask",
+}
+
+
+class _Group(TyperGroup):
+    """The command group, with usage errors as one ``error:`` line and SIGTERM as Ctrl-C.
+
+    Click's usage errors (unknown option, bad integer, missing argument) would print a
+    boxed, multi-line panel; here they get the same one-line ``error:`` form, exit 2, as
+    every other invalid input. SIGTERM (``timeout``, a cancelled CI job) raises
+    KeyboardInterrupt, so the interrupt paths (finished rows kept, partial files removed)
+    run for it too."""
+
+    def main(self, *args: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
+        if not standalone_mode:
+            return super().main(*args, standalone_mode=False, **kwargs)
+        previous = _sigterm_as_interrupt()
+        try:
+            rv = super().main(*args, standalone_mode=False, **kwargs)
+        except click.exceptions.NoArgsIsHelpError as exc:
+            exc.show()
+            sys.exit(exc.exit_code)
+        except click.exceptions.UsageError as exc:
+            where = f"kinprop {exc.ctx.info_name}: " if exc.ctx is not None and exc.ctx.parent is not None else ""
+            hint = f" (see {exc.ctx.command_path} --help)" if exc.ctx is not None else ""
+            _error_line(f"{where}{exc.format_message()}{hint}")
+            sys.exit(EXIT_INVALID)
+        except click.exceptions.ClickException as exc:
+            _error_line(exc.format_message())
+            sys.exit(exc.exit_code)
+        except (typer.Abort, KeyboardInterrupt):
+            err.print("interrupted")
+            sys.exit(EXIT_INTERRUPTED)
+        finally:
+            if previous is not None:
+                signal.signal(signal.SIGTERM, previous)
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+
+def _raise_interrupt(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt
+
+
+def _sigterm_as_interrupt() -> Any:
+    """Route SIGTERM to KeyboardInterrupt (main thread only); returns the previous handler."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    return signal.signal(signal.SIGTERM, _raise_interrupt)
+
 
 app = typer.Typer(
     name="kinprop",
@@ -26,22 +97,102 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    cls=_Group,
+    rich_markup_mode=None,
 )
-out = Console(highlight=False)
-err = Console(stderr=True, highlight=False)
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            text = version("kinprop")
+        except PackageNotFoundError:  # pragma: no cover - running from an uninstalled checkout
+            from kinprop import __version__ as text
+        out.print(f"kinprop {text}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    show_version: Annotated[
+        bool, typer.Option("--version", callback=_print_version, is_eager=True, help="print the version and exit")
+    ] = False,
+) -> None:
+    """Kinematic design propagation in closed-loop mechanisms (Zou, Abdel-Malek & Wang 1997)."""
+
+
+class _Console(Console):
+    """A rich console that prints user text literally (no markup, no ``:emoji:`` codes) and,
+    when not writing to a terminal, never wraps or truncates: a pipe gets whole lines."""
+
+    @property
+    def size(self) -> ConsoleDimensions:
+        size = Console.size.fget(self)  # type: ignore[attr-defined]
+        return size if self.is_terminal else ConsoleDimensions(PIPE_WIDTH, size.height)
+
+    @size.setter
+    def size(self, new_size: tuple[int, int]) -> None:
+        Console.size.fset(self, new_size)  # type: ignore[attr-defined]
+
+    def print(self, *objects: Any, **kwargs: Any) -> None:
+        """As :meth:`rich.console.Console.print`; to a pipe a table's title is its own line
+        (rich would wrap a title longer than the table to the table's width)."""
+        if objects and not self.is_terminal:
+            for k, obj in enumerate(objects):
+                if isinstance(obj, Table) and obj.title is not None:
+                    title, obj.title = obj.title, None
+                    super().print(title, soft_wrap=True)
+                    super().print(*objects[k : k + 1], **kwargs)
+                    obj.title = title
+                else:
+                    super().print(obj, **kwargs)
+            return
+        super().print(*objects, **kwargs)
+
+
+#: the line width when output goes to a pipe or file (tables are only as wide as their cells)
+PIPE_WIDTH = 100_000
+out = _Console(highlight=False, markup=False, emoji=False)
+err = _Console(stderr=True, highlight=False, markup=False, emoji=False)
 
 F = TypeVar("F", bound=Callable[..., Any])
 
 
-def fail(lines: list[str] | str, code: int = EXIT_INVALID) -> None:
-    """Print one line per problem on stderr and exit with ``code``."""
+def _error_line(line: str) -> None:
+    err.print(Text.assemble(("error:", "red"), " ", line), soft_wrap=True)
+
+
+def fail(lines: list[str] | str, code: int = EXIT_INVALID) -> NoReturn:
+    """Print one ``error: ...`` line per problem on stderr and exit with ``code``."""
     for line in [lines] if isinstance(lines, str) else lines:
-        err.print(f"[red]error:[/red] {escape(line)}", markup=True, soft_wrap=True)
+        _error_line(line)
     raise typer.Exit(code)
 
 
+def missing_extra(exc: ImportError) -> str | None:
+    """The one-line message for an optional module that is not installed, else None."""
+    name = (getattr(exc, "name", None) or "").split(".")[0]
+    extra = EXTRAS.get(name)
+    if extra is None:
+        return None
+    return f"this command needs {name}, which is not installed: pip install 'kinprop[{extra}]'"
+
+
+def require(module: str) -> None:
+    """Import an optional module now, so a missing extra is reported before any work."""
+    importlib.import_module(module)
+
+
+def require_plot(path: Path) -> None:
+    """The plotting library a plot file needs: plotly for ``.html``, matplotlib otherwise."""
+    require("plotly" if path.suffix.lower() == ".html" else "matplotlib")
+
+
 def handles_user_errors(fn: F) -> F:
-    """Turn model/address errors into one stderr line per problem and exit code 2."""
+    """Turn every invalid input into one ``error:`` line per problem on stderr and exit 2:
+    model and address errors, bad values, unwritable outputs, and a missing optional extra."""
 
     @wraps(fn)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
@@ -51,21 +202,52 @@ def handles_user_errors(fn: F) -> F:
             fail([str(p) for p in exc.problems])
         except (AddressError, ValueError) as exc:
             fail(str(exc.args[0]) if exc.args else str(exc))
+        except ImportError as exc:
+            msg = missing_extra(exc)
+            if msg is None:
+                raise
+            fail(msg)
+        except OSError as exc:
+            if exc.filename is None:
+                raise
+            fail(f"{exc.filename}: {exc.strerror or exc}")
 
     return wrapper  # type: ignore[return-value]
 
 
-def parse_assignment(text: str) -> tuple[str, np.ndarray]:
+#: model files larger than this show a progress line on a terminal while they load
+PROGRESS_BYTES = 512 * 1024
+
+
+def load_model_cli(path: Path) -> Model:
+    """:func:`kinprop.io.load_model`, with a live status line on stderr for a large file.
+
+    A 20,000-body model takes a few seconds to parse, validate and cut into a tree; a terminal
+    user sees what is happening (a pipe or CI log gets nothing extra)."""
+    try:
+        size = path.stat().st_size
+    except OSError:
+        size = 0
+    if size < PROGRESS_BYTES or not err.is_terminal:
+        return load_model(path)
+    with err.status(f"loading {path} ({size / 1e6:.1f} MB): parsing, validating, building the tree"):
+        model = load_model(path)
+    mech = model.mechanism
+    err.print(f"loaded {path}: {len(mech.bodies)} bodies, {len(mech.joints)} joints", soft_wrap=True)
+    return model
+
+
+def parse_assignment(text: str, option: str = "--set") -> tuple[str, np.ndarray]:
     """``ADDRESS=v1,v2,...`` -> (address, values)."""
     if "=" not in text:
-        raise AddressError(f"--set {text!r}: expected ADDRESS=VALUE (e.g. J12.s_j=-2.8,0.2,0.1)")
+        raise AddressError(f"{option} {text!r}: expected ADDRESS=VALUE (e.g. J12.s_j=-2.8,0.2,0.1)")
     addr, _, value = text.partition("=")
     try:
         nums = np.array([float(x) for x in value.replace(";", ",").split(",") if x.strip()], dtype=float)
     except ValueError:
-        raise AddressError(f"--set {text!r}: values must be comma-separated numbers") from None
+        raise AddressError(f"{option} {text!r}: values must be comma-separated numbers") from None
     if nums.size == 0:
-        raise AddressError(f"--set {text!r}: no value given")
+        raise AddressError(f"{option} {text!r}: no value given")
     return addr.strip(), nums
 
 
@@ -76,5 +258,25 @@ def parse_weight(text: str) -> tuple[str, float]:
     return addr, float(nums[0])
 
 
+def json_safe(obj: Any) -> Any:
+    """``obj`` with every non-finite float (NaN, +-Infinity) replaced by None: strict JSON."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return json_safe(obj.tolist())
+    if isinstance(obj, np.generic):
+        return json_safe(obj.item())
+    return obj
+
+
+def json_text(obj: Any) -> str:
+    """Strict JSON (RFC 8259): non-finite numbers become null, never bare NaN/Infinity."""
+    return json.dumps(json_safe(obj), allow_nan=False)
+
+
 def print_json(obj: Any) -> None:
-    sys.stdout.write(json.dumps(obj, allow_nan=True) + "\n")
+    sys.stdout.write(json_text(obj) + "\n")

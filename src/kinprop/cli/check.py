@@ -6,14 +6,12 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.markup import escape
 from rich.table import Table
 
 from kinprop.analysis.mobility import MobilityReport, mobility, row_names
-from kinprop.cli.app import EXIT_NOT_CONVERGED, app, fail, handles_user_errors, out, print_json
+from kinprop.cli.app import EXIT_NOT_CONVERGED, app, fail, handles_user_errors, load_model_cli, out, print_json
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
-from kinprop.io import load_model
 from kinprop.model import Model
 from kinprop.propagation import assemble
 
@@ -42,6 +40,10 @@ def check_json(model: Model, rep: MobilityReport, evaluated_at: str) -> dict[str
     topo = asm.topology
     tree = set(topo.tree_joints)
     rows = joint_rows(asm)
+    at_body: dict[str, list[str]] = {b.name: [] for b in mech.bodies}
+    for j in mech.joints:
+        at_body[j.body_i].append(j.name)
+        at_body[j.body_j].append(j.name)
     return {
         "model": model.source,
         "name": mech.name,
@@ -50,7 +52,7 @@ def check_json(model: Model, rep: MobilityReport, evaluated_at: str) -> dict[str
             {
                 "name": b.name,
                 "fixed": b.fixed,
-                "joints": [j.name for j in mech.joints if b.name in (j.body_i, j.body_j)],
+                "joints": at_body[b.name],
                 "points": [p for p, _ in b.points],
             }
             for b in mech.bodies
@@ -112,7 +114,7 @@ def _tables(obj: dict[str, Any]) -> list[Table]:
             j["bodies"][1],
             j["role"],
             str(j["n_coordinates"]),
-            escape(" ".join(r.split(":", 1)[1] for r in j["rows"])),
+            " ".join(r.split(":", 1)[1] for r in j["rows"]),
             style="cyan" if j["role"] == "cut" else None,
         )
     loops = Table(title="loops (one per cut joint)", title_justify="left")
@@ -133,7 +135,7 @@ def _tables(obj: dict[str, Any]) -> list[Table]:
 def print_report(obj: dict[str, Any], path: Path) -> None:
     """Rich tables and a summary for a human reader."""
     units = obj["units"]
-    out.print(escape(f"check {path}: {obj['name']}  (units: {units.get('length')}, {units.get('angle')})"))
+    out.print(f"check {path}: {obj['name']}  (units: {units.get('length')}, {units.get('angle')})")
     for t in _tables(obj):
         out.print(t)
     if obj["loops"]:
@@ -142,11 +144,12 @@ def print_report(obj: dict[str, Any], path: Path) -> None:
     n, m, rank = obj["n_coordinates"], obj["n_constraints"], obj["rank"]
     out.print(f"coordinates n = {n}, constraint rows m = {m}, rank of Phi_q = {rank}")
     out.print(f"Gruebler-Kutzbach count: {obj['gruebler']}")
-    out.print(f"[bold]mobility (n - rank): {obj['mobility']}[/bold]")
+    out.print(f"mobility (n - rank): {obj['mobility']}", style="bold")
     if obj["redundant"]:
         out.print(
-            f"[yellow]redundant constraint rows ({len(obj['redundant'])}): {escape(' '.join(obj['redundant']))}"
-            f"  (joints: {escape(' '.join(obj['redundant_joints']))})[/yellow]"
+            f"redundant constraint rows ({len(obj['redundant'])}): {' '.join(obj['redundant'])}"
+            f"  (joints: {' '.join(obj['redundant_joints'])})",
+            style="yellow",
         )
         if obj["mobility"] > obj["gruebler"]:
             out.print(
@@ -156,12 +159,13 @@ def print_report(obj: dict[str, Any], path: Path) -> None:
     else:
         out.print("redundant constraint rows: none")
     res = obj["residual_norm"]
-    out.print(f"evaluated at {escape(obj['evaluated_at'])}: ||Phi|| = {res:.3g}")
+    out.print(f"evaluated at {obj['evaluated_at']}: ||Phi|| = {res:.3g}")
     if not obj["assembled"]:
         out.print(
-            f"[yellow]note: not assembled (||Phi|| >= {ASSEMBLED_TOL:g}); the rank, mobility and redundant rows "
+            f"note: not assembled (||Phi|| >= {ASSEMBLED_TOL:g}); the rank, mobility and redundant rows "
             "hold at this configuration only. Assemble first: "
-            f"kinprop assemble {escape(str(path))} -o assembled.yaml (or kinprop check --assemble)[/yellow]",
+            f"kinprop assemble {path!s} -o assembled.yaml (or kinprop check --assemble)",
+            style="yellow",
             soft_wrap=True,
         )
 
@@ -184,7 +188,7 @@ def check_cmd(
     gruebler, n_coordinates, n_constraints, rank, tree_joints, cut_joints, loops, redundant,
     residual_norm, assembled, bodies, joints.
     """
-    m = load_model(model)
+    m = load_model_cli(model)
     evaluated_at = "the model's coordinates as given"
     if assemble_first:
         prop = assemble(m)

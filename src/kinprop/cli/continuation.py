@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 import typer
-from rich.markup import escape
+from rich.text import Text
 
 from kinprop.cli.app import EXIT_NOT_CONVERGED, err, out, print_json
 from kinprop.errors import SingularityWarning
@@ -28,20 +28,25 @@ from kinprop.propagation.continuation import ContinuationResult, propagate_conti
 
 @contextmanager
 def shown_warnings() -> Iterator[None]:
-    """Print :class:`SingularityWarning` s raised inside as one ``warning:`` line on stderr."""
+    """Print each distinct warning raised inside once, as a ``warning:`` line on stderr.
+
+    The records are printed after the recording context has closed: re-emitting a warning
+    while still recording appends it to the list being read (an endless loop on the first
+    numpy overflow warning, issue 11 item 2)."""
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", SingularityWarning)
+        warnings.simplefilter("always")
         try:
             yield
         finally:
-            seen: set[str] = set()
-            for w in caught:
-                msg = str(w.message)
-                if issubclass(w.category, SingularityWarning) and msg not in seen:
-                    seen.add(msg)
-                    err.print(f"[yellow]warning:[/yellow] {escape(msg)}", soft_wrap=True)
-                elif not issubclass(w.category, SingularityWarning):
-                    warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+            records = list(caught)
+    seen: set[tuple[type, str]] = set()
+    for w in records:
+        key = (w.category, " ".join(str(w.message).split()))
+        if key in seen:
+            continue
+        seen.add(key)
+        kind = "" if issubclass(w.category, SingularityWarning) else f"{w.category.__name__}: "
+        err.print(Text.assemble(("warning:", "yellow"), f" {kind}{key[1]}"), soft_wrap=True)
 
 
 def continuation_json(res: ContinuationResult) -> dict[str, Any]:
@@ -63,13 +68,11 @@ def print_continuation(res: ContinuationResult) -> None:
     if res.converged:
         out.print(f"continuation: {n_ok} sub-steps ({len(res.steps)} attempts)")
         return
-    out.print(f"[red]continuation: the change cannot be assembled beyond {res.fraction:.6g} of its size[/red]")
+    out.print(f"continuation: the change cannot be assembled beyond {res.fraction:.6g} of its size", style="red")
     for r, w in res.conflict:
-        out.print(
-            f"  in conflict: {escape(r)}  (weight {w:+.3f} in the left singular vector of the smallest singular value)"
-        )
+        out.print(f"  in conflict: {r}  (weight {w:+.3f} in the left singular vector of the smallest singular value)")
     for r, v in res.residual_rows:
-        out.print(f"  residual at the failed attempt: {escape(r)} = {v:.3g}")
+        out.print(f"  residual at the failed attempt: {r} = {v:.3g}")
     out.print(f"  smallest/largest singular value at the last feasible state: {res.singularity_ratio:.3g}")
 
 
@@ -137,7 +140,7 @@ def run_propagation(
 
     def say_fallback(plain: Propagation) -> None:
         if not as_json:
-            err.print(f"{escape(plain.result.message)}; diagnosing by continuation")
+            err.print(f"{plain.result.message}; diagnosing by continuation")
 
     with shown_warnings():
         prop, res, newton_ran = solve_propagation(
@@ -160,7 +163,7 @@ def run_propagation(
         print_json(propagate_json(prop, res, newton_ran))
         raise typer.Exit(EXIT_NOT_CONVERGED)
     print_continuation(res)
-    out.print(f"[red]{escape(res.message)}")
+    out.print(res.message, style="red")
     if output is not None:
         err.print(f"not writing {output}: the change cannot be assembled")
     raise typer.Exit(EXIT_NOT_CONVERGED)

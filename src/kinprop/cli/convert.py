@@ -11,8 +11,9 @@ from typing import Annotated, Any
 import typer
 import yaml
 
-from kinprop.cli.app import app, err, handles_user_errors, out
-from kinprop.io import load_model, model_to_data
+from kinprop.cli.app import app, err, handles_user_errors, load_model_cli, out
+from kinprop.cli.checks import check_outputs, check_suffix
+from kinprop.io import model_to_data
 from kinprop.io.hardpoints import joint_mismatch, model_to_hardpoints
 from kinprop.io.writer import atomic_write
 
@@ -55,7 +56,9 @@ def convert(
     coordinates (run ``kinprop assemble -o`` first if the model is not assembled). To frames,
     body frames, s', C and zero coordinates are derived from the hardpoints.
     """
-    m = load_model(model)
+    check_suffix("-o", output, (".xml", ".mjcf") if to is Style.mjcf else (".yaml", ".yml", ".json"))
+    check_outputs([model], [("-o", output)])
+    m = load_model_cli(model)
     if to is Style.mjcf:
         from kinprop.imports.mjcf_export import model_to_mjcf
 

@@ -6,8 +6,9 @@ from typing import Annotated
 
 import typer
 from rich.table import Table
+from rich.text import Text
 
-from kinprop.cli.app import EXIT_NOT_CONVERGED, app, out, print_json
+from kinprop.cli.app import EXIT_NOT_CONVERGED, app, fail, out, print_json
 from kinprop.reference import TABLES
 from kinprop.reference.paper import compare_column, reproduce
 
@@ -19,7 +20,9 @@ def _fmt(values: tuple[float, ...]) -> str:
 
 @app.command()
 def paper(
-    table: Annotated[list[str] | None, typer.Option("--table", help="table4 and/or table1 (default both)")] = None,
+    table: Annotated[
+        list[str] | None, typer.Option("--table", metavar="NAME", help="table4 and/or table1 (default both)")
+    ] = None,
     tol: Annotated[float, typer.Option("--tol", help="stopping rule ||Phi|| < TOL (the paper's: 1e-3)")] = 1e-3,
     as_json: Annotated[bool, typer.Option("--json", help="print one JSON object")] = False,
 ) -> None:
@@ -27,15 +30,14 @@ def paper(
     names = table or ["table4", "table1"]
     unknown = [n for n in names if n not in TABLES]
     if unknown:
-        out.print(f"unknown table {unknown}; choose from {list(TABLES)}")
-        raise typer.Exit(2)
+        fail(f"--table {unknown[0]!r}: unknown table; choose from {', '.join(TABLES)}")
     report: dict[str, list[dict]] = {}
     total = agree = 0
     for name in names:
         t = TABLES[name]
         report[name] = []
         if not as_json:
-            out.rule(f"[bold]{t.title}")
+            out.print(Text(t.title, style="bold"))
         for col, prop in reproduce(t, tol):
             rows = compare_column(prop, col)
             rt = Table(title=f"column: {col.name}   (free: {' '.join(col.free)})", title_justify="left")
@@ -49,7 +51,7 @@ def paper(
                     c.label,
                     printed if len(c.printed) == 1 else f"[{printed}]",
                     _fmt(c.ours),
-                    "[green]yes" if c.ok else "[red]NO",
+                    Text("yes", style="green") if c.ok else Text("NO", style="red"),
                     c.note,
                     style="yellow" if c.note.startswith(("typo", "label typo")) else None,
                 )
@@ -72,7 +74,7 @@ def paper(
         print_json({"agree": agree, "total": total, "tables": report})
     else:
         out.print(
-            f"\n[bold]{agree} of {total} printed quantities agree[/bold] (within one unit of the last printed digit, "
+            f"\n{agree} of {total} printed quantities agree (within one unit of the last printed digit, "
             "or to 5e-7 where the note says so — docs/paper.md; typos compared with the corrected value, "
             "marked in yellow; see kinprop.reference.paper)."
         )

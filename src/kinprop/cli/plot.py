@@ -7,11 +7,10 @@ from typing import Annotated
 
 import numpy as np
 import typer
-from rich.markup import escape
 
-from kinprop.cli.app import app, err, handles_user_errors, out
+from kinprop.cli.app import app, err, handles_user_errors, load_model_cli, out, require_plot
+from kinprop.cli.checks import check_outputs, check_suffix
 from kinprop.engine import compile as compile_engine
-from kinprop.io import load_model
 from kinprop.model import Model
 
 #: ||Phi|| above which a drawn model is flagged as not assembled
@@ -33,10 +32,8 @@ def note_if_unassembled(model: Model, path: Path | str) -> None:
     res = float(np.linalg.norm(compile_engine(model.mechanism).residual(model.design, model.coordinates)))
     if res > DRAW_NOTE_TOL:
         err.print(
-            escape(
-                f"note: {path} is drawn at its coordinates as given, not assembled (||Phi|| = {res:.3g}); "
-                "run kinprop assemble first for an assembled picture"
-            ),
+            f"note: {path} is drawn at its coordinates as given, not assembled (||Phi|| = {res:.3g}); "
+            "run kinprop assemble first for an assembled picture",
             soft_wrap=True,
         )
 
@@ -60,14 +57,17 @@ def plot_cmd(
     With --compare OTHER, OTHER is drawn faded as 'before' and MODEL solid as 'after' (the
     paper's Figs. 5 and 6).
     """
+    cam = parse_view(view)
+    check_suffix("-o", output, (".png", ".html"))
+    check_outputs([model, compare], [("-o", output)])
+    require_plot(output)
     from kinprop.plot import save_plot
 
-    cam = parse_view(view)
-    m = load_model(model)
+    m = load_model_cli(model)
     note_if_unassembled(m, model)
     before = None
     if compare is not None:
-        before = load_model(compare)
+        before = load_model_cli(compare)
         note_if_unassembled(before, compare)
     save_plot(
         output,
@@ -78,4 +78,4 @@ def plot_cmd(
         title=title,
         view=cam,
     )
-    out.print(escape(f"wrote {output}"))
+    out.print(f"wrote {output}")

@@ -4,90 +4,118 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import Annotated, Any, NamedTuple
 
 import numpy as np
 import typer
-from rich.markup import escape
 from rich.table import Table
 
-from kinprop.analysis.sensitivity import RESIDUAL_WARN, design_sensitivity, output_sensitivity
-from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, fail, handles_user_errors, out, parse_weight, print_json
+from kinprop.analysis.sensitivity import RESIDUAL_WARN, design_sensitivity, output_sensitivity_matrix
+from kinprop.cli.app import (
+    EXIT_NOT_CONVERGED,
+    app,
+    err,
+    fail,
+    handles_user_errors,
+    load_model_cli,
+    out,
+    print_json,
+)
+from kinprop.cli.checks import check_tol, parse_weights
 from kinprop.cli.continuation import shown_warnings
 from kinprop.engine import compile as compile_engine
-from kinprop.io import load_model
+from kinprop.io.units import derivative_scale, unit_of
+from kinprop.model import Model
 from kinprop.propagation import assemble
 from kinprop.propagation.hardpoints import free_weights, global_columns, is_global
-
-if TYPE_CHECKING:
-    import pandas as pd
-
-    from kinprop.model import Model
-    from kinprop.solver import SolveResult
+from kinprop.solver import SolveResult
 
 Json = Annotated[bool, typer.Option("--json", help="print one JSON object instead of a table")]
 
 
-def sensitivity_table(frame: pd.DataFrame, title: str) -> Table:
+def sensitivity_table(matrix: np.ndarray, rows: list[str], columns: list[str], title: str) -> Table:
     """A labelled matrix: one row per output, one column per design variable."""
-    t = Table(title=escape(title), title_justify="left")
+    t = Table(title=title, title_justify="left")
     t.add_column("d(output) / d(design)", style="bold")
-    for c in frame.columns:
-        t.add_column(escape(str(c)), justify="right")
-    for name, row in frame.iterrows():
-        cells = [f"{x:.6g}" if abs(x) > 1e-9 * max(1.0, np.max(np.abs(row.values))) else "0" for x in row.values]
-        t.add_row(escape(str(name)), *cells)
+    for c in columns:
+        t.add_column(str(c), justify="right")
+    for name, row in zip(rows, np.asarray(matrix), strict=True):
+        scale = max(1.0, float(np.max(np.abs(row)))) if row.size else 1.0
+        cells = [f"{x:.6g}" if abs(x) > 1e-9 * scale else "0" for x in row]
+        t.add_row(str(name), *cells)
     return t
 
 
-def sensitivity_frame(
-    assembled: Model,
-    wrt: Sequence[str],
-    of: Sequence[str] | None,
-    free: Sequence[str],
-    weights: Mapping[str, float] | None,
-) -> pd.DataFrame:
-    """d(outputs)/d(wrt) at an assembled model; without ``of``, of the free variables."""
+def _per(model, name: str) -> str:
+    """The unit of a design column: a C column is per angle of body-frame rotation."""
+    if ".C_" in name:
+        return model.units.get("angle", "rad")
+    return unit_of(model, name)
+
+
+class Sensitivities(NamedTuple):
+    """d(rows)/d(columns) in the model's units, with the unit of every row and column."""
+
+    matrix: np.ndarray
+    rows: list[str]
+    columns: list[str]
+    units_of: list[str]
+    units_wrt: list[str]
+
+
+def _solver_matrix(
+    assembled: Model, wrt: Sequence[str], of: Sequence[str] | None, free: Sequence[str], weights: Any
+) -> tuple[np.ndarray, list[str], list[str]]:
     if of:
-        return output_sensitivity(assembled, of, wrt, free, weights)
-    return design_sensitivity(assembled, wrt, free, weights).frame()
+        with shown_warnings():
+            matrix, rows, columns, _ = output_sensitivity_matrix(assembled, of, wrt, free, weights)
+        return np.asarray(matrix), list(rows), list(columns)
+    sens = design_sensitivity(assembled, wrt, free, weights)
+    return np.asarray(sens.matrix), list(sens.rows), list(sens.columns)
 
 
-def global_frame(
+def sensitivities(
     assembled: Model,
     wrt: Sequence[str],
     of: Sequence[str] | None,
     free: Sequence[str],
     weights: Mapping[str, float] | None,
-) -> pd.DataFrame:
-    """:func:`sensitivity_frame` where ``hardpoint:J[.i|.j][c]`` columns are per global length
-    unit (kinprop.propagation.hardpoints.global_columns); other columns unchanged."""
+) -> Sensitivities:
+    """d(outputs)/d(wrt) at an assembled model (without ``of``: of the free variables), in the
+    model's units (docs/units.md); ``hardpoint:J[.i|.j][c]`` columns are per global length unit
+    (:func:`kinprop.propagation.hardpoints.global_columns`)."""
     engine = compile_engine(assembled)
     design, combos = global_columns(engine, engine.reference, wrt)
-    frame = sensitivity_frame(assembled, design, of, free, free_weights(engine, weights))
-    if not combos:
-        return frame
-    for label, coef in combos.items():
-        frame[label] = sum(c * frame[col] for col, c in coef.items())
-    plain = set(sensitivity_frame(assembled, [w for w in wrt if not is_global(w)], of, free, None).columns) if any(
-        not is_global(w) for w in wrt) else set()  # fmt: skip
-    return frame[[c for c in frame.columns if c in combos or c in plain]]
+    matrix, rows, columns = _solver_matrix(assembled, design, of, free, free_weights(engine, weights))
+    if combos:
+        index = {c: k for k, c in enumerate(columns)}
+        plain = {engine.column_labels[int(c)] for c in engine.columns([w for w in wrt if not is_global(w)])}
+        keep = [c for c in columns if c in plain]
+        extra = list(combos)
+        cols = [matrix[:, index[c]] for c in keep] + [
+            sum(coef * matrix[:, index[c]] for c, coef in combos[label].items()) for label in extra
+        ]
+        matrix, columns = np.column_stack(cols) if cols else np.zeros((len(rows), 0)), keep + extra
+    # in the model's units: d(out)/d(in) * scale(out) / scale(in)
+    so = np.array([derivative_scale(assembled, str(name)) for name in rows])
+    si = np.array([derivative_scale(assembled, str(name)) for name in columns])
+    matrix = matrix * so[:, None] / si[None, :]
+    units_of = [unit_of(assembled, str(name)) for name in rows]
+    units_wrt = [_per(assembled, str(name)) for name in columns]
+    return Sensitivities(matrix, rows, columns, units_of, units_wrt)
 
 
 def sensitivity_json(
-    model: str,
-    frame: pd.DataFrame,
-    free: Sequence[str],
-    weights: Mapping[str, float] | None,
-    assembly: SolveResult,
+    model: str, sens: Sensitivities, free: Sequence[str], weights: Mapping[str, float] | None, assembly: SolveResult
 ) -> dict[str, Any]:
     """What ``kinprop sensitivity --json`` prints (``assembly``: the assembly solved first)."""
     r = assembly
     return {
         "model": model,
-        "of": [str(i) for i in frame.index],
-        "wrt": [str(c) for c in frame.columns],
-        "matrix": frame.to_numpy().tolist(),
+        "of": [str(i) for i in sens.rows],
+        "wrt": [str(c) for c in sens.columns],
+        "matrix": np.asarray(sens.matrix).tolist(),
+        "units": {"of": sens.units_of, "wrt": sens.units_wrt, "matrix": "unit of the row per unit of the column"},
         "free": list(free),
         "weights": dict(weights) if weights else {},
         "assembly": {
@@ -105,15 +133,26 @@ def sensitivity_cmd(
     wrt: Annotated[
         list[str],
         typer.Option(
-            "--wrt", help="design variables: addresses (RS.s_i[2]), groups, hardpoint:J.i[x] (per global unit)"
+            "--wrt",
+            metavar="ADDRESS",
+            help="design variables: addresses (RS.s_i[2]), groups, hardpoint:J.i[x] (per global length unit)",
         ),
     ],
     of: Annotated[
         list[str] | None,
-        typer.Option("--of", help="outputs: J.q[k], J.s_i[k], point:BODY.NAME[x], hardpoint:J.i[x], metric:W.camber"),
+        typer.Option(
+            "--of",
+            metavar="NAME",
+            help="outputs: J.q[k], J.s_i[k], point:BODY.NAME[x], hardpoint:J.i[x], metric:W.camber",
+        ),
     ] = None,
-    free: Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")] = None,
-    weight: Annotated[list[str] | None, typer.Option("--weight", help="ADDRESS_OR_GROUP=W: larger moves more")] = None,
+    free: Annotated[
+        list[str] | None,
+        typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q"),
+    ] = None,
+    weight: Annotated[
+        list[str] | None, typer.Option("--weight", metavar="ADDRESS=W", help="ADDRESS_OR_GROUP=W: larger moves more")
+    ] = None,
     tol: Annotated[float, typer.Option("--tol", help="assembly tolerance on ||Phi||_2")] = 1e-10,
     as_json: Json = False,
 ) -> None:
@@ -122,9 +161,10 @@ def sensitivity_cmd(
     The model is assembled first (free: q), then the implicit-function theorem gives the free
     variables' response with the same weighted minimum-norm inverse as `propagate`.
     """
-    m = load_model(model)
+    check_tol(tol)
+    weights = parse_weights(weight)
+    m = load_model_cli(model)
     free_set = tuple(free or ["q"])
-    weights = dict(parse_weight(w) for w in (weight or [])) or None
     with shown_warnings():  # a near-singular assembly is one "warning:" line on stderr
         prop = assemble(m, tol=tol)
     r = prop.result
@@ -133,19 +173,23 @@ def sensitivity_cmd(
         fail(f"{model}: cannot assemble the model before differentiating: {r.message}", EXIT_NOT_CONVERGED)
     if initial > RESIDUAL_WARN:
         err.print(
-            escape(f"note: {model} was not assembled (||Phi|| = {initial:.3g}); assembled first: {r.message}"),
+            f"note: {model} was not assembled (||Phi|| = {initial:.3g}); assembled first: {r.message}",
             soft_wrap=True,
         )
-    frame = global_frame(prop.after, wrt, of, free_set, weights)
+    assembled = prop.after
+    sens = sensitivities(assembled, wrt, of, free_set, weights)
     if as_json:
-        print_json(sensitivity_json(str(model), frame, free_set, weights, r))
+        print_json(sensitivity_json(str(model), sens, free_set, weights, r))
         return
     title = f"sensitivity {model}"
-    out.print(sensitivity_table(frame, title))
+    labelled_rows = [f"{r} [{u}]" if u else str(r) for r, u in zip(sens.rows, sens.units_of, strict=True)]
+    labelled_cols = [f"{c} [{u}]" if u else str(c) for c, u in zip(sens.columns, sens.units_wrt, strict=True)]
+    out.print(sensitivity_table(sens.matrix, labelled_rows, labelled_cols, title))
     weights_text = "; weights " + " ".join(f"{k}={v:g}" for k, v in weights.items()) if weights else ""
-    out.print(escape(f"free: {' '.join(free_set)}{weights_text}"))
+    out.print(f"free: {' '.join(free_set)}{weights_text}")
+    angle = assembled.units.get("angle", "rad")
     out.print(
-        "units: output unit per design unit; coordinates in rad (or length), metric angles in deg, "
-        "C columns per rad of body-frame rotation"
+        f"units: [row unit] per [column unit], the model's units ({assembled.units.get('length')}, {angle}); "
+        f"C columns per {angle} of body-frame rotation"
     )
     out.print(f"assembled: {r.message}")

@@ -6,7 +6,6 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.markup import escape
 from rich.table import Table
 
 from kinprop.cli.app import (
@@ -14,18 +13,27 @@ from kinprop.cli.app import (
     app,
     err,
     handles_user_errors,
+    load_model_cli,
     out,
-    parse_assignment,
-    parse_weight,
     print_json,
+    require_plot,
+)
+from kinprop.cli.checks import (
+    MAX_ITER,
+    check_int,
+    check_outputs,
+    check_set_not_free,
+    check_suffix,
+    check_tol,
+    parse_assignments,
+    parse_weights,
 )
 from kinprop.cli.continuation import run_propagation, shown_warnings
 from kinprop.cli.targets import run_targets
 from kinprop.engine import compile as compile_engine
-from kinprop.io import dump_model, load_model
 from kinprop.io.results import comparison_rows, point_rows, propagation_json, variable_rows
 from kinprop.io.units import changes_to_internal
-from kinprop.io.writer import atomic_write
+from kinprop.io.writer import atomic_write, csv_text, dump_model_like
 from kinprop.propagation import Propagation, propagate
 from kinprop.propagation.hardpoints import free_addresses, free_weights, is_global, resolve_changes
 
@@ -62,13 +70,9 @@ def comparison_table(prop: Propagation, title: str) -> Table:
 
 
 def comparison_csv(prop: Propagation) -> str:
-    """Before/after rows (:func:`comparison_rows`, then hardpoints and named points) as CSV text."""
-    import pandas as pd
-
-    frame = pd.DataFrame(
-        comparison_rows(prop) + point_rows(prop), columns=["variable", "unit", "before", "after", "change", "role"]
-    )
-    return frame.to_csv(index=False)  # shortest round-trip float text
+    """Before/after rows (:func:`comparison_rows`, then hardpoints and named points) as CSV text:
+    shortest round-trip numbers, ``\\n`` line endings (no pandas needed)."""
+    return csv_text(["variable", "unit", "before", "after", "change", "role"], comparison_rows(prop) + point_rows(prop))
 
 
 def write_csv(prop: Propagation, path: Path) -> None:
@@ -85,6 +89,19 @@ def write_plot(prop: Propagation, path: Path) -> None:
     save_plot(path, prop.after, prop.before, label="after", before_label="before", title=title)
 
 
+def check_report_options(
+    model: Path, output: Path | None, csv: Path | None, plot: Path | None, tol: float, max_iter: int
+) -> None:
+    """Everything about the outputs and numbers, before the model is loaded or solved."""
+    check_tol(tol)
+    check_int("--max-iter", max_iter, 1, MAX_ITER)
+    check_suffix("--plot", plot, (".png", ".html"))
+    check_suffix("-o", output, (".yaml", ".yml", ".json"))
+    check_outputs([model], [("-o", output), ("--csv", csv), ("--plot", plot)])
+    if plot is not None:
+        require_plot(plot)
+
+
 def report(
     prop: Propagation,
     title: str,
@@ -92,13 +109,12 @@ def report(
     as_json: bool,
     csv: Path | None = None,
     plot: Path | None = None,
+    source: Path | None = None,
 ) -> None:
     r = prop.result
-    if plot is not None and plot.suffix.lower() not in (".png", ".html"):
-        raise ValueError(f"--plot {str(plot)!r}: expected a name ending in .png or .html")
     written = []
     for path, write in (
-        (output, lambda p: dump_model(prop.after, p)),
+        (output, lambda p: dump_model_like(prop.after, p, source)),
         (csv, lambda p: write_csv(prop, p)),
         (plot, lambda p: write_plot(prop, p)),
     ):
@@ -115,9 +131,9 @@ def report(
         out.print(comparison_table(prop, title))
         out.print(f"free: {' '.join(prop.free)}   rank {r.rank} of {r.n_equations} equations, {r.n_free} free columns")
         out.print(f"||Phi|| history: {'  '.join(f'{x:.6g}' for x in r.residual_history)}")
-        out.print(("[green]" if r.converged else "[red]") + r.message)
+        out.print(r.message, style="green" if r.converged else "red")
         for note in prop.notes:
-            out.print(f"[yellow]note:[/yellow] {escape(note)}")
+            out.print(f"note: {note}", style="yellow")
         for path in written:
             out.print(f"wrote {path}")
     if not r.converged:
@@ -130,17 +146,21 @@ def assemble(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
     tol: Tol = 1e-10,
     max_iter: MaxIter = 50,
-    free: Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")] = None,
+    free: Annotated[
+        list[str] | None,
+        typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q"),
+    ] = None,
     output: Output = None,
     as_json: Json = False,
     csv: Csv = None,
     plot: Plot = None,
 ) -> None:
     """Solve for the joint coordinates from the model's estimates."""
-    m = load_model(model)
+    check_report_options(model, output, csv, plot, tol, max_iter)
+    m = load_model_cli(model)
     with shown_warnings():
         prop = propagate(m, {}, tuple(free or ["q"]), tol=tol, max_iter=max_iter)
-    report(prop, f"assemble {model}", output, as_json, csv, plot)
+    report(prop, f"assemble {model}", output, as_json, csv, plot, source=model)
 
 
 @app.command(name="propagate")
@@ -149,10 +169,19 @@ def propagate_cmd(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
     set_: Annotated[
         list[str] | None,
-        typer.Option("--set", help="ADDRESS=VALUE, e.g. J12.s_j=-2.8,0.2,0.1 or hardpoint:UBJ=x,y,z (global)"),
+        typer.Option(
+            "--set",
+            metavar="ADDRESS=VALUE",
+            help="ADDRESS=VALUE, e.g. J12.s_j=-2.8,0.2,0.1 or hardpoint:UBJ=x,y,z (global)",
+        ),
     ] = None,
-    free: Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")] = None,
-    weight: Annotated[list[str] | None, typer.Option("--weight", help="ADDRESS_OR_GROUP=W: larger moves more")] = None,
+    free: Annotated[
+        list[str] | None,
+        typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q"),
+    ] = None,
+    weight: Annotated[
+        list[str] | None, typer.Option("--weight", metavar="ADDRESS=W", help="ADDRESS_OR_GROUP=W: larger moves more")
+    ] = None,
     tol: Tol = 1e-10,
     max_iter: MaxIter = 50,
     output: Output = None,
@@ -170,11 +199,13 @@ def propagate_cmd(
 ) -> None:
     """Change design variables and re-assemble, moving only the free variables; with
     --target, find the smallest change of the --free design variables meeting the targets."""
-    m = load_model(model)
-    assignments = dict(parse_assignment(s) for s in (set_ or []))
-    changes = changes_to_internal(m, {k: v for k, v in assignments.items() if not is_global(k)})
-    changes |= {k: v for k, v in assignments.items() if is_global(k)}
-    weights = dict(parse_weight(w) for w in (weight or [])) or None
+    check_report_options(model, output, csv, plot, tol, max_iter)
+    given = parse_assignments("--set", set_)
+    check_set_not_free(given, free)
+    weights = parse_weights(weight)
+    m = load_model_cli(model)
+    changes = changes_to_internal(m, {k: v for k, v in given.items() if not is_global(k)})
+    changes |= {k: v for k, v in given.items() if is_global(k)}
     if target:
         writers = [(p, fn) for p, fn in ((csv, write_csv), (plot, write_plot)) if p is not None]
         run_targets(m, model, target, tuple(free or []), changes, weights, max_iter=max_iter, output=output,
@@ -197,4 +228,4 @@ def propagate_cmd(
         output=output,
         as_json=as_json,
     )
-    report(prop, f"propagate {model}", output, as_json, csv, plot)
+    report(prop, f"propagate {model}", output, as_json, csv, plot, source=model)

@@ -11,16 +11,37 @@ from typing import Annotated
 
 import numpy as np
 import typer
-from rich.markup import escape
 from rich.table import Table
 
-from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, handles_user_errors, out, parse_assignment, print_json
+from kinprop.cli.app import (
+    EXIT_NOT_CONVERGED,
+    app,
+    err,
+    handles_user_errors,
+    load_model_cli,
+    out,
+    print_json,
+    require,
+)
+from kinprop.cli.checks import (
+    MAX_ITER,
+    MAX_SAMPLES,
+    check_int,
+    check_outputs,
+    check_set_not_free,
+    check_tol,
+    parse_assignments,
+)
 from kinprop.errors import AddressError
-from kinprop.io import load_model
+from kinprop.io.units import derivative_scale, to_solver_units, unit_of
 
-Free = Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")]
+Free = Annotated[
+    list[str] | None, typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q")
+]
 EXIT_INTERRUPTED = 130
-Sets = Annotated[list[str] | None, typer.Option("--set", help="ADDRESS=VALUE applied to every variant")]
+Sets = Annotated[
+    list[str] | None, typer.Option("--set", metavar="ADDRESS=VALUE", help="ADDRESS=VALUE applied to every variant")
+]
 
 
 def _to_internal(model, changes: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -31,11 +52,32 @@ def _to_internal(model, changes: dict[str, np.ndarray]) -> dict[str, np.ndarray]
     return changes_to_internal(model, changes)
 
 
+def _model_unit_scale(model, factors) -> dict[str, float]:
+    """Column -> factor from radians to the model's angle unit, for the varied addresses and the
+    coordinate columns, so a study's inputs and outputs are in the model's units."""
+    from kinprop.engine import compile as compile_engine
+    from kinprop.kinematics.layout import column_labels
+
+    layout = compile_engine(model.mechanism).layout
+    labels = [f.address for f in factors] + [
+        lab for lab, col in zip(column_labels(layout), range(layout.n), strict=True) if _is_q(layout, col)
+    ]
+    scale = {lab: derivative_scale(model, lab) for lab in labels}
+    return {k: v for k, v in scale.items() if v != 1.0}
+
+
+def _is_q(layout, col: int) -> bool:
+    return any(v.group == "q" and v.start <= col < v.start + v.size for v in layout.variables)
+
+
 @app.command(name="study")
 @handles_user_errors
 def study_cmd(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
-    vary: Annotated[list[str], typer.Option("--vary", help="ADDRESS=LOW:HIGH, a scalar (component) address")],
+    vary: Annotated[
+        list[str],
+        typer.Option("--vary", metavar="ADDRESS=LOW:HIGH", help="ADDRESS=LOW:HIGH, a scalar (component) address"),
+    ],
     output: Annotated[Path, typer.Option("-o", "--output", help="result directory of Parquet parts (results.parquet)")],
     method: Annotated[str, typer.Option("--method", help="grid | lhs | mc")] = "lhs",
     samples: Annotated[int, typer.Option("--samples", help="variants (lhs, mc) or levels per factor (grid)")] = 100,
@@ -43,7 +85,7 @@ def study_cmd(
     free: Free = None,
     set_: Sets = None,
     out_names: Annotated[
-        list[str] | None, typer.Option("--output-name", help="extra outputs (point:, metric:, ...)")
+        list[str] | None, typer.Option("--output-name", metavar="NAME", help="extra outputs (point:, metric:, ...)")
     ] = None,
     tol: Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL")] = 1e-10,
     max_iter: Annotated[int, typer.Option("--max-iter")] = 50,
@@ -53,48 +95,68 @@ def study_cmd(
     resume: Annotated[bool, typer.Option("--resume", help="complete an interrupted study in OUTPUT")] = False,
     chunk_size: Annotated[int, typer.Option("--chunk-size", help="variants per chunk (one Parquet part each)")] = 256,
     as_json: Annotated[bool, typer.Option("--json", help="print a JSON summary")] = False,
+    engine: Annotated[
+        str, typer.Option("--engine", help="auto (compiled when possible), fast (compiled) or reference (numpy)")
+    ] = "auto",
 ) -> None:
     """Run a design study: every variant re-assembled, inputs and results streamed to Parquet."""
-    from kinprop.analysis.study import Factor, parse_vary, run_study, sample_plan  # pandas/pyarrow only when used
+    check_tol(tol)
+    check_int("--max-iter", max_iter, 1, MAX_ITER)
+    check_int("--samples", samples, 1, MAX_SAMPLES)
+    check_int("--chunk-size", chunk_size, 1, MAX_SAMPLES)
+    if method not in ("grid", "lhs", "mc"):
+        raise AddressError(f"--method {method!r}: expected grid, lhs or mc")
+    if engine not in ("auto", "fast", "reference"):
+        raise AddressError(f"--engine {engine!r}: expected auto, fast or reference")
+    check_outputs([model], [("-o", output)], directories=("-o",))
+    given = parse_assignments("--set", set_)
+    check_set_not_free(given, free)
+    require("pandas")
+    require("pyarrow")
+    if scheduler is not None:
+        require("distributed")
+    from kinprop.analysis.study import parse_vary, run_study, sample_plan
     from kinprop.engine import compile as compile_engine
     from kinprop.propagation.hardpoints import global_plan, is_global, resolve_changes
 
-    m = load_model(model)
-    sets = _to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
-    factors = []
-    for text in vary:
-        f = parse_vary(text)
-        lo = float(_to_internal(m, {f.address: np.array([f.low])})[f.address][0])
-        hi = float(_to_internal(m, {f.address: np.array([f.high])})[f.address][0])
-        factors.append(Factor(f.address, lo, hi))
-    if method not in ("grid", "lhs", "mc"):
-        raise AddressError(f"--method {method!r}: expected grid, lhs or mc")
+    parsed = [parse_vary(text) for text in vary]
+    seen: dict[str, str] = {}
+    for f, text in zip(parsed, vary, strict=True):
+        if f.address in seen:
+            raise AddressError(f"--vary {text!r}: {f.address} is already varied by --vary {seen[f.address]!r}")
+        seen[f.address] = text
+        if f.address in given:
+            raise AddressError(f"--vary {text!r}: {f.address} is also given by --set")
+    if method == "grid":
+        sample_plan(parsed, method, samples, seed)  # refuses a huge grid up front, with its count
+    m = load_model_cli(model)
+    sets = _to_internal(m, given)
+    factors = parsed  # in the model's units, as given; stored as given (scale below)
     # global hardpoints (hardpoint:J.i[z]=LOW:HIGH, --set hardpoint:J=x,y,z): exact s' columns
-    engine = compile_engine(m)
-    sets = resolve_changes(engine, engine.reference, sets)
+    compiled = compile_engine(m)
+    sets = resolve_changes(compiled, compiled.reference, sets)
     plan = addresses = None
     if any(is_global(f.address.split("[")[0]) for f in factors):
         values = sample_plan(factors, method, samples, seed)
-        addresses, plan = global_plan(engine, engine.reference, [f.address for f in factors], values)
+        addresses, plan = global_plan(compiled, compiled.reference, [f.address for f in factors], values)
     try:
         frame = run_study(
             m, factors, method=method, samples=samples, seed=seed, free=tuple(free or ["q"]), sets=sets,
             outputs=out_names, tol=tol, max_iter=max_iter, chunk_size=chunk_size, output=output, resume=resume,
-            scheduler=scheduler, progress=not as_json, plan=plan, addresses=addresses,
+            scheduler=scheduler, progress=not as_json, plan=plan, addresses=addresses, engine=engine,
+            scale=_model_unit_scale(m, factors),
         )  # fmt: skip
         if plan is not None:  # the global factor values beside the s' columns they set
             for k, f in enumerate(factors):
                 frame[f.address] = values[frame["variant"].to_numpy(), k]
     except KeyboardInterrupt:
-        err.print(f"interrupted: finished chunks are kept in {escape(str(output))}; run again with --resume")
+        err.print(f"interrupted: finished chunks are kept in {output!s}; run again with --resume")
         raise typer.Exit(EXIT_INTERRUPTED) from None
     n_failed = int((~frame["converged"]).sum()) if len(frame) else 0
     if as_json:
         print_json({"variants": len(frame), "failed": n_failed, "output": str(output)})
     else:
-        out.print(
-            f"{len(frame)} variants, {n_failed} failed; wrote {escape(str(output))}/ (read with pandas.read_parquet)"
-        )
+        out.print(f"{len(frame)} variants, {n_failed} failed; wrote {output!s}/ (read with pandas.read_parquet)")
         if len(frame):
             out.print(_summary(frame, [f.address for f in factors]))
     if n_failed:
@@ -112,7 +174,7 @@ def _summary(frame, inputs: list[str]) -> Table:
     ]:
         if c in ok and len(ok):
             col = ok[c].astype(float)
-            t.add_row(escape(c), f"{col.min():.6g}", f"{col.mean():.6g}", f"{col.max():.6g}")
+            t.add_row(c, f"{col.min():.6g}", f"{col.mean():.6g}", f"{col.max():.6g}")
     return t
 
 
@@ -120,8 +182,12 @@ def _summary(frame, inputs: list[str]) -> Table:
 @handles_user_errors
 def tolerance_cmd(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
-    tolerance: Annotated[list[str], typer.Option("--tolerance", help="ADDRESS=SIGMA (standard deviation)")],
-    of: Annotated[list[str], typer.Option("--of", help="output: a coordinate (J32.q[1]) or point:/metric: name")],
+    tolerance: Annotated[
+        list[str], typer.Option("--tolerance", metavar="ADDRESS=SIGMA", help="ADDRESS=SIGMA (standard deviation)")
+    ],
+    of: Annotated[
+        list[str], typer.Option("--of", metavar="NAME", help="output: a coordinate (J32.q[1]) or point:/metric: name")
+    ],
     free: Free = None,
     set_: Sets = None,
     mc: Annotated[int, typer.Option("--mc", help="also run a Monte Carlo study of N samples to compare")] = 0,
@@ -132,14 +198,19 @@ def tolerance_cmd(
     from kinprop.analysis.tolerance import monte_carlo, tolerance_analysis
     from kinprop.propagation import propagate
 
-    m = load_model(model)
-    sets = _to_internal(m, dict(parse_assignment(s) for s in (set_ or [])))
+    check_int("--mc", mc, 0, MAX_SAMPLES)
+    if mc:
+        require("pandas")  # the Monte Carlo comparison runs as a design study
+    given = parse_assignments("--set", set_)
+    check_set_not_free(given, free)
     tols = {}
-    for text in tolerance:
-        addr, vals = parse_assignment(text)
+    for addr, vals in parse_assignments("--tolerance", tolerance).items():
         if vals.size != 1 or not vals[0] > 0:
-            raise AddressError(f"--tolerance {text!r}: expected one positive standard deviation")
+            raise AddressError(f"--tolerance {addr}: expected one positive standard deviation")
         tols[addr] = float(vals[0])
+    m = load_model_cli(model)
+    sets = _to_internal(m, given)
+    tols = {a: float(to_solver_units(m, a, v)) for a, v in tols.items()}  # sigmas in the model's units
     freeset = tuple(free or ["q"])
     if sets:
         prop = propagate(m, sets, freeset)
@@ -149,18 +220,26 @@ def tolerance_cmd(
         m = prop.after
     res = tolerance_analysis(m, tols, of, free=freeset, fixed=tuple(sets))
     mc_std = monte_carlo(m, tols, res.outputs, n=mc, seed=seed, free=freeset, fixed=tuple(sets)) if mc else None
+    # everything reported in the model's units (docs/units.md)
+    so = np.array([derivative_scale(m, name) for name in res.outputs])
+    si = np.array([derivative_scale(m, name) for name in res.inputs])
+    nominal, std, cov, sigma = res.nominal * so, res.std * so, res.covariance * np.outer(so, so), res.sigma * si
+    mc_std = None if mc_std is None else mc_std * so
+    units = [unit_of(m, name) for name in res.outputs]
     if as_json:
-        obj = {"outputs": res.outputs, "nominal": res.nominal.tolist(), "std": res.std.tolist(),
-               "covariance": res.covariance.tolist(), "inputs": res.inputs, "sigma": res.sigma.tolist()}  # fmt: skip
+        obj = {"outputs": res.outputs, "nominal": nominal.tolist(), "std": std.tolist(),
+               "covariance": cov.tolist(), "inputs": res.inputs, "sigma": sigma.tolist(),
+               "units": {"outputs": units, "inputs": [unit_of(m, name) for name in res.inputs],
+                         "length": m.units.get("length"), "angle": m.units.get("angle")}}  # fmt: skip
         if mc_std is not None:
             obj["mc_std"] = mc_std.tolist()
         print_json(obj)
         return
-    t = Table(title=f"tolerance analysis of {escape(str(model))} (linearised)", title_justify="left")
-    for c in ("output", "nominal", "std", *(["MC std", "MC / linear"] if mc_std is not None else [])):
-        t.add_column(c, justify="left" if c == "output" else "right")
+    t = Table(title=f"tolerance analysis of {model!s} (linearised)", title_justify="left")
+    for c in ("output", "unit", "nominal", "std", *(["MC std", "MC / linear"] if mc_std is not None else [])):
+        t.add_column(c, justify="left" if c in ("output", "unit") else "right")
     for k, name in enumerate(res.outputs):
-        cells = [escape(name), f"{res.nominal[k]:.7g}", f"{res.std[k]:.4g}"]
+        cells = [name, units[k], f"{nominal[k] + 0.0:.7g}", f"{std[k]:.4g}"]  # + 0.0: no "-0"
         if mc_std is not None:
             cells += [f"{mc_std[k]:.4g}", f"{mc_std[k] / res.std[k]:.3f}" if res.std[k] > 0 else "-"]
         t.add_row(*cells)

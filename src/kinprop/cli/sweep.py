@@ -12,14 +12,30 @@ from typing import Annotated
 
 import numpy as np
 import typer
-from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
 from kinprop.analysis.sweep import Drive, parse_drive, plot_sweep, sweep
-from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, handles_user_errors, out, parse_assignment, print_json
-from kinprop.io import load_model
-from kinprop.io.units import changes_to_internal
+from kinprop.cli.app import (
+    EXIT_NOT_CONVERGED,
+    app,
+    err,
+    handles_user_errors,
+    load_model_cli,
+    out,
+    print_json,
+    require,
+)
+from kinprop.cli.checks import (
+    MAX_ITER,
+    check_int,
+    check_outputs,
+    check_set_not_free,
+    check_suffix,
+    check_tol,
+    parse_assignments,
+)
+from kinprop.io.units import changes_to_internal, unit_of
 from kinprop.model import Model
 
 #: show a progress bar from this many steps on
@@ -32,30 +48,38 @@ def _fmt(v: object) -> str:
     return str(v)
 
 
-def _table(frame, columns: list[str], limit: int = 24) -> Table:
+def _table(frame, columns: list[str], limit: int | None = 24) -> Table:
+    """The sweep's rows; with a ``limit`` the middle rows are elided (a terminal), else all."""
     t = Table(show_lines=False, title_justify="left")
+    units = frame.attrs.get("column_units", {})
     for c in columns:
-        t.add_column(escape(c), justify="left" if c in ("status",) else "right")
+        t.add_column(f"{c} [{units[c]}]" if units.get(c) else c, justify="left" if c in ("status",) else "right")
     n = len(frame)
-    idx = list(range(n)) if n <= limit else list(range(limit // 2)) + [-1] + list(range(n - limit // 2, n))
+    if limit is None or n <= limit:
+        idx = list(range(n))
+    else:
+        idx = list(range(limit // 2)) + [-1] + list(range(n - limit // 2, n))
     for i in idx:
         if i < 0:
             t.add_row(*["..."] * len(columns))
             continue
         row = frame.iloc[i]
         style = None if row["status"] == "converged" else "red"
-        t.add_row(*[escape(_fmt(row[c])) for c in columns], style=style)
+        t.add_row(*[_fmt(row[c]) for c in columns], style=style)
     return t
 
 
-def _shown_columns(res, limit: int = 10) -> list[str]:
-    """Step, drives, status, iterations, then the outputs and the coordinates that vary."""
+def _shown_columns(res, requested: list[str] | None, limit: int | None = 10) -> list[str]:
+    """Step, drives, the requested outputs (all of them, first), status, iterations, then the
+    default outputs and the coordinates that vary, up to ``limit`` columns (None: all)."""
     df = res.frame
-    head = ["step", *(d.label for d in res.drives), "status", "iterations"]
+    drives = [d.label for d in res.drives]
+    asked = list(res.outputs) if requested else []
+    head = ["step", *drives, *asked, "status", "iterations"]
     coords = [c for c in df.columns if ".q" in c and c not in head and not c.startswith(("point:", "metric:"))]
     rest = [c for c in res.outputs if c not in head] + coords
     varying = [c for c in rest if df[c].notna().any() and float(df[c].max() - df[c].min()) > 1e-12]
-    return head + varying[: max(0, limit - len(head))]
+    return head + (varying if limit is None else varying[: max(0, limit - len(head))])
 
 
 def _records(frame) -> list[dict]:
@@ -80,6 +104,7 @@ def sweep_json(res, base, output: Path | None = None, plot: Path | None = None) 
         "output_file": None if output is None else str(output),
         "plot_file": None if plot is None else str(plot),
         "rows": _records(df),
+        "units": {c: u for c, u in df.attrs.get("column_units", {}).items() if u},
     }
     if base is not None:
         obj["baseline_rows"] = _records(base.frame)
@@ -115,11 +140,25 @@ def sweep_inputs(
     m: Model, drive: Sequence[str], set_: Sequence[str], baseline: bool = False
 ) -> tuple[list[Drive], dict[str, np.ndarray]]:
     """The parsed ``--drive`` and ``--set`` options (``--set`` in model units, converted)."""
-    drives = [parse_drive(m, d) for d in drive]
-    changes = changes_to_internal(m, dict(parse_assignment(s) for s in set_))
-    if baseline and not changes:
+    given = parse_assignments("--set", list(set_))
+    if baseline and not given:
         raise ValueError("--baseline compares with the design before the --set changes: give at least one --set")
-    return drives, changes
+    return [parse_drive(m, d) for d in drive], changes_to_internal(m, given)
+
+
+def _check_x(model, drives, outputs: list[str] | None, x: str) -> None:
+    """``--x`` names a column the sweep will have: a drive, a coordinate or an output."""
+    from kinprop.analysis.outputs import expand_outputs
+    from kinprop.analysis.sweep import coordinate_columns, default_outputs
+
+    names = list(default_outputs(model) if outputs is None else outputs)
+    columns = [d.label for d in drives] + [c for c, *_ in coordinate_columns(model)] + expand_outputs(model, names)
+    if x not in columns:
+        raise ValueError(f"--x {x!r}: not a column of this sweep; columns: {', '.join(dict.fromkeys(columns))}")
+
+
+#: sweep columns that are counts, flags or text
+_NO_UNIT = {"step", "status", "iterations", "residual_norm", "sv_ratio", "near_singular", "message"}
 
 
 @app.command(name="sweep")
@@ -127,16 +166,26 @@ def sweep_inputs(
 def sweep_cmd(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
     drive: Annotated[
-        list[str], typer.Option("--drive", help="JOINT=START:STOP:STEPS (model units; repeat to drive together)")
+        list[str],
+        typer.Option(
+            "--drive",
+            metavar="JOINT=START:STOP:STEPS",
+            help="JOINT=START:STOP:STEPS (model units; repeat to drive together)",
+        ),
     ],
     set_: Annotated[
-        list[str] | None, typer.Option("--set", help="ADDRESS=VALUE design change applied at step 0")
+        list[str] | None,
+        typer.Option("--set", metavar="ADDRESS=VALUE", help="ADDRESS=VALUE design change applied at step 0"),
     ] = None,
-    free: Annotated[list[str] | None, typer.Option("--free", help="groups (q s C l) or addresses; default q")] = None,
+    free: Annotated[
+        list[str] | None,
+        typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q"),
+    ] = None,
     outputs: Annotated[
         list[str] | None,
         typer.Option(
             "--out",
+            metavar="NAME",
             help="output names (point:BODY.NAME, metric:WHEEL.camber, J.q ...); default: named points and metrics",
         ),
     ] = None,
@@ -160,11 +209,28 @@ def sweep_cmd(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="no table, no progress bar")] = False,
 ) -> None:
     """Drive joint coordinates over a range; each step is solved from the previous one."""
-    m = load_model(model)
-    drives, changes = sweep_inputs(m, drive, set_ or [], baseline)
+    check_tol(tol)
+    check_int("--max-iter", max_iter, 1, MAX_ITER)
+    check_suffix("-o", output, (".csv", ".parquet", ".pq"))
+    check_suffix("--plot", plot, (".png", ".pdf", ".svg"))
+    check_outputs([model], [("-o", output), ("--plot", plot)])
+    given = parse_assignments("--set", set_)
+    check_set_not_free(given, free)
+    if baseline and not given:
+        raise ValueError("--baseline compares with the design before the --set changes: give at least one --set")
+    if x is not None and not baseline:
+        raise ValueError("--x sets the abscissa of the --baseline plot: give --baseline (and --plot) too")
+    require("pandas")
+    if output is not None and output.suffix.lower() != ".csv":
+        require("pyarrow")
+    if plot is not None:
+        require("matplotlib")
+    m = load_model_cli(model)
+    drives = [parse_drive(m, d) for d in drive]
+    changes = changes_to_internal(m, given)
+    if x is not None:
+        _check_x(m, drives, outputs, x)
     quiet = quiet or as_json
-    if output is not None and output.suffix.lower() not in (".csv", ".parquet", ".pq"):
-        raise ValueError(f"--output {str(output)!r}: expected a .csv or .parquet file")
     n = max(d.values.size for d in drives)
     show = not quiet and n >= PROGRESS_FROM
     progress = Progress(
@@ -202,7 +268,7 @@ def sweep_cmd(
             )
         except KeyboardInterrupt:
             where = f"; rows computed so far are in {output}" if output is not None else ""
-            err.print(f"[yellow]interrupted[/yellow] after {done} of {n} steps ({failed} failed){where}")
+            err.print(f"interrupted after {done} of {n} steps ({failed} failed){where}")
             raise typer.Exit(130) from None
     base = None
     if baseline:
@@ -210,10 +276,15 @@ def sweep_cmd(
             m, drives, free=tuple(free or ["q"]), outputs=outputs, tol=tol, max_iter=max_iter, continuation=continuation
         )
     df = res.frame
+    df.attrs["column_units"] = {c: unit_of(m, c) for c in df.columns if c not in _NO_UNIT}
+    if base is not None:
+        base.frame.attrs["column_units"] = df.attrs["column_units"]
     if as_json:
         print_json(sweep_json(res, base, output, plot))
     if not quiet:
-        out.print(_table(df, _shown_columns(res)))
+        terminal = out.is_terminal  # a pipe gets every row and every varying column
+        shown = _shown_columns(res, outputs, 10 if terminal else None)
+        out.print(_table(df, shown, 24 if terminal else None))
     bad = df[df["status"] != "converged"]
     near = int(df["near_singular"].sum())
     say = err.print if as_json else out.print
@@ -224,8 +295,8 @@ def sweep_cmd(
     if len(bad):
         first = bad.iloc[0]
         label = res.drives[0].label
-        why = escape(str(first["message"]))
-        say(f"[red]first failure at step {int(first['step'])} ({label} = {first[label]:g}): {why}")
+        why = str(first["message"])
+        say(f"first failure at step {int(first['step'])} ({label} = {first[label]:g}): {why}", style="red")
     if output is not None:
         say(f"wrote {output}")
     if plot is not None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 import os
 import tempfile
@@ -18,7 +20,7 @@ from kinprop.model import Model
 def atomic_write(path: str | Path, data: str | bytes) -> None:
     """Write ``data`` to ``path`` so that readers see the old file or the new one, never half."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    path.parent.mkdir(parents=True, exist_ok=True)  # the CLI refuses a missing directory before this
     mode = "wb" if isinstance(data, bytes) else "w"
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
@@ -87,3 +89,54 @@ def dump_model(model: Model, path: str | Path) -> None:
         else yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
     )
     atomic_write(path, text)
+
+
+def _csv_cell(v: Any) -> Any:
+    """Shortest round-trip text for numbers (``repr``), empty for NaN, as-is otherwise."""
+    if isinstance(v, (bool, np.bool_)):
+        return "true" if v else "false"
+    if isinstance(v, (float, np.floating)):
+        v = float(v)
+        return "" if v != v else repr(v)
+    if isinstance(v, np.integer):
+        return int(v)
+    return v
+
+
+def csv_text(columns: list[str], rows: list[dict[str, Any]]) -> str:
+    """CSV with a header row, ``\\n`` line endings and shortest round-trip numbers."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(columns)
+    for row in rows:
+        w.writerow([_csv_cell(row.get(c)) for c in columns])
+    return buf.getvalue()
+
+
+def model_text(data: dict[str, Any], path: str | Path | None) -> str:
+    """File text of model data: JSON for ``*.json``, else YAML (leaf lists inline), full precision."""
+    if path is not None and str(path).endswith(".json"):
+        return json.dumps(data, indent=2) + "\n"
+    return yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
+
+
+def file_style(path: str | Path) -> tuple[str, str]:
+    """``(style, body_frames)`` of a model file: ``("frames", "")`` or ``("hardpoints", "global"|"joint")``."""
+    from kinprop.io.loader import parse_text
+
+    data = parse_text(Path(path).read_text(encoding="utf-8"), str(path))
+    if isinstance(data, dict) and data.get("style") == "hardpoints":
+        return "hardpoints", str(data.get("body_frames", "global"))
+    return "frames", ""
+
+
+def dump_model_like(model: Model, path: str | Path, like: str | Path | None) -> None:
+    """Write ``model`` in the style of the file ``like`` (the input): a hardpoint-style input
+    gives a hardpoint-style output (same ``body_frames`` rule), a frame-style one frames."""
+    style, body_frames = file_style(like) if like is not None else ("frames", "")
+    if style != "hardpoints":
+        dump_model(model, path)
+        return
+    from kinprop.io.hardpoints import model_to_hardpoints
+
+    atomic_write(path, model_text(model_to_hardpoints(model, body_frames), path))

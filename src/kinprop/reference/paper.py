@@ -19,11 +19,11 @@ import numpy as np
 from kinprop.io import load_model
 from kinprop.model import Model
 from kinprop.propagation import Propagation, assemble, propagate
+from kinprop.resources import examples_dir
 from kinprop.spatial import matrix_to_euler
 
 #: agreement floor in solver units (rad, m) for the few values that differ beyond their print (docs/paper.md)
 PRECISION_FLOOR = 5e-7
-EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
 
 
 @dataclass(frozen=True)
@@ -306,9 +306,11 @@ def compare_column(prop: Propagation, col: PaperColumn) -> list[Comparison]:
     return out
 
 
-def reproduce(table: PaperTable, tol: float = 1e-3, examples: Path = EXAMPLES) -> list[tuple[PaperColumn, Propagation]]:
+def reproduce(
+    table: PaperTable, tol: float = 1e-3, examples: Path | None = None
+) -> list[tuple[PaperColumn, Propagation]]:
     """Run the paper's propagations with its stopping rule ``||Phi|| < tol``."""
-    model: Model = load_model(examples / table.model)
+    model: Model = load_model((examples or examples_dir()) / table.model)
     runs = []
     if table.initial_assembly:
         first = assemble(model, tol=tol)
@@ -322,5 +324,5 @@ def reproduce(table: PaperTable, tol: float = 1e-3, examples: Path = EXAMPLES) -
     return runs
 
 
-def compare_table(table: PaperTable, tol: float = 1e-3, examples: Path = EXAMPLES) -> list[Comparison]:
+def compare_table(table: PaperTable, tol: float = 1e-3, examples: Path | None = None) -> list[Comparison]:
     return [c for col, prop in reproduce(table, tol, examples) for c in compare_column(prop, col)]

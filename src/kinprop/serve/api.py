@@ -39,7 +39,7 @@ from kinprop.analysis.sweep import sweep
 from kinprop.cli.app import parse_assignment, parse_weight
 from kinprop.cli.check import check_json
 from kinprop.cli.continuation import propagate_json, solve_propagation
-from kinprop.cli.sensitivity import sensitivity_frame, sensitivity_json
+from kinprop.cli.sensitivity import sensitivities, sensitivity_json
 from kinprop.cli.solve import comparison_csv
 from kinprop.cli.sweep import sweep_inputs, sweep_json
 from kinprop.errors import AddressError, ModelError, SingularityWarning
@@ -278,8 +278,8 @@ def create_app(model: Model, label: str | None = None, *, assemble_first: bool =
         r = prop.result
         if not r.converged:
             return errors([f"{label}: cannot assemble the model before differentiating: {r.message}"], 409)
-        frame = sensitivity_frame(prop.after, req.wrt, req.of, tuple(req.free), weights)
-        obj = sensitivity_json(label, frame, tuple(req.free), weights, r)
+        sens = sensitivities(prop.after, req.wrt, req.of, tuple(req.free), weights)
+        obj = sensitivity_json(label, sens, tuple(req.free), weights, r)
         headers = {}
         if r.residual_history[0] > RESIDUAL_WARN:
             headers["X-Kinprop-Note"] = f"not assembled (||Phi|| = {r.residual_history[0]:.3g}); assembled first"

@@ -57,11 +57,32 @@ class Topology:
         return tuple(t.joint for t in self.tree)
 
 
-def _path(chain: list[str], junction: str, parent_joint: dict[str, str]) -> tuple[str, ...]:
-    """Tree joints from ``junction`` down to ``chain[0]`` (chain runs body -> world).
+def _loop_paths(
+    body_i: str, body_j: str, parent: dict[str, str], depth: dict[str, int], parent_joint: dict[str, str]
+) -> tuple[str, tuple[str, ...], tuple[str, ...]]:
+    """Junction (lowest common ancestor) and the tree joints from it down to each body.
 
-    Fixed bodies have no parent joint: a loop between two fixed bases meets at WORLD."""
-    return tuple(parent_joint[b] for b in reversed(chain[: chain.index(junction)]) if b in parent_joint)
+    Walks up from the deeper body until both meet, so the work is the length of the two
+    paths (the loop's own size), not the depth of the tree. Fixed bodies have no parent
+    joint: a loop between two fixed bases meets at WORLD."""
+    a, b = body_i, body_j
+    up_i: list[str] = []
+    up_j: list[str] = []
+    while depth[a] > depth[b]:
+        up_i.append(a)
+        a = parent[a]
+    while depth[b] > depth[a]:
+        up_j.append(b)
+        b = parent[b]
+    while a != b:
+        up_i.append(a)
+        up_j.append(b)
+        a, b = parent[a], parent[b]
+    return (
+        a,
+        tuple(parent_joint[x] for x in reversed(up_i) if x in parent_joint),
+        tuple(parent_joint[x] for x in reversed(up_j) if x in parent_joint),
+    )
 
 
 def build_topology(mech: Mechanism) -> Topology:
@@ -89,10 +110,15 @@ def build_topology(mech: Mechanism) -> Topology:
     full.add_nodes_from(mech.body_names)
     full.add_edges_from((j.body_i, j.body_j) for j in mech.joints)
     fixed = {b.name for b in mech.bodies if b.fixed}
+    grounded: set[str] = set()
+    if len(reach) - 1 < len(mech.body_names):  # reach holds WORLD
+        for comp in nx.connected_components(full):
+            if comp & fixed:
+                grounded |= comp
     for b in mech.body_names:
         if b in reach:
             continue
-        if not any(f in nx.node_connected_component(full, b) for f in fixed):
+        if b not in grounded:
             problems.append(Problem(f"bodies.{b}", "not connected to a fixed body by any joint"))
         else:
             problems.append(
@@ -111,10 +137,12 @@ def build_topology(mech: Mechanism) -> Topology:
     # orient the tree from the world (BFS: parent before child)
     joints = {j.name: j for j in mech.joints}
     parent: dict[str, str] = {}
+    depth: dict[str, int] = {WORLD: 0}
     parent_joint: dict[str, str] = {}
     tree: list[TreeJoint] = []
     order: list[str] = []
     for u, v, key in nx.edge_bfs(T, WORLD):
+        depth[v] = depth[u] + 1
         if u == WORLD:
             parent[v] = WORLD
             continue
@@ -124,21 +152,11 @@ def build_topology(mech: Mechanism) -> Topology:
         tree.append(TreeJoint(key, u, v, reversed=(j.body_j == u)))
         order.append(v)
 
-    def chain(b: str) -> list[str]:
-        out = [b]
-        while out[-1] != WORLD:
-            out.append(parent[out[-1]])
-        return out
-
     loops = []
     cut = [j.name for j in mech.joints if j.name not in tree_keys]
     for name in cut:
         j = joints[name]
-        ci, cj = chain(j.body_i), chain(j.body_j)
-        cj_set = set(cj)
-        junction = next(b for b in ci if b in cj_set)
-
-        pi, pj = _path(ci, junction, parent_joint), _path(cj, junction, parent_joint)
+        junction, pi, pj = _loop_paths(j.body_i, j.body_j, parent, depth, parent_joint)
         case = 1 if (len(pi) + len(pj) == 1) else 2
         loops.append(Loop(name, j.body_i, j.body_j, junction, pi, pj, case))
     return Topology(tuple(order), tuple(tree), tuple(cut), tuple(loops), parent_joint)

@@ -1,0 +1,137 @@
+"""Option checks run before any work: every invalid option is one located ``error:`` line.
+
+Each command validates its numbers, repeated assignments and output paths here, before it
+loads the model or creates a file, so a bad option never costs a sweep or leaves a
+half-created directory (issue 11, items 1 and 6).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from kinprop.errors import AddressError
+from kinprop.model.design import parse_address
+
+#: upper bounds that keep one command's work and memory finite
+MAX_ITER = 100_000
+MAX_SAMPLES = 10_000_000
+
+
+def check_tol(tol: float, option: str = "--tol") -> None:
+    """A stopping tolerance is a positive finite number."""
+    if not (math.isfinite(tol) and tol > 0):
+        raise AddressError(f"{option} {tol!r}: expected a positive finite number (e.g. 1e-10)")
+
+
+def check_int(option: str, value: int, low: int, high: int) -> None:
+    """``low <= value <= high``."""
+    if not low <= value <= high:
+        raise AddressError(f"{option} {value}: expected an integer from {low} to {high:,}")
+
+
+def parse_assignments(option: str, texts: Iterable[str] | None) -> dict[str, np.ndarray]:
+    """``ADDRESS=VALUES`` options -> {address: values}; an address given twice is refused."""
+    from kinprop.cli.app import parse_assignment
+
+    out: dict[str, np.ndarray] = {}
+    seen: dict[tuple[str, int | None], str] = {}
+    for text in texts or []:
+        addr, values = parse_assignment(text, option)
+        if not np.all(np.isfinite(values)):
+            raise AddressError(f"{option} {text!r}: values must be finite numbers")
+        key = _key(addr)
+        clash = [t for (k, i), t in seen.items() if k == key[0] and (i is None or key[1] is None or i == key[1])]
+        if clash:
+            raise AddressError(f"{option} {text!r}: {addr} is already given by {option} {clash[0]!r}")
+        seen[key] = text
+        out[addr] = values
+    return out
+
+
+def parse_weights(texts: Iterable[str] | None) -> dict[str, float] | None:
+    """``--weight ADDRESS_OR_GROUP=W`` options: one positive number each, no address twice."""
+    out = {}
+    for addr, values in parse_assignments("--weight", texts).items():
+        if values.size != 1 or not values[0] > 0:
+            found = ", ".join(map(str, values))
+            raise AddressError(f"--weight {addr}: expected one number, and weights must be positive; found {found}")
+        out[addr] = float(values[0])
+    return out or None
+
+
+def _key(address: str) -> tuple[str, int | None]:
+    try:
+        a = parse_address(address)
+    except AddressError:
+        return address, None
+    return a.key, a.index
+
+
+def check_set_not_free(changes: Iterable[str], free: Sequence[str] | None, option: str = "--set") -> None:
+    """A changed variable is never free: naming it in --free too is a contradiction."""
+    changed = {_key(a)[0]: a for a in changes}
+    for f in free or []:
+        if "." in f and _key(f)[0] in changed:
+            raise AddressError(
+                f"--free {f!r}: {changed[_key(f)[0]]} is also given by {option}; a changed variable is never free"
+            )
+
+
+def check_outputs(
+    inputs: Sequence[Path | None], outputs: Sequence[tuple[str, Path | None]], directories: Sequence[str] = ()
+) -> None:
+    """Output paths that would destroy an input or each other, or cannot be written, are refused.
+
+    ``outputs``: (option, path) pairs; options in ``directories`` name an output directory
+    (``study -o``), the others a file. Nothing is created here: a missing parent directory is
+    an error (not silently made), as is a path that is a directory, an input model, or the
+    same file as another output.
+    """
+    ins = [(p, p.resolve()) for p in inputs if p is not None]
+    taken: dict[Path, str] = {}
+    for option, path in outputs:
+        if path is None:
+            continue
+        where = f"{option} {str(path)!r}"
+        real = path.resolve()
+        for given, inp in ins:
+            if real == inp or (path.exists() and given.exists() and os.path.samefile(path, given)):
+                raise AddressError(f"{where}: is the input model {str(given)!r}; refusing to overwrite it")
+        if real in taken:
+            raise AddressError(f"{where}: the same file as {taken[real]}; give each output its own name")
+        taken[real] = option
+        if option in directories:
+            if path.exists() and not path.is_dir():
+                raise AddressError(f"{where}: exists and is not a directory")
+        elif path.is_dir():
+            raise AddressError(f"{where}: is a directory; expected a file name")
+        parent = real.parent
+        if not parent.is_dir():
+            raise AddressError(f"{where}: the directory {str(parent)!r} does not exist")
+        target = path if path.exists() else parent
+        if not os.access(target, os.W_OK):
+            raise AddressError(f"{where}: {str(target)!r} is not writable")
+
+
+def check_suffix(option: str, path: Path | None, suffixes: Sequence[str]) -> None:
+    """The output format follows the name: refuse an unknown suffix up front."""
+    if path is not None and path.suffix.lower() not in suffixes:
+        raise AddressError(f"{option} {str(path)!r}: expected a name ending in {' or '.join(suffixes)}")
+
+
+__all__ = [
+    "MAX_ITER",
+    "MAX_SAMPLES",
+    "check_int",
+    "check_outputs",
+    "check_set_not_free",
+    "check_suffix",
+    "check_tol",
+    "parse_assignments",
+    "parse_weights",
+]

@@ -1,0 +1,174 @@
+"""Never destroy input or lose results (issue 11, item 1).
+
+Output paths equal to the input or to each other are refused before any work; ``-o`` keeps a
+hardpoint-style model hardpoint style; an interrupted study (SIGINT, SIGKILL) resumes in a new
+process to exactly the rows of an uninterrupted run; SIGTERM is handled like Ctrl-C; a refused
+command creates nothing.
+"""
+
+from __future__ import annotations
+
+import shutil
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+from cli_run import kinprop_cmd, one_error_line, run_kinprop
+
+from kinprop import load_model, propagate
+from kinprop.analysis.points import joint_hardpoints
+
+SET = "J12.s_j=-2.8,0.2,0.1"
+
+
+@pytest.fixture
+def model(examples, tmp_path) -> Path:
+    path = tmp_path / "M.yaml"
+    shutil.copy(examples / "slider_crank.yaml", path)
+    return path
+
+
+@pytest.mark.parametrize(
+    "outputs",
+    [
+        ["--csv", "{m}"],
+        ["-o", "{m}"],
+        ["--csv", "{d}/../{name}"],  # the same file by another spelling
+        ["-o", "{d}/out.yaml", "--csv", "{d}/out.yaml"],
+    ],
+)
+def test_outputs_never_overwrite_the_input_or_each_other(model, outputs) -> None:
+    before = model.read_bytes()
+    args = [o.format(m=model, d=model.parent / "x", name=model.name) for o in outputs]
+    (model.parent / "x").mkdir()
+    p = run_kinprop("propagate", model, "--set", SET, *args)
+    line = one_error_line(p)
+    assert "refusing to overwrite" in line or "the same file as" in line
+    assert model.read_bytes() == before
+    assert sorted(x.name for x in model.parent.iterdir()) == ["M.yaml", "x"]  # nothing written
+
+
+def test_convert_and_plot_refuse_the_input(model) -> None:
+    before = model.read_bytes()
+    assert "refusing to overwrite" in one_error_line(run_kinprop("convert", model, "--to", "frames", "-o", model))
+    html = model.with_suffix(".html")
+    html.write_text("keep")
+    line = one_error_line(run_kinprop("plot", model, "--compare", html, "-o", html))
+    assert "refusing to overwrite" in line and html.read_text() == "keep"
+    assert model.read_bytes() == before
+
+
+def test_output_keeps_hardpoint_style(examples, tmp_path) -> None:
+    """-o on a hardpoint-style model writes hardpoint style, and it reloads to the same result."""
+    src = examples / "slider_crank_hardpoints.yaml"
+    out = tmp_path / "after.yaml"
+    p = run_kinprop("propagate", src, "--set", "J12.s_j=0,-2.4,1.4", "-o", out)
+    assert p.returncode == 0, p.stderr
+    data = yaml.safe_load(out.read_text())
+    assert data["style"] == "hardpoints" and data["body_frames"] == "global"
+    ref = propagate(load_model(src), {"J12.s_j": [0, -2.4, 1.4]})
+    again = load_model(out)
+    want, got = joint_hardpoints(ref.after), joint_hardpoints(again)
+    assert list(got) == list(want)
+    # every joint where its second body carries it (a slide's guide point on the ground is the
+    # file's reference point, the slider's position, by the hardpoint convention), and the cut joint
+    for k in [k for k in want if k.endswith(".j")] + ["J12.i"]:
+        np.testing.assert_allclose(got[k], want[k], atol=1e-9, err_msg=k)
+
+
+def test_frame_style_output_stays_frame_style(model, tmp_path) -> None:
+    out = tmp_path / "after.yaml"
+    assert run_kinprop("propagate", model, "--set", SET, "-o", out).returncode == 0
+    assert "style" not in yaml.safe_load(out.read_text())
+
+
+def test_refused_commands_create_nothing(examples, tmp_path) -> None:
+    study = tmp_path / "study"
+    args = ["study", examples / "fourbar.yaml", "--vary", "B.s_i[0]=0.39:0.41", "--samples", "8", "-o", study]
+    line = one_error_line(run_kinprop(*args, "--output-name", "bogus"))
+    assert "bogus" in line and not study.exists()
+    p = run_kinprop(*args, "--engine", "reference")  # the rerun is not blocked
+    assert p.returncode == 0, p.stderr
+    assert len(pd.read_parquet(study)) == 8
+    # a sweep option that would only fail at the end fails before the first step
+    t0 = time.monotonic()
+    csv = tmp_path / "s.csv"
+    p = run_kinprop(
+        "sweep", examples / "double_wishbone.yaml", "--drive", "LCA=-6:6:2000", "--set", "TR.length=0.3",
+        "--baseline", "--x", "bogus", "-o", csv, "--plot", tmp_path / "s.png",
+    )  # fmt: skip
+    assert "--x 'bogus'" in one_error_line(p) and not csv.exists()
+    assert time.monotonic() - t0 < 30
+    # a missing directory is an error, not created
+    line = one_error_line(run_kinprop("assemble", examples / "fourbar.yaml", "-o", tmp_path / "no" / "dir" / "o.yaml"))
+    assert "does not exist" in line and not (tmp_path / "no").exists()
+    assert "is a directory" in one_error_line(run_kinprop("assemble", examples / "fourbar.yaml", "--csv", tmp_path))
+
+
+STUDY = ["--vary", "B.s_i[0]=0.38:0.42", "--vary", "A.s_i[0]=0.14:0.16", "--samples", "600", "--chunk-size", "20"]
+
+
+def _study_args(examples: Path, out: Path) -> list[object]:
+    return ["study", examples / "fourbar.yaml", *STUDY, "--engine", "reference", "-o", out, "--json"]
+
+
+def _parts(path: Path) -> int:
+    return len(list(path.glob("part-*.parquet"))) if path.exists() else 0
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL, signal.SIGTERM], ids=["SIGINT", "SIGKILL", "SIGTERM"])
+def test_study_resumes_in_a_new_process(examples, tmp_path, sig) -> None:
+    """Interrupt a study after a few chunks, resume it in a new process: the rows equal an
+    uninterrupted run's, bit for bit (the study identity is a content hash, stable per process)."""
+    full = tmp_path / "full"
+    p = run_kinprop(*_study_args(examples, full), timeout=300)
+    assert p.returncode == 0, p.stderr
+    want = pd.read_parquet(full).sort_values("variant", ignore_index=True)
+    assert len(want) == 600 and want["converged"].all()
+
+    cut = tmp_path / "cut"
+    proc = subprocess.Popen(kinprop_cmd(*_study_args(examples, cut)), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 120
+    while _parts(cut) < 3 and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    proc.send_signal(sig)
+    _, stderr = proc.communicate(timeout=60)
+    done = _parts(cut)
+    assert 3 <= done < 30, f"interrupted after {done} of 30 chunks"
+    if sig != signal.SIGKILL:  # Ctrl-C and SIGTERM: the interrupt message and exit 130
+        assert proc.returncode == 130, stderr.decode()
+        assert "--resume" in stderr.decode()
+    # no half-written part: every stored part reads
+    for part in cut.glob("part-*.parquet"):
+        assert len(pd.read_parquet(part)) == 20
+
+    p = run_kinprop(*_study_args(examples, cut), "--resume", timeout=300)
+    assert p.returncode == 0, p.stderr
+    got = pd.read_parquet(cut).sort_values("variant", ignore_index=True)
+    pd.testing.assert_frame_equal(got, want)
+
+
+def test_sigterm_leaves_a_complete_parquet_sweep(examples, tmp_path) -> None:
+    """A sweep to Parquet killed by SIGTERM (timeout, CI cancel) leaves a readable file with
+    every row computed so far, and exits 130 like Ctrl-C."""
+    out = tmp_path / "sweep.parquet"
+    args = ["sweep", examples / "fourbar.yaml", "--drive", "O2=0:360:400000", "-o", out, "-q"]
+    proc = subprocess.Popen(kinprop_cmd(*args), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    partial = out.with_name(f".{out.name}.partial")
+    deadline = time.monotonic() + 120
+    while not partial.exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(1.5)
+    proc.send_signal(signal.SIGTERM)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, stderr.decode()
+    frame = pd.read_parquet(out)
+    assert 0 < len(frame) < 400_001
+    assert list(frame["step"]) == list(range(len(frame)))
+    np.testing.assert_allclose(frame["O2.q"], np.linspace(0, 360, 400_001)[: len(frame)])
+    assert not partial.exists()

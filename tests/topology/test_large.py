@@ -1,0 +1,130 @@
+"""Topology of large models: linear in bodies, loops equal to a brute-force reference (issue 11, item 9).
+
+The old topology walked each cut joint's chain to the root (O(K * depth)): a 2,000-body chain
+with a cut joint per body took ~8 s and 20,000 bodies more than two minutes. The junction is now
+found by walking up from both bodies only until they meet.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import networkx as nx
+import numpy as np
+import pytest
+
+from kinprop.model import Body, Joint, Mechanism
+from kinprop.topology import WORLD, build_topology
+from random_mechanisms import suite_mechanisms
+
+
+def reference_loops(mech: Mechanism) -> dict[str, tuple[str, tuple[str, ...], tuple[str, ...]]]:
+    """Junction and paths of every cut joint from networkx's own tree algorithms (independent)."""
+    topo = build_topology(mech)
+    T = nx.DiGraph()
+    T.add_node(WORLD)
+    for b in mech.bodies:
+        if b.fixed:
+            T.add_edge(WORLD, b.name)
+    for t in topo.tree:
+        T.add_edge(t.parent, t.child, joint=t.joint)
+    out = {}
+    for name in topo.cut_joints:
+        j = mech.joint(name)
+        lca = nx.lowest_common_ancestor(T, j.body_i, j.body_j)
+
+        def down(b: str, lca: str = lca) -> tuple[str, ...]:
+            path = nx.shortest_path(T, lca, b)
+            return tuple(T.edges[u, v]["joint"] for u, v in itertools.pairwise(path) if "joint" in T.edges[u, v])
+
+        out[name] = (lca, down(j.body_i), down(j.body_j))
+    return out
+
+
+@pytest.mark.parametrize("rm", suite_mechanisms(12), ids=lambda rm: f"seed{rm.seed}")
+def test_loops_match_networkx_lca(rm) -> None:
+    mech = rm.model.mechanism
+    topo = build_topology(mech)
+    ref = reference_loops(mech)
+    assert {lp.cut_joint: (lp.junction, lp.path_i, lp.path_j) for lp in topo.loops} == ref
+
+
+def ladder(n: int) -> Mechanism:
+    """A serial chain of ``n`` revolute bodies with a distance joint from every body to the one
+    two links back (n - 2 short loops, at depths up to n)."""
+    bodies = [Body("ground", fixed=True)] + [Body(f"b{k}") for k in range(n)]
+    joints = [
+        Joint(f"R{k}", "revolute", "ground" if k == 0 else f"b{k - 1}", f"b{k}", frozenset({"s_i"})) for k in range(n)
+    ]
+    joints += [Joint(f"D{k}", "distance", f"b{k - 2}", f"b{k}", frozenset({"length"})) for k in range(2, n)]
+    return Mechanism(tuple(bodies), tuple(joints), "ladder")
+
+
+def test_deep_ladder_topology_is_linear() -> None:
+    """20,000 bodies and 19,998 cut joints at depth up to 20,000: each loop is 2 tree joints long."""
+    mech = ladder(20_000)
+    t0 = time.process_time()
+    topo = build_topology(mech)
+    cpu = time.process_time() - t0
+    assert len(topo.loops) == 19_998
+    lp = {lp.cut_joint: lp for lp in topo.loops}["D15000"]
+    assert (lp.junction, lp.path_i, lp.path_j, lp.case) == ("b14998", (), ("R14999", "R15000"), 2)
+    assert cpu < 10.0, f"build_topology took {cpu:.1f} s of CPU on 20,000 bodies"
+
+
+def chain_yaml(n: int) -> str:
+    """A planar chain of ``n`` revolute links (bent into an arc) closed to the ground by one
+    distance joint whose length is the actual tip distance: assembled, mobility n - 1."""
+    L = 1.0 / n
+    q = [0.0] + [0.5 / n] * (n - 1)  # a gentle arc, so the closing distance is not radial
+    lines = ["kinprop: 1", f"name: chain {n}", "units: {length: m, angle: rad}", "bodies:"]
+    lines.append("  ground: {fixed: true, position: [0, 0, 0]}")
+    lines += [f"  b{k}: {{}}" for k in range(n)]
+    lines.append("joints:")
+    theta = np.cumsum(q)
+    tip = np.array([L * np.cos(theta).sum(), L * np.sin(theta).sum()])
+    for k in range(n):
+        parent = "ground" if k == 0 else f"b{k - 1}"
+        lines.append(
+            f"  R{k}: {{type: revolute, bodies: [{parent}, b{k}], s_i: [{0 if k == 0 else L}, 0, 0], q: [{q[k]!r}]}}"
+        )
+    lines.append(
+        f"  D: {{type: distance, bodies: [b{n - 1}, ground], s_i: [{L}, 0, 0], s_j: [0.3, 0, 0],"
+        f" length: {math.dist(tip, (0.3, 0.0))!r}}}"
+    )
+    return "\n".join(lines) + "\n"
+
+
+def test_check_20000_body_chain_under_10s(tmp_path: Path) -> None:
+    """Load + ``kinprop check`` of a 20,000-body chain in a fresh process: < 10 s CPU (was > 2 min)."""
+    path = tmp_path / "chain.yaml"
+    path.write_text(chain_yaml(20_000))
+    code = (
+        "import json, resource, subprocess, sys, time\n"
+        "from kinprop.cli import app\n"
+        "t = time.process_time()\n"
+        "try:\n"
+        f'    app(["check", {str(path)!r}, "--json"])\n'
+        "except SystemExit as e:\n"
+        "    assert not e.code, e.code\n"
+        "print(time.process_time() - t, file=sys.stderr)\n"
+    )
+    t0 = time.monotonic()
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    wall = time.monotonic() - t0
+    assert p.returncode == 0, p.stderr[-2000:]
+    cpu = float(p.stderr.strip().splitlines()[-1])
+    obj = json.loads(p.stdout)
+    assert len(obj["bodies"]) == 20_001 and obj["cut_joints"] == ["D"]
+    assert obj["loops"][0]["junction"] == "ground" and len(obj["loops"][0]["path_i"]) == 20_000
+    # one distance row on 20,000 angles: rank 1, mobility 19,999 = the Gruebler count
+    assert (obj["n_coordinates"], obj["rank"], obj["mobility"], obj["gruebler"]) == (20_000, 1, 19_999, 19_999)
+    assert obj["assembled"] and obj["residual_norm"] < 1e-9
+    print(f"load + check of 20,000 bodies: {cpu:.2f} s CPU, {wall:.2f} s wall")
+    assert cpu < 10.0, f"load + check took {cpu:.1f} s CPU ({wall:.1f} s wall)"
