@@ -13,7 +13,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "kinprop"
 #: layer of each top-level module or package, in pipeline order (a module may import its own
 #: layer and the ones below)
 LAYERS = {
-    "errors": 0, "jit": 0, "spatial": 0,
+    "errors": 0, "jit": 0, "spatial": 0, "resources": 0, "__main__": 14,
     "constraints": 1, "joints": 2, "model": 3, "topology": 4, "kinematics": 5, "solver": 6, "engine": 7,
     "propagation": 8, "analysis": 9, "builders": 9,
     "io": 10, "imports": 10, "reference": 11, "plot": 11, "serve": 13, "cli": 13, "__init__": 14,

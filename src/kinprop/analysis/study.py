@@ -31,10 +31,9 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
 from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
@@ -45,6 +44,9 @@ from kinprop.model import Design, Model
 from kinprop.model.design import as_coordinates, parse_address
 from kinprop.propagation.propagate import apply_changes
 from kinprop.spatial import Array
+
+if TYPE_CHECKING:  # pandas (the data extra) is imported where a frame is built
+    import pandas as pd
 
 METHODS = ("grid", "lhs", "mc")
 MANIFEST = "_study.json"
@@ -197,6 +199,12 @@ def _outputs_for(model: Model, names: list[str]) -> dict[str, float]:
     return evaluate_outputs(model, names)
 
 
+def _pandas():
+    import pandas
+
+    return pandas
+
+
 def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, start: int) -> pd.DataFrame:
     """Rows of variants ``start .. start + len(values) - 1`` (runs on a Dask worker too)."""
     model = _model_from_payload(payload)
@@ -261,6 +269,8 @@ def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, s
             rows[f"{name}[{ax}]"] = P[:, k, x]
     for key in outs:
         rows[key] = outs[key]
+    import pandas as pd
+
     return pd.DataFrame(rows)
 
 
@@ -282,7 +292,8 @@ def read_study(path: str | Path) -> pd.DataFrame:
     """All finished rows of a study directory, ordered by variant."""
     parts = sorted(Path(path).glob("part-*.parquet"))
     if not parts:
-        return pd.DataFrame()
+        return _pandas().DataFrame()
+    pd = _pandas()
     return pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True).sort_values("variant", ignore_index=True)
 
 
@@ -348,8 +359,6 @@ def run_study(
     if len(values):
         apply_changes(base, {a: values[0, k] for k, a in enumerate(addrs)})
     if outputs:  # unknown output names fail here, before any directory is created
-        from kinprop.analysis.outputs import expand_outputs
-
         expand_outputs(base, list(outputs))
     spec = StudySpec(
         addresses=addrs,
@@ -418,8 +427,8 @@ def run_study(
     if directory is not None:
         return read_study(directory)
     if not frames:
-        return pd.DataFrame()
-    return pd.concat([frames[c] for c in sorted(frames)], ignore_index=True)
+        return _pandas().DataFrame()
+    return _pandas().concat([frames[c] for c in sorted(frames)], ignore_index=True)
 
 
 def _connect(scheduler: Any) -> tuple[Any, bool]:

@@ -14,6 +14,8 @@ import numpy as np
 import yaml
 
 from kinprop.engine import compile as compile_engine
+from kinprop.io.hardpoints import model_to_hardpoints
+from kinprop.io.loader import parse_text
 from kinprop.model import Model
 
 
@@ -122,8 +124,6 @@ def model_text(data: dict[str, Any], path: str | Path | None) -> str:
 
 def file_style(path: str | Path) -> tuple[str, str]:
     """``(style, body_frames)`` of a model file: ``("frames", "")`` or ``("hardpoints", "global"|"joint")``."""
-    from kinprop.io.loader import parse_text
-
     data = parse_text(Path(path).read_text(encoding="utf-8"), str(path))
     if isinstance(data, dict) and data.get("style") == "hardpoints":
         return "hardpoints", str(data.get("body_frames", "global"))
@@ -137,6 +137,4 @@ def dump_model_like(model: Model, path: str | Path, like: str | Path | None) -> 
     if style != "hardpoints":
         dump_model(model, path)
         return
-    from kinprop.io.hardpoints import model_to_hardpoints
-
     atomic_write(path, model_text(model_to_hardpoints(model, body_frames), path))
