@@ -52,7 +52,7 @@ def test_propagate_degrees_weights_and_strings(make_client, examples: Path) -> N
     c = make_client(DW, assemble_first=False)
     obj = c.post("/api/propagate", json={"set": {"LCA.q": 3}}).json()
     assert obj == cli_json("propagate", examples / DW, "--set", "LCA.q=3", "--json")
-    assert obj["coordinates"]["LCA"][0] == pytest.approx(np.radians(3.0), abs=1e-15)
+    assert obj["coordinates"]["LCA"][0] == pytest.approx(3.0, abs=1e-12)  # model units (docs/units.md)
 
     c = make_client(MC, assemble_first=False)
     req = {"set": {"ST.s_i": "0.5,1.0,0"}, "free": ["s", "l"], "weights": {"s": 1, "RS.length": 10}}
@@ -68,8 +68,13 @@ def test_failed_change_is_reported_and_not_applied(make_client, examples: Path) 
     r = c.post("/api/propagate", json={"set": {"TR.length": 5000}})
     code, out, _ = cli("propagate", examples / DW, "--set", "TR.length=5000", "--json")
     assert code == 1 and r.status_code == 200
-    assert r.text == out.rstrip("\n")
-    obj = r.json()
+    obj, cli_obj = r.json(), json.loads(out)
+    # the same diagnosis; the iterates of a solve that cannot converge differ in the last bits
+    # between processes (threaded BLAS), so compare what the user reads, not every digit
+    for key in ("status", "message", "changes", "free", "units"):
+        assert obj[key] == cli_obj[key], key
+    for key in ("status", "fraction", "message", "conflict"):
+        assert obj["continuation"][key] == cli_obj["continuation"][key], key
     assert obj["status"] == "not_converged" and "cannot be assembled" in obj["continuation"]["message"]
     assert r.headers["x-kinprop-applied"] == "false"
     assert c.get("/api/model.yaml").text == before
@@ -231,7 +236,7 @@ def test_slider_moves_coalesce_into_one_undo_step(make_client) -> None:
     for deg in (1.0, 2.0, 3.0):
         obj = c.post("/api/propagate", json={"set": {"LCA.q": deg}}).json()
         assert obj["status"] == "converged"
-        assert obj["coordinates"]["LCA"][0] == pytest.approx(np.radians(deg), abs=1e-15)
+        assert obj["coordinates"]["LCA"][0] == pytest.approx(deg, abs=1e-12)  # model units (docs/units.md)
     assert c.get("/api/state").json()["history"]["undo"] == 1
     c.post("/api/propagate", json={"set": {"TR.length": 390.0}})
     assert c.get("/api/state").json()["history"]["undo"] == 2

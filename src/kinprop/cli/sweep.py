@@ -90,9 +90,19 @@ def _records(frame) -> list[dict]:
     ]
 
 
+def label_units(res, base=None) -> None:
+    """The unit of every value column (model units, docs/units.md) into the frames' attrs."""
+    units = {c: unit_of(res.last, c) for c in res.frame.columns if c not in _NO_UNIT}
+    for r in (res, base):
+        if r is not None:
+            r.frame.attrs["column_units"] = units
+
+
 def sweep_json(res, base, output: Path | None = None, plot: Path | None = None) -> dict:
     """What ``kinprop sweep --json`` prints: counts, failed steps and every row (and the
-    baseline's rows when ``base`` is given)."""
+    baseline's rows when ``base`` is given), with the unit of every column."""
+    if "column_units" not in res.frame.attrs:
+        label_units(res, base)
     df = res.frame
     ok = df["status"] == "converged"
     obj = {
@@ -218,8 +228,8 @@ def sweep_cmd(
     check_set_not_free(given, free)
     if baseline and not given:
         raise ValueError("--baseline compares with the design before the --set changes: give at least one --set")
-    if x is not None and not baseline:
-        raise ValueError("--x sets the abscissa of the --baseline plot: give --baseline (and --plot) too")
+    if x is not None and plot is None:
+        raise ValueError("--x sets the abscissa of the --plot figure: give --plot too")
     require("pandas")
     if output is not None and output.suffix.lower() != ".csv":
         require("pyarrow")
@@ -276,9 +286,7 @@ def sweep_cmd(
             m, drives, free=tuple(free or ["q"]), outputs=outputs, tol=tol, max_iter=max_iter, continuation=continuation
         )
     df = res.frame
-    df.attrs["column_units"] = {c: unit_of(m, c) for c in df.columns if c not in _NO_UNIT}
-    if base is not None:
-        base.frame.attrs["column_units"] = df.attrs["column_units"]
+    label_units(res, base)
     if as_json:
         print_json(sweep_json(res, base, output, plot))
     if not quiet:
