@@ -564,10 +564,10 @@ class Engine:
         st = start.copy()
         goal = target if target is not None else start
         hist = np.zeros(max_iter + 1)
-        code, it, frac, subs, norm, flags = newton.follow_one(
+        code, it, frac, subs, norm, flags, hlen = newton.follow_one(
             self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, goal.Q, goal.S, goal.C, goal.L,
             -1 if assembled is None else int(assembled), self.row_scale, self.col_scale, cfg, hist)  # fmt: skip
-        return Solution(self, start, st, STATUSES[code], int(it), float(norm), hist[: min(it, max_iter) + 1], cols,
+        return Solution(self, start, st, STATUSES[code], int(it), float(norm), hist[: min(hlen, hist.size)], cols,
                         cfg.tol, dict(changes or {}), tol, float(frac), int(subs), int(flags))  # fmt: skip
 
     def apply(self, start: State, changes: Mapping[str, Any]) -> tuple[State, dict[str, Array], set[str]]:

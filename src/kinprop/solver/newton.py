@@ -315,7 +315,8 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
     ``max_substeps``. The state ends at the last accepted point. A start that is not assembled
     (estimates; ``assembled`` 0, or -1: evaluate to know) is assembled at its own design first
     (flagged when det changed sign on the way), then the change is followed. Returns
-    ``(status, iterations, fraction reached, sub-steps, ||scaled residual||, flags)``.
+    ``(status, iterations, fraction reached, sub-steps, ||scaled residual||, flags, entries of
+    history written)`` (the history holds the assembly's residuals, then the last sub-step's).
     """
     nj = S.shape[0]
     Q0, S0, C0, L0, Qs, Ss, Cs, Ls = fbuf[0], fbuf[1], fbuf[2], fbuf[3], fbuf[4], fbuf[5], fbuf[6], fbuf[7]
@@ -340,7 +341,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         if s0 != 0 and s1 != 0 and s0 != s1:
             flags |= SIGN_FLIP
         if st != CONVERGED and st != NO_FREE:
-            return st, it, 0.0, 1, nr, flags
+            return st, it, 0.0, 1, nr, flags, it + 1
         its0 = it
         Q0[:], S0[:], C0[:], L0[:] = Q, S, C, L
     # the change is what differs between start and target outside the free columns (the free
@@ -375,7 +376,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
                 log_so3_into(T, W[j, side])
     w, E = ws[7][5], ws[6][1]
     t, h = 0.0, 1.0
-    subs, its, last = 0, its0, CONVERGED
+    subs, its, last, hlen = 0, its0, CONVERGED, its0 + 1
     status, norm = CONVERGED, 0.0
     while t < 1.0:
         if subs >= cfg.max_substeps:
@@ -402,6 +403,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         st, it, nr, p1, corr, s0, s1 = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, hist, buf)
         last = st
         its += it
+        hlen = min(its0, history.shape[0]) + it + 1
         subs += 1
         norm = nr
         if st == NO_FREE:
@@ -433,7 +435,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
             break
     if status != CONVERGED and t == 0.0 and not flags & (JUMPED | SIGN_FLIP) and last != CONVERGED:
         status = last  # nothing of the change could be solved at all: say why (not a branch matter)
-    return status, its, t, subs, norm, flags
+    return status, its, t, subs, norm, flags, hlen
 
 
 @njit
