@@ -38,6 +38,8 @@ from kinprop.topology import Topology, build_topology
 #: converged when the scaled residual < max(tol, ROUNDOFF * eps * (U L)^2): distance rows
 #: d.d - l^2 carry round-off of about eps * L^2
 ROUNDOFF = 16.0
+#: a value beyond this multiple of the model's length scale is rejected as absurd (bounded work)
+ABSURD = 1e6
 #: metres per length unit a model may declare
 METRES_PER_UNIT = {"m": 1.0, "mm": 1e-3}
 #: branch keeping (kinprop.solver.newton.follow): jump test, trust radius of the predictor
@@ -393,6 +395,12 @@ class Engine:
             raise AddressError(f"{address!r}: expected {t.size} numbers, found {val.size}")
         if not np.all(np.isfinite(val)):
             raise AddressError(f"{address!r}: value must be finite")
+        bound = ABSURD * max(1.0, self.length_scale or 1.0)
+        if t.group != "C" and np.max(np.abs(val)) > bound:
+            raise AddressError(
+                f"{address!r}: {float(np.max(np.abs(val))):.3g} is beyond {ABSURD:g} times the model's length scale "
+                f"({bound:.3g}); no mechanism assembles there"
+            )
         if t.group == "q":
             state.Q[t.start + (t.index or 0) : t.start + (t.index or 0) + (1 if t.index is not None else t.size)] = val
         elif t.group == "s":
