@@ -91,6 +91,15 @@ def _sigterm_as_interrupt() -> Any:
     return signal.signal(signal.SIGTERM, _raise_interrupt)
 
 
+#: ``--free`` and ``--weight``, shared by every command that solves
+FreeOption = Annotated[
+    list[str] | None,
+    typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l inputs) or addresses; default q"),
+]
+WeightOption = Annotated[
+    list[str] | None, typer.Option("--weight", metavar="ADDRESS=W", help="ADDRESS_OR_GROUP=W: larger moves more")
+]
+
 app = typer.Typer(
     name="kinprop",
     help="Kinematic design propagation in closed-loop mechanisms (Zou, Abdel-Malek & Wang 1997).",

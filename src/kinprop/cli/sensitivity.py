@@ -13,6 +13,8 @@ from rich.table import Table
 from kinprop.analysis.sensitivity import RESIDUAL_WARN, design_sensitivity, output_sensitivity_matrix
 from kinprop.cli.app import (
     EXIT_NOT_CONVERGED,
+    FreeOption,
+    WeightOption,
     app,
     err,
     fail,
@@ -146,13 +148,8 @@ def sensitivity_cmd(
             help="outputs: J.q[k], J.s_i[k], point:BODY.NAME[x], hardpoint:J.i[x], metric:W.camber",
         ),
     ] = None,
-    free: Annotated[
-        list[str] | None,
-        typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q"),
-    ] = None,
-    weight: Annotated[
-        list[str] | None, typer.Option("--weight", metavar="ADDRESS=W", help="ADDRESS_OR_GROUP=W: larger moves more")
-    ] = None,
+    free: FreeOption = None,
+    weight: WeightOption = None,
     tol: Annotated[float, typer.Option("--tol", help="assembly tolerance on ||Phi||_2")] = 1e-10,
     as_json: Json = False,
 ) -> None:

@@ -10,6 +10,8 @@ from rich.table import Table
 
 from kinprop.cli.app import (
     EXIT_NOT_CONVERGED,
+    FreeOption,
+    WeightOption,
     app,
     err,
     handles_user_errors,
@@ -146,10 +148,7 @@ def assemble(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
     tol: Tol = 1e-10,
     max_iter: MaxIter = 50,
-    free: Annotated[
-        list[str] | None,
-        typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q"),
-    ] = None,
+    free: FreeOption = None,
     output: Output = None,
     as_json: Json = False,
     csv: Csv = None,
@@ -175,13 +174,8 @@ def propagate_cmd(
             help="ADDRESS=VALUE, e.g. J12.s_j=-2.8,0.2,0.1 or hardpoint:UBJ=x,y,z (global)",
         ),
     ] = None,
-    free: Annotated[
-        list[str] | None,
-        typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q"),
-    ] = None,
-    weight: Annotated[
-        list[str] | None, typer.Option("--weight", metavar="ADDRESS=W", help="ADDRESS_OR_GROUP=W: larger moves more")
-    ] = None,
+    free: FreeOption = None,
+    weight: WeightOption = None,
     tol: Tol = 1e-10,
     max_iter: MaxIter = 50,
     output: Output = None,

@@ -18,6 +18,7 @@ from rich.table import Table
 from kinprop.analysis.sweep import Drive, parse_drive, plot_sweep, sweep
 from kinprop.cli.app import (
     EXIT_NOT_CONVERGED,
+    FreeOption,
     app,
     err,
     handles_user_errors,
@@ -187,10 +188,7 @@ def sweep_cmd(
         list[str] | None,
         typer.Option("--set", metavar="ADDRESS=VALUE", help="ADDRESS=VALUE design change applied at step 0"),
     ] = None,
-    free: Annotated[
-        list[str] | None,
-        typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q"),
-    ] = None,
+    free: FreeOption = None,
     outputs: Annotated[
         list[str] | None,
         typer.Option(
