@@ -138,13 +138,17 @@ def min_norm_step(J, rhs, out):
     return 0
 
 
+#: slots of :func:`buffers`
+B_PHI, B_VALS, B_STORE, B_DX, B_DISP, B_WS, B_DX1 = range(7)
+
+
 @njit
 def buffers(tb, plan, nnz):
-    """Work arrays of one solve: Phi, entry values, block storage, step, displacement, (unused),
-    the kinematics workspace, and the first step."""
+    """Work arrays of one solve (slots ``B_*``): Phi, entry values, block storage, step,
+    displacement, the kinematics workspace, and the first step."""
     nf = plan.free.shape[0]
     return np.zeros(plan.n_rows), np.zeros(nnz), np.zeros(plan.store_ptr[-1]), np.zeros(nf), np.zeros(nf), \
-        np.zeros(0), workspace(tb), np.zeros(nf)  # fmt: skip
+        workspace(tb), np.zeros(nf)  # fmt: skip
 
 
 @njit
@@ -185,7 +189,7 @@ def newton_step(plan, Phi, vals, store, dx):
 def _residual(tb, plan, Q, S, C, L, row_scale, buf):
     """Evaluate Phi (kept in ``buf``) and the Jacobian entries the plan needs; return the
     scaled norm of Phi."""
-    Phi, vals, ws = buf[0], buf[1], buf[6]
+    Phi, vals, ws = buf[B_PHI], buf[B_VALS], buf[B_WS]
     dummy = np.zeros(0, np.int64)
     evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, dummy, dummy, False)
     s = 0.0
@@ -205,7 +209,7 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
     Jacobian at the first and last step taken (0: not square or singular).
     ``history[k]`` receives the residual after k updates (may be shorter than ``max_iter + 1``).
     """
-    Phi, vals, store, dx, disp, dx1 = buf[0], buf[1], buf[2], buf[3], buf[4], buf[7]
+    Phi, vals, store, dx, disp, dx1 = buf[B_PHI], buf[B_VALS], buf[B_STORE], buf[B_DX], buf[B_DISP], buf[B_DX1]
     free = plan.free
     nf = free.shape[0]
     norm = _residual(tb, plan, Q, S, C, L, row_scale, buf)
@@ -294,7 +298,7 @@ def follow_buffers(Q, S, C, L):
 @njit
 def _sign_at(tb, plan, Q, S, C, L, buf):
     """Sign of det of the free Jacobian at a state (0: not square or singular); no step taken."""
-    Phi, vals, store, dx, ws = buf[0], buf[1], buf[2], buf[3], buf[6]
+    Phi, vals, store, dx, ws = buf[B_PHI], buf[B_VALS], buf[B_STORE], buf[B_DX], buf[B_WS]
     if plan.free.shape[0] == 0:
         return 0
     dummy = np.zeros(0, np.int64)
@@ -322,9 +326,9 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
     Q0, S0, C0, L0, Qs, Ss, Cs, Ls = fbuf[0], fbuf[1], fbuf[2], fbuf[3], fbuf[4], fbuf[5], fbuf[6], fbuf[7]
     W, turn = fbuf[8], fbuf[9]
     Q0[:], S0[:], C0[:], L0[:] = Q, S, C, L
-    ws = buf[6]
+    ws = buf[B_WS]
     if cfg.branch and assembled < 0:  # is the start assembled? (no Jacobian entries needed)
-        Phi, vals = buf[0], buf[1]
+        Phi, vals = buf[B_PHI], buf[B_VALS]
         dummy = np.zeros(0, np.int64)
         evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need_none, dummy, dummy, False)
         r2 = 0.0
