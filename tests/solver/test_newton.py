@@ -10,6 +10,10 @@ import pytest
 
 from kinprop import ConvergenceError, propagate
 from kinprop.engine import Engine as Assembly
+from kinprop.jit import kernel
+from kinprop.kinematics import kernels
+from kinprop.solver import newton
+from kinprop.solver.newton import min_norm_step
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates
 from oracle.forward import read
 from random_mechanisms import CUT_TYPES, LOOP_KINDS, TREE_TYPES, random_mechanism
@@ -169,3 +173,31 @@ def test_newton_defaults():
         warnings.simplefilter("error")
         res = propagate(slider_with_rod(), {}, free=("T1.q",)).result
     assert res.converged and res.residual_norm < 1e-10
+
+
+@pytest.mark.parametrize("shape", [(3, 5), (5, 3), (4, 4), (6, 6), (1, 7), (7, 1)])
+def test_min_norm_step_is_numpy_lstsq_including_rank_deficient(shape):
+    """The step is ``-pinv(J) rhs`` as ``numpy.linalg.lstsq`` gives it (LU when square and
+    regular, LAPACK dgelsd otherwise), also when rows repeat (rank deficient)."""
+    rng = np.random.default_rng(sum(shape))
+    for deficient in (False, True):
+        J = rng.normal(size=shape)
+        if deficient and shape[0] > 1:
+            J[-1] = 2.0 * J[0]
+        rhs = rng.normal(size=shape[0])
+        out = np.zeros(shape[1])
+        sign = min_norm_step(J, rhs, out)
+        ref = -np.linalg.lstsq(J, rhs, rcond=None)[0]
+        np.testing.assert_allclose(out, ref, rtol=1e-10, atol=1e-12)
+        if shape[0] == shape[1]:
+            assert sign == (0 if deficient else int(np.sign(np.linalg.det(J))))
+
+
+def test_kernels_compile_without_reference_counting():
+    """Allocation-free kernels are compiled without numba's reference counting (kinprop.jit):
+    a kernel that allocated would not compile, and the loop's hot functions are kernels."""
+    if kernel.keywords.get("_nrt", True):
+        pytest.skip("this numba has no _nrt option: kernels are plain njit functions")
+    for f in (kernels.evaluate, kernels.forward_kinematics, kernels.retract, newton.newton_step, newton.solve,
+              newton.follow):  # fmt: skip
+        assert f.targetoptions.get("_nrt") is False, f.__name__

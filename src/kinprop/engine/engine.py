@@ -469,7 +469,8 @@ class Engine:
         ``C <- exp(tilde(dxi')) C``), as a new state."""
         st = state.copy()
         cols = np.flatnonzero(np.asarray(dx)).astype(np.int64)
-        kernels.retract(self.tables, cols, np.ascontiguousarray(np.asarray(dx, float)[cols]), st.Q, st.S, st.C, st.L)
+        dxc = np.ascontiguousarray(np.asarray(dx, float)[cols])
+        kernels.retract(self.tables, cols, dxc, st.Q, st.S, st.C, st.L, kernels.workspace(self.tables))
         return st
 
     def _length_scale(self, state: State) -> float:
