@@ -12,9 +12,9 @@ from kinprop import ConvergenceError, propagate
 from kinprop.engine import Engine as Assembly
 from kinprop.jit import kernel
 from kinprop.kinematics import kernels
+from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates
 from kinprop.solver import newton
 from kinprop.solver.newton import min_norm_step
-from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates
 from oracle.forward import read
 from random_mechanisms import CUT_TYPES, LOOP_KINDS, TREE_TYPES, random_mechanism
 
