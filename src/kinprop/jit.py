@@ -4,6 +4,11 @@ Compiled kernels are cached in a per-user cache directory (``KINPROP_CACHE_DIR``
 platform's user cache dir, e.g. ``~/.cache/kinprop/numba``), in one folder per version of the
 kernel sources, never next to the installed sources, which may be read-only. The same source
 runs uncompiled (plain Python) when ``NUMBA_DISABLE_JIT=1``: one implementation either way.
+
+``KINPROP_JIT`` chooses: ``on`` (the default: compile on first use), ``off`` (never compile),
+``auto`` (what the command line uses for one-shot jobs): compiled when the cache holds a
+complete build (:func:`is_warm`), else uncompiled for this process, while the cache is built
+in the background (``kinprop.cli.warmup``), so a first run never waits for a compile.
 """
 
 from __future__ import annotations
@@ -38,6 +43,22 @@ def cache_dir() -> Path:
     return base / kernel_version()
 
 
+def warm_marker() -> Path:
+    """Written by the warm-up (``kinprop.cli.warmup``) once every entry point is compiled."""
+    return cache_dir() / "complete"
+
+
+def is_warm() -> bool:
+    """Whether the kernel cache holds a complete build of this version of the kernels."""
+    return warm_marker().exists()
+
+
+#: how this process runs the kernels: ``on``, ``off`` or ``auto`` (see the module docstring)
+MODE = os.environ.get("KINPROP_JIT", "on").lower()
+if MODE not in ("on", "off", "auto"):
+    raise ValueError(f"KINPROP_JIT must be on, off or auto, found {MODE!r}")
+_UNCOMPILED = MODE == "off" or (MODE == "auto" and not is_warm())
+
 os.environ["NUMBA_CACHE_DIR"] = os.environ.get("KINPROP_NUMBA_CACHE_DIR") or str(cache_dir())
 
 import numba  # noqa: E402  (after the cache directory is set)
@@ -45,6 +66,8 @@ import numba.core.cpu  # noqa: E402
 from numba.np.linalg import _LAPACK, F_INT_nptype  # noqa: E402
 
 numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
+if _UNCOMPILED:  # before any kernel is decorated; never exported to child processes
+    numba.config.DISABLE_JIT = True
 
 #: ``@njit``: compiled, cached on disk, numpy's floating-point error model, GIL released
 njit = partial(numba.njit, cache=True, error_model="numpy", nogil=True)
@@ -63,6 +86,20 @@ kernel = partial(njit, _nrt=False) if hasattr(numba.core.cpu.CPUTargetOptions, "
 GELSD = _LAPACK().numba_ez_gelsd(numba.types.float64)
 LAPACK_INT = F_INT_nptype
 prange = numba.prange
+#: False when numba's compiler is switched off (``NUMBA_DISABLE_JIT=1``): the kernels run as Python
+JIT = not numba.config.DISABLE_JIT
 get_num_threads = numba.get_num_threads
 
-__all__ = ["GELSD", "LAPACK_INT", "cache_dir", "get_num_threads", "kernel", "njit", "prange"]
+__all__ = [
+    "GELSD",
+    "JIT",
+    "LAPACK_INT",
+    "MODE",
+    "cache_dir",
+    "get_num_threads",
+    "is_warm",
+    "kernel",
+    "njit",
+    "prange",
+    "warm_marker",
+]

@@ -72,6 +72,13 @@ class State:
     def __getitem__(self, k: Any) -> State:
         return State(self.Q[k], self.S[k], self.C[k], self.L[k])
 
+    def writable(self) -> State:
+        """The arrays as the kernels take them: writable and C-contiguous (copied only when not),
+        so one compiled version of each kernel serves every call (numba compiles a separate
+        one for read-only arrays)."""
+        return State(*(a if a.flags.writeable and a.flags.c_contiguous else np.array(a)
+                       for a in (self.Q, self.S, self.C, self.L)))  # fmt: skip
+
     def frozen(self) -> State:
         for a in (self.Q, self.S, self.C, self.L):
             a.setflags(write=False)
@@ -248,11 +255,11 @@ class Engine:
     @cached_property
     def pattern(self) -> tuple[Array, Array]:
         """Row and column of every Jacobian entry the kernel emits (fixed order)."""
-        st = self.default_state()
+        st = self.default_state().writable()
         rows, cols = np.zeros(self.nnz, np.int64), np.zeros(self.nnz, np.int64)
         need = np.ones(self.n_columns, np.int8)
         k = kernels.evaluate(self.tables, st.Q, st.S, st.C, st.L, kernels.workspace(self.tables),
-                             np.zeros(self.n_rows), np.zeros(self.nnz), need, rows, cols, True)  # fmt: skip
+                             np.zeros(self.n_rows), np.zeros(self.nnz), need, rows, cols)  # fmt: skip
         if k != self.nnz:  # pragma: no cover - the count and the kernel's emission must agree
             raise AssertionError(f"the kernel emitted {k} Jacobian entries, the count says {self.nnz}")
         return rows, cols
@@ -432,12 +439,12 @@ class Engine:
     ) -> tuple[Array, Array | None]:
         """``(Phi, Phi_x)`` of a single state (or design and coordinates), the Jacobian dense
         over every layout column."""
-        state = self._as_state(state, coordinates)
+        state = self._as_state(state, coordinates).writable()
         Phi, vals = np.zeros(self.n_rows), np.zeros(self.nnz)
         need = np.full(self.n_columns, int(jacobian), np.int8)
         dummy = np.zeros(0, np.int64)
         kernels.evaluate(self.tables, state.Q, state.S, state.C, state.L, kernels.workspace(self.tables), Phi, vals,
-                         need, dummy, dummy, False)  # fmt: skip
+                         need, dummy, dummy)  # fmt: skip
         if not jacobian:
             return Phi, None
         J = np.zeros((self.n_rows, self.n_columns))
@@ -451,7 +458,7 @@ class Engine:
     def poses(self, state: State) -> tuple[Array, Array, Array, Array]:
         """Body positions ``r`` (nb, 3), orientations ``A`` (nb, 3, 3) and joint frames ``P``
         (nj, 2, 3), ``R`` (nj, 2, 3, 3) (global origins and axes of frames i and j) of a single state."""
-        ws = kernels.workspace(self.tables)
+        ws, state = kernels.workspace(self.tables), state.writable()
         kernels.forward_kinematics(self.tables, state.Q, state.S, state.C, ws)
         return ws[0], ws[1], ws[2], ws[3]
 
@@ -571,7 +578,7 @@ class Engine:
         plan = self.plan(cols, self.weights_for(cols, weights))
         cfg = self.settings(tol, max_iter, branch=branch, state=start)
         st = start.copy()
-        goal = target if target is not None else start
+        goal = (target if target is not None else start).writable()
         hist = np.zeros(max_iter + 1)
         code, it, frac, subs, norm, flags, hlen = newton.follow_one(
             self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, goal.Q, goal.S, goal.C, goal.L,
@@ -639,6 +646,7 @@ class Engine:
         cols = free if isinstance(free, np.ndarray) else self.columns(free, exclude)
         plan = self.plan(cols)
         cfg = self.settings(tol, max_iter, branch=branch, state=base)
+        targets = targets.writable()
         N = targets.Q.shape[0]
         st = State(*(np.array(np.broadcast_to(getattr(base, a), getattr(targets, a).shape)) for a in "QSCL"))
         out = np.zeros((N, 6))

@@ -192,14 +192,15 @@ def _emit(k, value, r, c, vals, rows, cols, record):
 
 
 @kernel
-def evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols, record):
+def evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols):
     """Phi and the Jacobian entries at one state; returns the number of entries.
 
     ``need`` (per layout column, int8): entries of a variable whose first column is 0 there
-    are skipped (left as they are); with ``record`` the entries' rows and columns are written
-    too (the sparsity pattern, same order). ``ws`` from :func:`workspace` holds the poses and
-    frames afterwards.
+    are skipped (left as they are); when ``rows``, ``cols`` are not empty the entries' rows
+    and columns are written too (the sparsity pattern, same order). ``ws`` from
+    :func:`workspace` holds the poses and frames afterwards.
     """
+    record = rows.shape[0] > 0
     A, P, R, Tq, Td = ws[1], ws[2], ws[3], ws[4], ws[5]
     forward_kinematics(tb, Q, S, C, ws)
     tree_twists(tb, Q, ws)

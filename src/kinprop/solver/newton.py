@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from kinprop.jit import GELSD, LAPACK_INT, kernel, njit, prange
+from kinprop.jit import GELSD, JIT, LAPACK_INT, kernel, njit, prange
 from kinprop.kinematics.kernels import evaluate, retract, workspace
 from kinprop.kinematics.tables import V_COMPONENT, V_JOINT, V_KIND, V_SIDE, VAR_C, VAR_Q, VAR_S
 from kinprop.spatial import exp_so3_into, mm_into, mmT_into
@@ -113,9 +113,13 @@ def _lstsq(M, m, n, b, sv, rank):
     s_max`` dropped) on the column-major ``m x n`` matrix in ``M`` (destroyed): ``b`` (at
     least ``max(m, n)`` long) holds the right side on entry and the minimum-norm least-squares
     solution in ``b[:n]`` on exit. ``sv``, ``rank``: scratch. Returns LAPACK's info (0: ok).
-    Called through numba's own LAPACK binding, so it allocates nothing numba counts."""
+    Called through numba's own LAPACK binding, so it allocates nothing numba counts;
+    uncompiled (``NUMBA_DISABLE_JIT``), through ``numpy.linalg.lstsq`` (the same routine)."""
+    if not JIT:
+        b[:n] = np.linalg.lstsq(M[: m * n].reshape((n, m)).T, b[:m], rcond=None)[0]
+        return 0
     return GELSD(_KIND_D, m, n, 1, M.ctypes, max(m, 1), b.ctypes, max(m, n, 1), sv.ctypes,
-                  2.220446049250313e-16 * max(m, n), rank.ctypes)  # fmt: skip
+                 2.220446049250313e-16 * max(m, n), rank.ctypes)  # fmt: skip
 
 
 @njit
@@ -266,7 +270,7 @@ def _residual(tb, plan, Q, S, C, L, row_scale, buf):
     """Evaluate Phi (kept in ``buf``) and the Jacobian entries the plan needs; return the
     scaled norm of Phi."""
     Phi, vals, ws, none = buf[B_PHI], buf[B_VALS], buf[B_WS], buf[B_NONE]
-    evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, none, none, False)
+    evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, none, none)
     s = 0.0
     for i in range(Phi.shape[0]):
         r = Phi[i] * row_scale[i]
@@ -393,7 +397,7 @@ def _sign_at(tb, plan, Q, S, C, L, buf):
     Phi, vals, ws, none = buf[B_PHI], buf[B_VALS], buf[B_WS], buf[B_NONE]
     if plan.free.shape[0] == 0:
         return 0
-    evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, none, none, False)
+    evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, none, none)
     return newton_step(plan, Phi, vals, buf)
 
 
@@ -421,7 +425,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
     ws = buf[B_WS]
     if cfg.branch and assembled < 0:  # is the start assembled? (no Jacobian entries needed)
         Phi, vals, none = buf[B_PHI], buf[B_VALS], buf[B_NONE]
-        evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need_none, none, none, False)
+        evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need_none, none, none)
         r2 = 0.0
         for i in range(Phi.shape[0]):
             r2 += (Phi[i] * row_scale[i]) ** 2
