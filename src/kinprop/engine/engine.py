@@ -408,7 +408,7 @@ class Engine:
         if not np.all(np.isfinite(val)):
             raise AddressError(f"{address!r}: value must be finite")
         bound = ABSURD * max(1.0, self.length_scale or 1.0)
-        if t.group != "C" and np.max(np.abs(val)) > bound:
+        if t.group not in ("C", "coef") and np.max(np.abs(val)) > bound:
             raise AddressError(
                 f"{address!r}: {float(np.max(np.abs(val))):.3g} is beyond {ABSURD:g} times the model's length scale "
                 f"({bound:.3g}); no mechanism assembles there"
