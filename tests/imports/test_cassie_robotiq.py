@@ -98,7 +98,7 @@ ROBOTIQ_FREE = ["left_driver_joint", "right_spring_link_joint", "right_follower_
                 "left_follower_joint"]  # fmt: skip
 
 
-def test_robotiq_imports_with_its_coupling() -> None:
+def test_robotiq_imports_with_its_coupling(tmp_path) -> None:
     model = kp.load_model(ROBOTIQ)
     [c] = model.mechanism.couplings
     assert (c.joint_a, c.joint_b, c.q_a0, c.q_b0) == ("right_driver_joint", "left_driver_joint", 0.0, 0.0)
@@ -114,8 +114,12 @@ def test_robotiq_imports_with_its_coupling() -> None:
     assert obj["couplings"] == [
         {"name": c.name, "joints": ["right_driver_joint", "left_driver_joint"], "rows": [f"{c.name}:coupling"]}
     ]
-    r = runner.invoke(app, ["import", str(ROBOTIQ), "-o", "robotiq.yaml"])
+    out = tmp_path / "robotiq.yaml"
+    r = runner.invoke(app, ["import", str(ROBOTIQ), "-o", str(out)])
     assert r.exit_code == 0, r.output
+    back = kp.load_model(out)  # the written file keeps the coupling
+    assert back.mechanism.couplings == model.mechanism.couplings
+    np.testing.assert_array_equal(back.design[f"{c.name}.coef"], [0, 1, 0, 0, 0])
 
 
 def test_robotiq_mobility_is_mujocos() -> None:
