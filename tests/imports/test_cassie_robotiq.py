@@ -117,6 +117,8 @@ def test_robotiq_imports_with_its_coupling(tmp_path) -> None:
     out = tmp_path / "robotiq.yaml"
     r = runner.invoke(app, ["import", str(ROBOTIQ), "-o", str(out)])
     assert r.exit_code == 0, r.output
+    assert f"(2 cut: connect_right_follower_right_coupler, connect_left_follower_left_coupler), 1 coupling: {c.name}" \
+        in " ".join(r.output.split())  # fmt: skip
     back = kp.load_model(out)  # the written file keeps the coupling
     assert back.mechanism.couplings == model.mechanism.couplings
     np.testing.assert_array_equal(back.design[f"{c.name}.coef"], [0, 1, 0, 0, 0])
