@@ -59,7 +59,7 @@ class MobilityReport:
 
     @property
     def redundant_joints(self) -> list[str]:
-        """Cut joints owning redundant rows, in row order."""
+        """Cut joints (and couplings) owning redundant rows, in row order."""
         return list(dict.fromkeys(r.split(":", 1)[0] for r in self.redundant))
 
     @property
