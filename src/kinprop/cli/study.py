@@ -36,7 +36,8 @@ from kinprop.errors import AddressError
 from kinprop.io.units import derivative_scale, to_solver_units, unit_of
 
 Free = Annotated[
-    list[str] | None, typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q")
+    list[str] | None,
+    typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l coef) or addresses; default q"),
 ]
 EXIT_INTERRUPTED = 130
 Sets = Annotated[

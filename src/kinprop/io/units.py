@@ -10,7 +10,8 @@ Which numbers are angles: the angle components of a tree joint's coordinates (a 
 ``q``, a cylindrical joint's ``q[0]``, both of a universal joint; ``JOINT.q`` addresses) and, for
 derivatives, the body-frame rotation of a ``C`` column. Euler parameters, slides, positions,
 lengths and rotation matrices have no angle unit. Suspension metrics (``metric:W.camber``) are
-computed in degrees and converted like coordinates.
+computed in degrees and converted like coordinates. A coupling coefficient ``COUPLING.coef[k]``
+has the unit ``[q_a] / [q_b]^k`` of its two joints (:mod:`kinprop.io.couplings`).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import numpy as np
 
 from kinprop.analysis.metrics import METRIC_ALIASES, METRICS, metric_unit
 from kinprop.engine import compile as compile_engine
+from kinprop.io.couplings import coef_factors
 from kinprop.model import Model, parse_address
 
 
@@ -53,6 +55,21 @@ def _angle_mask(model: Model, address: str, size: int) -> np.ndarray:
     return mask
 
 
+def _coef_scale(model: Model, address: str, size: int) -> np.ndarray | None:
+    """Solver value / model value of each component of a coupling-coefficient address
+    (``f_a / f_b^k``), or None when ``address`` is not one."""
+    try:
+        addr = parse_address(address)
+    except Exception:
+        return None
+    couplings = {c.name: c for c in model.mechanism.couplings}
+    if addr.field != "coef" or addr.joint not in couplings:
+        return None
+    c = couplings[addr.joint]
+    F = coef_factors(model.mechanism.joint(c.joint_a), model.mechanism.joint(c.joint_b), _degrees(model))[0]
+    return np.full(size, F[addr.index]) if addr.index is not None and addr.index < F.size else np.resize(F, size)
+
+
 def to_solver_units(model: Model, address: str, value: object) -> np.ndarray:
     """A value for ``address`` given in the model's units -> solver units (radians).
 
@@ -62,6 +79,9 @@ def to_solver_units(model: Model, address: str, value: object) -> np.ndarray:
     if not _degrees(model):
         return v
     flat = v.reshape(-1)
+    coef = _coef_scale(model, address, flat.size)
+    if coef is not None:
+        return (flat * coef).reshape(v.shape)
     mask = _angle_mask(model, address, flat.size)
     flat[mask] = np.radians(flat[mask])
     return flat.reshape(v.shape)
@@ -73,6 +93,9 @@ def from_solver_units(model: Model, address: str, value: object) -> np.ndarray:
     if not _degrees(model):
         return v
     flat = v.reshape(-1)
+    coef = _coef_scale(model, address, flat.size)
+    if coef is not None:
+        return (flat / coef).reshape(v.shape)
     mask = _angle_mask(model, address, flat.size)
     flat[mask] = np.degrees(flat[mask])
     return flat.reshape(v.shape)
@@ -110,6 +133,8 @@ def unit_of(model: Model, name: str) -> str:
         return length
     if addr.field in ("C_i", "C_j"):
         return ""
+    if addr.field == "coef":
+        return _coef_unit(model, addr.joint, addr.index)
     if addr.field == "q" and addr.joint in model.mechanism.joint_names:
         jt = model.mechanism.joint(addr.joint).jtype
         tree = addr.joint in compile_engine(model.mechanism).topology.tree_joints
@@ -122,6 +147,22 @@ def unit_of(model: Model, name: str) -> str:
             return kinds[0] if len(set(kinds)) == 1 else ",".join(kinds)
         return angle if k in angles else ("" if k in euler else length)
     return ""
+
+
+def _coef_unit(model: Model, coupling: str, k: int | None) -> str:
+    """``[q_a] / [q_b]^k`` of a coupling coefficient ``c_k`` (``""`` for ``c1`` between like
+    units; ``deg/deg^k`` for the whole ``coef`` without an index)."""
+    c = next((c for c in model.mechanism.couplings if c.name == coupling), None)
+    if c is None:
+        return ""
+    ua, ub = unit_of(model, f"{c.joint_a}.q"), unit_of(model, f"{c.joint_b}.q")
+    if k is None:
+        return f"{ua}/{ub}^k"
+    if k == 0:
+        return ua
+    if k == 1:
+        return "" if ua == ub else f"{ua}/{ub}"
+    return f"{ua}/{ub}^{k}"
 
 
 def derivative_scale(model: Model, name: str) -> float:
@@ -144,6 +185,9 @@ def derivative_scale(model: Model, name: str) -> float:
         return 1.0
     if addr.field in ("C_i", "C_j"):
         return 180.0 / math.pi
+    if addr.field == "coef":  # model value = solver value / (f_a / f_b^k)
+        scale = _coef_scale(model, name, 1)
+        return 1.0 if scale is None or addr.index is None else float(1.0 / scale[0])
     return 180.0 / math.pi if unit_of(model, name) == "deg" else 1.0
 
 

@@ -36,6 +36,8 @@ from kinprop.constraints.basic import basic_rows
 from kinprop.jit import kernel, njit
 from kinprop.joints import motion, placement
 from kinprop.joints.composite import TD_CODE
+from kinprop.kinematics.couplings import ENTRIES as COUPLING_ENTRIES
+from kinprop.kinematics.couplings import coupling_rows
 from kinprop.kinematics.tables import (
     B_KIND,
     B_ON_J,
@@ -300,6 +302,7 @@ def evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols):
             else:
                 k += 1
         Phi[row] = s - 1.0
+    k = coupling_rows(tb, Q, L, Phi, vals, need, rows, cols, record, k)  # kinematics/couplings.py
     return k
 
 
@@ -311,7 +314,8 @@ def count_entries(tb) -> int:
     m = tb.cut[:, K_NROWS]
     per_path = moved[tb.tree[tb.path[:, P_TREE], T_JOINT]] if tb.path.size else np.zeros(0, np.int64)
     path_sum = np.array([per_path[a:b].sum() for a, b in tb.cut[:, [K_PATH0, K_PATH1]]], dtype=np.int64)
-    return int(np.sum(m * (own[tb.cut[:, K_JOINT]] + path_sum)) + 4 * tb.euler.shape[0])
+    return int(np.sum(m * (own[tb.cut[:, K_JOINT]] + path_sum)) + 4 * tb.euler.shape[0]
+               + COUPLING_ENTRIES * tb.coupling.shape[0])  # fmt: skip
 
 
 @kernel

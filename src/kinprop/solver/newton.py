@@ -388,7 +388,7 @@ def follow_buffers(Q, S, C, L):
     nj = S.shape[0]
     return (Q.copy(), S.copy(), C.copy(), L.copy(), Q.copy(), S.copy(), C.copy(), L.copy(), np.zeros((nj, 2, 3)),
             np.zeros((nj, 2), np.bool_), np.zeros(Q.shape[0], np.bool_), np.zeros((nj, 2, 3), np.bool_),
-            np.zeros((nj, 2), np.bool_), np.zeros(nj, np.bool_))  # fmt: skip
+            np.zeros((nj, 2), np.bool_), np.zeros(L.shape[0], np.bool_))  # fmt: skip
 
 
 @kernel
@@ -487,9 +487,10 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         for k in range(Q.shape[0]):
             if Q1[k] != Q0[k] and not fq[k]:
                 Q[k] = Q0[k] + tn * (Q1[k] - Q0[k])
-        for j in range(nj):
+        for j in range(L.shape[0]):  # lengths, then coupling coefficients
             if L1[j] != L0[j] and not fl[j]:
                 L[j] = L0[j] + tn * (L1[j] - L0[j])
+        for j in range(nj):
             for side in range(2):
                 for a in range(3):
                     if S1[j, side, a] != S0[j, side, a] and not fs[j, side, a]:
