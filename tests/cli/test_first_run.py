@@ -9,11 +9,12 @@ import json
 import os
 import signal
 import subprocess
+import sys
 import time
 from pathlib import Path
 
 import pytest
-from cli_run import kinprop_cmd, run_kinprop
+from cli_run import run_kinprop
 
 from kinprop.jit import kernel_version
 
@@ -27,7 +28,8 @@ def _auto_env(cache: Path) -> dict[str, str]:
 
 
 def _run(env: dict[str, str], *args: object) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(kinprop_cmd(*args), capture_output=True, text=True, timeout=300, env=env)
+    cmd = [sys.executable, "-m", "kinprop", *map(str, args)]  # the command's entry: kinprop.__main__
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
 
 
 def test_first_run_answers_uncompiled_and_builds_the_cache_in_the_background(tmp_path):
