@@ -13,13 +13,13 @@ unit of ``q_a`` (radians for a revolute, the length unit for a slide).
 
 from __future__ import annotations
 
-from kinprop.jit import njit
+from kinprop.jit import kernel
 
 #: number of polynomial coefficients (c0..c4, MuJoCo's ``polycoef``)
 N_COEF = 5
 
 
-@njit
+@kernel
 def coupling_value(qa, qb, qa0, qb0, c):
     """``(Phi, Phi_qb)`` of one coupling row at coordinates ``qa``, ``qb`` with coefficients
     ``c`` (5 numbers); ``Phi_qa = 1`` and ``Phi_ck = -(qb - qb0)^k``."""
