@@ -99,8 +99,11 @@ def main() -> None:
     hand = newton_by_hand(q0)
     ls = least_squares(phi, q0, xtol=1e-15, ftol=1e-15, gtol=1e-15)
     assert np.linalg.norm(phi(hand)) < 1e-10 and np.linalg.norm(phi(ls.x)) < 1e-8
-    # same assembly: both start from the same estimate; the hand Newton is the same min-norm method
-    assert np.allclose(hand, ours, atol=1e-9), (hand, ours)
+    # an assembly by the benchmark's own constraint equations, on the hand Newton's branch: with
+    # --free q the 4 coordinates have 1 degree of freedom left, and following the change in
+    # sub-steps (kinprop's default) lands a few microradians from the one-shot min-norm step
+    assert np.linalg.norm(phi(ours)) < 1e-10, phi(ours)
+    assert np.allclose(hand, ours, atol=1e-4), (hand, ours)
     rows.append(("baseline: numpy Newton, analytic Jacobian (q)", *timeit(lambda: newton_by_hand(q0), args.repeats)))
     rows.append(
         (

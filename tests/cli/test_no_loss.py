@@ -172,3 +172,19 @@ def test_sigterm_leaves_a_complete_parquet_sweep(examples, tmp_path) -> None:
     assert list(frame["step"]) == list(range(len(frame)))
     np.testing.assert_allclose(frame["O2.q"], np.linspace(0, 360, 400_001)[: len(frame)])
     assert not partial.exists()
+
+
+def test_an_interrupt_inside_a_c_callback_is_an_interrupt() -> None:
+    """A signal that arrives while numba unpickles a constant reaches us as a SystemError
+    caused by the KeyboardInterrupt (seen once under load): it is handled as an interrupt."""
+    from kinprop.cli.app import is_interrupt
+
+    try:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as cause:
+            raise SystemError("<function _numba_unpickle> returned a result with an exception set") from cause
+    except SystemError as exc:
+        assert is_interrupt(exc)
+    assert not is_interrupt(SystemError("unrelated"))
+    assert not is_interrupt(None)

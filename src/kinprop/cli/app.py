@@ -71,13 +71,27 @@ class _Group(TyperGroup):
         except click.exceptions.ClickException as exc:
             _error_line(exc.format_message())
             sys.exit(exc.exit_code)
-        except (typer.Abort, KeyboardInterrupt):
+        except (typer.Abort, KeyboardInterrupt, SystemError) as exc:
+            if not isinstance(exc, typer.Abort) and not is_interrupt(exc):
+                raise
             err.print("interrupted")
             sys.exit(EXIT_INTERRUPTED)
         finally:
             if previous is not None:
                 signal.signal(signal.SIGTERM, previous)
         sys.exit(rv if isinstance(rv, int) else 0)
+
+
+def is_interrupt(exc: BaseException | None) -> bool:
+    """Whether ``exc`` is a KeyboardInterrupt (Ctrl-C, or SIGTERM routed to it), also when the
+    signal arrived inside a C callback (numba unpickling a constant), which Python reports
+    as a SystemError caused by the KeyboardInterrupt."""
+    seen = 0
+    while exc is not None and seen < 20:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        exc, seen = exc.__cause__ or exc.__context__, seen + 1
+    return False
 
 
 def _raise_interrupt(signum: int, frame: Any) -> None:

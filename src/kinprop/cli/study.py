@@ -18,6 +18,7 @@ from kinprop.cli.app import (
     app,
     err,
     handles_user_errors,
+    is_interrupt,
     load_model_cli,
     out,
     print_json,
@@ -150,7 +151,9 @@ def study_cmd(
         if plan is not None:  # the global factor values beside the s' columns they set
             for k, f in enumerate(factors):
                 frame[f.address] = values[frame["variant"].to_numpy(), k]
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, SystemError) as exc:
+        if not is_interrupt(exc):
+            raise
         err.print(f"interrupted: finished chunks are kept in {output!s}; run again with --resume")
         raise typer.Exit(EXIT_INTERRUPTED) from None
     n_failed = int((~frame["converged"]).sum()) if len(frame) else 0

@@ -22,6 +22,7 @@ from kinprop.cli.app import (
     app,
     err,
     handles_user_errors,
+    is_interrupt,
     load_model_cli,
     out,
     print_json,
@@ -274,7 +275,9 @@ def sweep_cmd(
                 on_step=on_step,
                 continuation=continuation,
             )
-        except KeyboardInterrupt:
+        except (KeyboardInterrupt, SystemError) as exc:
+            if not is_interrupt(exc):
+                raise
             where = f"; rows computed so far are in {output}" if output is not None else ""
             err.print(f"interrupted after {done} of {n} steps ({failed} failed){where}")
             raise typer.Exit(130) from None
