@@ -53,6 +53,7 @@ from kinprop.propagation.point_jacobians import PointJacobians, PointSpec
 from kinprop.propagation.poses import joint_values
 from kinprop.propagation.propagate import Propagation, engine_for, propagation_of
 from kinprop.propagation.targets import Configuration, Row, TargetResult, output_jacobian, solve_targets
+from kinprop.propagation.units import changes_to_internal, check_units
 from kinprop.spatial import Array
 
 LENGTHS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "inch": 0.0254}
@@ -449,18 +450,22 @@ def propagate_targets(
     target_tol: float = 1e-6,
     max_iter: int = 60,
     analytic: bool = True,
+    units: str = "model",
 ) -> TargetPropagation:
     """Find the minimum-(weighted-)norm change of the ``free`` design variables that meets the
     ``targets`` (specs, module docstring) with every configuration assembled.
 
-    ``changes`` (addresses, global hardpoints too) are applied first, at the model's assembly.
+    ``changes`` (addresses, global hardpoints too) are applied first, at the model's assembly;
+    they are in the model's units (``units="model"``, degrees in a degree model) or in solver
+    units (``units="solver"``: radians). Target values carry their own unit (module docstring).
     ``weights``: ``{address or group: w}``, a larger weight lets a variable move more.
     ``analytic``: analytic output Jacobians where available (False: central differences of the
     output map for every output; :mod:`kinprop.propagation.targets`).
     """
     eng = engine_for(model, engine)
     start = eng.state_of(model)
-    st, _, _ = eng.apply(start, resolve_changes(eng, start, changes or {}))
+    changes = changes_to_internal(model, changes or {}) if check_units(units) else dict(changes or {})
+    st, _, _ = eng.apply(start, resolve_changes(eng, start, changes))
     specs = tuple(t if isinstance(t, TargetSpec) else parse_target(model, t) for t in targets)
     if not specs:
         raise AddressError("no targets given")

@@ -273,6 +273,7 @@ def sweep_cmd(
                 output=output,
                 on_step=on_step,
                 continuation=continuation,
+                units="solver",  # changes converted above
             )
         except KeyboardInterrupt:
             where = f"; rows computed so far are in {output}" if output is not None else ""
