@@ -85,6 +85,7 @@ def test_continuation_degrees_is_the_cli_set(fourbar) -> None:
     obj = cli_json("propagate", fourbar, "--set", "O2.q=150", "--free", "A.q", "--free", "O4.q", "--continuation")
     res = kp.propagate_continuation(kp.load_model(fourbar), {"O2.q": [150.0]}, ("A.q", "O4.q"))
     assert res.converged and obj["status"] == "converged"
+    assert repr(res).startswith("<ContinuationResult converged: fraction 1,") and "set O2.q: 60 -> 150 deg" in repr(res)
     for j in ("A", "O4"):
         assert res.propagation.coordinates[j][0] == pytest.approx(obj["coordinates"][j][0], abs=1e-8)
     assert res.propagation.changes["O2.q"].tolist() == pytest.approx([150.0])
@@ -151,7 +152,8 @@ def test_targets_changes_in_degrees_are_the_cli_set(examples, tmp_path) -> None:
     m = kp.load_model(path)
     tp = kp.propagate_targets(m, [target], free, changes={"LCA.q": [2.0]})
     solver = kp.propagate_targets(m, [target], free, changes={"LCA.q": [math.radians(2.0)]}, units="solver")
-    assert tp.converged
+    assert tp.converged and repr(tp).splitlines()[1] == f"  {target}: wanted -1.5, achieved -1.5 deg"
+    assert "<th>achieved</th>" in tp._repr_html_() and len(repr(tp)) < 400
     np.testing.assert_allclose(tp.after.design["UBJ.s_i"], cli_after.design["UBJ.s_i"], atol=1e-6)
     np.testing.assert_allclose(tp.after.design["UBJ.s_i"], solver.after.design["UBJ.s_i"], atol=1e-9)
     assert tp.after.coordinates["LCA"][0] == pytest.approx(0.0)  # the design is reported at the model's own pose

@@ -37,6 +37,7 @@ import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
+from html import escape
 from typing import Any
 
 import numpy as np
@@ -413,6 +414,26 @@ class TargetPropagation:
     @property
     def design_change(self) -> dict[str, Array]:
         return self.result.design_change
+
+    def __repr__(self) -> str:
+        """One line per target (wanted, achieved, unit), not the configurations' arrays."""
+        changed = ", ".join(self.design_change) or "nothing"
+        lines = [f"<TargetPropagation of {self.model.mechanism.name!r}: {self.status}; {len(self.specs)} targets, "
+                 f"{len(self.configuration_names)} configurations, changed {changed}>"]  # fmt: skip
+        for row in self.table()[:8]:
+            lines.append(f"  {row['target']}: wanted {row['value']:.6g}, achieved {row['achieved']:.6g} {row['unit']}")
+        return "\n".join(line.rstrip() for line in lines)
+
+    def _repr_html_(self) -> str:
+        head = "".join(f"<th>{h}</th>" for h in ("target", "unit", "wanted", "before", "achieved", "residual"))
+        body = "".join(
+            f"<tr><td>{escape(r['target'])}</td><td>{escape(r['unit'])}</td>"
+            + "".join(f"<td>{r[k]:.6g}</td>" for k in ("value", "before", "achieved", "residual"))
+            + "</tr>"
+            for r in self.table()
+        )
+        return (f"<p><b>TargetPropagation</b> of {escape(self.model.mechanism.name)}: {escape(self.status)}</p>"
+                f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")  # fmt: skip
 
     def joint_positions(self, k: int = 0) -> dict[str, tuple[Array, Array]]:
         """Global joint origins ``J.i``/``J.j`` -> (before, after) in configuration ``k``

@@ -33,7 +33,6 @@ from kinprop.cli.checks import (
     parse_assignments,
 )
 from kinprop.errors import AddressError
-from kinprop.io.units import derivative_scale, to_solver_units, unit_of
 
 Free = Annotated[
     list[str] | None, typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q")
@@ -192,7 +191,6 @@ def tolerance_cmd(
         tols[addr] = float(vals[0])
     m = load_model_cli(model)
     sets = _to_internal(m, given)
-    tols = {a: float(to_solver_units(m, a, v)) for a, v in tols.items()}  # sigmas in the model's units
     freeset = tuple(free or ["q"])
     if sets:
         prop = propagate(m, sets, freeset, units="solver")
@@ -200,22 +198,15 @@ def tolerance_cmd(
             err.print(f"the model does not assemble with --set: {prop.result.message}")
             raise typer.Exit(EXIT_NOT_CONVERGED)
         m = prop.after
-    res = tolerance_analysis(m, tols, of, free=freeset, fixed=tuple(sets), units="solver")
-    mc_std = (
-        monte_carlo(m, tols, res.outputs, n=mc, seed=seed, free=freeset, fixed=tuple(sets), units="solver")
-        if mc
-        else None
-    )
-    # everything reported in the model's units (docs/units.md)
-    so = np.array([derivative_scale(m, name) for name in res.outputs])
-    si = np.array([derivative_scale(m, name) for name in res.inputs])
-    nominal, std, cov, sigma = res.nominal * so, res.std * so, res.covariance * np.outer(so, so), res.sigma * si
-    mc_std = None if mc_std is None else mc_std * so
-    units = [unit_of(m, name) for name in res.outputs]
+    # sigmas as given and everything reported in the model's units (docs/units.md)
+    res = tolerance_analysis(m, tols, of, free=freeset, fixed=tuple(sets))
+    mc_std = monte_carlo(m, tols, res.outputs, n=mc, seed=seed, free=freeset, fixed=tuple(sets)) if mc else None
+    nominal, std, cov, sigma = res.nominal, res.std, res.covariance, res.sigma
+    units = list(res.output_units)
     if as_json:
         obj = {"outputs": res.outputs, "nominal": nominal.tolist(), "std": std.tolist(),
                "covariance": cov.tolist(), "inputs": res.inputs, "sigma": sigma.tolist(),
-               "units": {"outputs": units, "inputs": [unit_of(m, name) for name in res.inputs],
+               "units": {"outputs": units, "inputs": list(res.input_units),
                          "length": m.units.get("length"), "angle": m.units.get("angle")}}  # fmt: skip
         if mc_std is not None:
             obj["mc_std"] = mc_std.tolist()

@@ -100,6 +100,18 @@ class ContinuationResult:
         """Joints owning the conflicting rows, most involved first."""
         return list(dict.fromkeys(r.split(":", 1)[0] for r, _ in self.conflict + self.residual_rows))
 
+    def __repr__(self) -> str:
+        """The outcome in one line, then the propagation's summary (model units)."""
+        n_ok = sum(s.accepted for s in self.steps)
+        head = (f"<ContinuationResult {self.status}: fraction {self.fraction:.6g}, {n_ok} accepted of "
+                f"{len(self.steps)} sub-steps>")  # fmt: skip
+        return f"{head}\n{self.propagation!r}"
+
+    def _repr_html_(self) -> str:
+        return f"<p><b>ContinuationResult</b> {self.status}: fraction {self.fraction:.6g}</p>" + (
+            self.propagation._repr_html_()
+        )
+
     def raise_for_status(self) -> ContinuationResult:
         if not self.converged:
             raise ConvergenceError(self.message)
