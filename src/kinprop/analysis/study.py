@@ -213,11 +213,12 @@ def model_unit_scale(model: Model, addresses: Sequence[str], outputs: Sequence[s
     every coordinate column and the metric ``outputs`` (default: the wheel metrics): ``180/pi``
     for angles of a degree model, ``pi/180`` for metric angles of a radian model; columns
     already in the model's units are left out."""
-    labels = column_labels(compile_engine(model.mechanism).layout)
+    engine = compile_engine(model.mechanism)
+    labels = column_labels(engine.layout)
     names = list(outputs) if outputs is not None else _default_outputs(model)
     qlabels = [lab for lab in labels if parse_address(lab).field == "q"]
     cols = [*addresses, *qlabels, *(expand_outputs(model, names) if names else [])]
-    scale = {c: derivative_scale(model, c) for c in dict.fromkeys(cols)}
+    scale = {c: derivative_scale(model, c, engine) for c in dict.fromkeys(cols)}
     return {k: v for k, v in scale.items() if v != 1.0}
 
 
@@ -354,7 +355,7 @@ def run_study(
     """
     model_units = check_units(units)
     if model_units:
-        sets = changes_to_internal(model, sets or {})
+        sets = changes_to_internal(model, sets or {}, compile_engine(model.mechanism))
     if plan is None:
         factors = list(factors or [])
         values = sample_plan(factors, method, samples, seed)

@@ -217,13 +217,13 @@ class Sink(Protocol):
     def close(self) -> None: ...
 
 
-def header_labels(model: Model, columns: Sequence[str]) -> dict[str, str]:
+def header_labels(model: Model, columns: Sequence[str], engine: Engine | None = None) -> dict[str, str]:
     """CSV header of each column: ``NAME [unit]`` for a quantity in the model's units
     (``O2.q [deg]``, ``point:crank.tip[x] [m]``, ``metric:upright.camber [deg]``), the bare name
     for the rest (``step``, ``status``, Euler parameters, ...); docs/units.md."""
     out = {}
     for c in columns:
-        u = "" if c in (*META, "message") else unit_of(model, c)
+        u = "" if c in (*META, "message") else unit_of(model, c, engine)
         out[c] = f"{c} [{u}]" if u else c
     return out
 
@@ -384,7 +384,6 @@ def sweep(
     """
     import pandas as pd
 
-    changes = changes_to_internal(model, changes or {}) if check_units(units) else dict(changes or {})
     dr = tuple(parse_drive(model, d) if isinstance(d, str) else d for d in drives)
     if not dr:
         raise AddressError("a sweep needs at least one --drive")
@@ -399,26 +398,33 @@ def sweep(
         raise AddressError("--set: a driven coordinate cannot also be set")
     names = list(default_outputs(model) if outputs is None else outputs)
     engine = compile_engine(model.mechanism)
+    changes = changes_to_internal(model, changes or {}, engine) if check_units(units) else dict(changes or {})
     fout, expanded = output_function(model, names, engine=engine)
     coord_cols = coordinate_columns(model)
     drive_cols = [d.label for d in dr]
+    # unit factors, once (io.units' conversions are linear): model -> solver for the drives,
+    # solver -> model for the coordinate columns
+    to_solver = [float(to_solver_units(model, d.address, [1.0], engine)[0]) for d in dr]
+    to_model = {col: float(from_solver_units(model, col, [1.0], engine)[0]) for col, *_ in coord_cols}
     # an output naming a coordinate is already a column (in model units, not radians)
     taken = {c for c, *_ in coord_cols} | set(drive_cols)
     keep = [i for i, e in enumerate(expanded) if e not in taken]
     expanded = [expanded[i] for i in keep]
-    out_scale = np.array([derivative_scale(model, e) for e in expanded])  # metric angles: the angle unit
+    out_scale = np.array([derivative_scale(model, e, engine) for e in expanded])  # metric angles: the angle unit
     columns = list(dict.fromkeys(["step", *drive_cols, *META[1:], *(c for c, *_ in coord_cols), *expanded, "message"]))
     rows: list[dict[str, Any]] = []
     good = model
     sink = (
-        open_sink(output, columns, labels=header_labels(model, columns)) if isinstance(output, (str, Path)) else output
+        open_sink(output, columns, labels=header_labels(model, columns, engine))
+        if isinstance(output, (str, Path))
+        else output
     )
     try:
         for k in range(n_steps):
             step_changes: dict[str, object] = dict(changes or {}) if k == 0 else {}
-            for d in dr:  # one component each: a joint's other coordinates may follow
+            for d, f in zip(dr, to_solver, strict=True):  # one component each: the other coordinates may follow
                 v = d.values[k]
-                step_changes[d.address] = float(to_solver_units(model, d.address, [v])[0]) if d.angle else v
+                step_changes[d.address] = v * f if d.angle else v
             prop, note = _solve_step(engine, good, step_changes, free, tol, max_iter, continuation)
             r = prop.result
             row: dict[str, Any] = dict.fromkeys(columns, float("nan"))
@@ -440,7 +446,7 @@ def sweep(
                     if col in drive_cols:
                         continue  # the driven value exactly as given (not degrees -> radians -> degrees)
                     val = float(np.atleast_1d(good.coordinates[joint])[idx])
-                    row[col] = float(from_solver_units(model, col, [val])[0]) if deg else val
+                    row[col] = val * to_model[col] if deg else val
                 try:
                     values = fout(good)
                     row.update(

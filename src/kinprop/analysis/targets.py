@@ -485,7 +485,7 @@ def propagate_targets(
     """
     eng = engine_for(model, engine)
     start = eng.state_of(model)
-    changes = changes_to_internal(model, changes or {}) if check_units(units) else dict(changes or {})
+    changes = changes_to_internal(model, changes or {}, eng) if check_units(units) else dict(changes or {})
     st, _, _ = eng.apply(start, resolve_changes(eng, start, changes))
     specs = tuple(t if isinstance(t, TargetSpec) else parse_target(model, t) for t in targets)
     if not specs:

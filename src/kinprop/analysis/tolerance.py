@@ -67,8 +67,9 @@ class ToleranceResult:
 
 
 def _in_model_units(model: Model, res: ToleranceResult) -> ToleranceResult:
-    so = np.array([derivative_scale(model, n) for n in res.outputs])
-    si = np.array([derivative_scale(model, n) for n in res.inputs])
+    eng = compile_engine(model.mechanism)
+    so = np.array([derivative_scale(model, n, eng) for n in res.outputs])
+    si = np.array([derivative_scale(model, n, eng) for n in res.inputs])
     return replace(
         res,
         nominal=res.nominal * so,
@@ -185,8 +186,8 @@ def tolerance_analysis(
                 vals.append(_output_value(moved, name, labels))
             G[i, k] = (vals[0] - vals[1]) / (2 * h)
     cov = G @ np.diag(sigma**2) @ G.T
-    res = ToleranceResult(names, nominal, np.sqrt(np.diag(cov)), cov, G, wrt, sigma, "solver",
-                          tuple(unit_of(model, n) for n in names), tuple(unit_of(model, n) for n in wrt))  # fmt: skip
+    out_units, in_units = tuple(unit_of(model, n, asm) for n in names), tuple(unit_of(model, n, asm) for n in wrt)
+    res = ToleranceResult(names, nominal, np.sqrt(np.diag(cov)), cov, G, wrt, sigma, "solver", out_units, in_units)
     return _in_model_units(model, res) if model_units else res
 
 
@@ -207,7 +208,8 @@ def monte_carlo(
     model_units = check_units(units)
     if model_units:
         tolerances = _sigmas_to_solver(model, tolerances)
-    layout = compile_engine(model.mechanism).layout
+    layout_engine = compile_engine(model.mechanism)
+    layout = layout_engine.layout
     labels = column_labels(layout)
     pcols, sigma = _inputs(model, tolerances)
     addrs = [labels[c] for c in pcols]
@@ -225,7 +227,7 @@ def monte_carlo(
     df = run_study(model, plan=plan, addresses=addrs, free=free, outputs=extra or [], sets=sets or None, units="solver")
     ok = df[df["converged"]]
     std = np.array([ok[x].std(ddof=1) for x in names])
-    return std * np.array([derivative_scale(model, x) for x in names]) if model_units else std
+    return std * np.array([derivative_scale(model, x, layout_engine) for x in names]) if model_units else std
 
 
 __all__ = ["ToleranceResult", "expand_names", "monte_carlo", "tolerance_analysis"]

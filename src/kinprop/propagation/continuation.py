@@ -236,7 +236,7 @@ def propagate_continuation(
     """
     engine = engine_for(model, engine)
     if check_units(units):
-        changes = changes_to_internal(model, changes)
+        changes = changes_to_internal(model, changes, engine)
     path = _build_path(engine, model, changes)
     layout = engine.layout
     keys = list(path.start)

@@ -100,6 +100,10 @@ class Propagation:
         eng = engine_for(self.after, self.engine)
         return body_poses(eng, eng.state_of(self.after))
 
+    @cached_property
+    def _engine(self) -> Engine:
+        return engine_for(self.before, self.engine)
+
     @property
     def units(self) -> dict[str, str]:
         """The model's declared units, the units of ``changes``, ``coordinates`` and ``joint_values``."""
@@ -108,12 +112,13 @@ class Propagation:
     @cached_property
     def changes(self) -> dict[str, Array]:
         """The values set, by address, in the model's units (degrees in a degree model)."""
-        return changes_to_model_units(self.before, self.solver_changes)
+        return changes_to_model_units(self.before, self.solver_changes, self._engine)
 
     @cached_property
     def coordinates(self) -> dict[str, Array]:
         """Every joint's coordinates after the propagation, in the model's units."""
-        return {j: from_solver_units(self.after, f"{j}.q", q) for j, q in self.after.coordinates.items()}
+        eng = self._engine
+        return {j: from_solver_units(self.after, f"{j}.q", q, eng) for j, q in self.after.coordinates.items()}
 
     @cached_property
     def solver_joint_values(self) -> dict[str, dict[str, float | Array]]:
@@ -200,7 +205,7 @@ def propagate(
     """
     eng = engine_for(model, engine)
     start = eng.reference if eng.model is model else eng.state_of(model)
-    changes = changes_to_internal(model, changes or {}) if check_units(units) else dict(changes or {})
+    changes = changes_to_internal(model, changes or {}, eng) if check_units(units) else dict(changes or {})
     changes = resolve_changes(eng, start, changes)
     sol = eng.propagate(
         changes,

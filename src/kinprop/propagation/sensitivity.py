@@ -105,19 +105,19 @@ def design_sensitivity(
     rows, cols = [labels[i] for i in fc], [labels[i] for i in pc]
     if not check_units(units):
         return Sensitivity(S, rows, cols, fc, pc, "solver")
-    scale_r = np.array([address_scale(model, r) for r in rows])
-    scale_c = np.array([address_scale(model, c) for c in cols])
+    scale_r = np.array([address_scale(model, r, engine) for r in rows])
+    scale_c = np.array([address_scale(model, c, engine) for c in cols])
     S = S * scale_r[:, None] / scale_c[None, :] if S.size else S
-    row_units = tuple(address_unit(model, r) for r in rows)
-    col_units = tuple(_column_unit(model, c) for c in cols)
+    row_units = tuple(address_unit(model, r, engine) for r in rows)
+    col_units = tuple(_column_unit(model, c, engine) for c in cols)
     return Sensitivity(S, rows, cols, fc, pc, "model", row_units, col_units)
 
 
-def _column_unit(model: Model, label: str) -> str:
+def _column_unit(model: Model, label: str, engine: Engine) -> str:
     """A design column's unit; a ``C`` column is a rotation in the angle unit."""
     if ".C_" in label:
         return model.units.get("angle", "rad")
-    return address_unit(model, label)
+    return address_unit(model, label, engine)
 
 
 __all__ = ["Sensitivity", "design_sensitivity", "weight_vector"]

@@ -41,9 +41,9 @@ def variable_rows(prop: Propagation) -> list[dict[str, Any]]:
                 {"variable": v.key, "unit": angle, "before": [0.0], "after": [ang], "change": ang, "role": role}
             )
             continue
-        b = from_solver_units(model, v.key, asm.get(st_before, v.key))
-        a = from_solver_units(model, v.key, asm.get(st_after, v.key))
-        unit = address_unit(model, v.key)
+        b = from_solver_units(model, v.key, asm.get(st_before, v.key), asm)
+        a = from_solver_units(model, v.key, asm.get(st_after, v.key), asm)
+        unit = address_unit(model, v.key, asm)
         change = float(np.max(np.abs(a - b))) if a.size else 0.0
         rows.append(
             {"variable": v.key, "unit": unit, "before": b.tolist(), "after": a.tolist(), "change": change, "role": role}

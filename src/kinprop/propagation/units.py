@@ -17,17 +17,24 @@ knows the metrics). The public door is :mod:`kinprop.io.units`, which re-exports
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Container, Mapping
 
 import numpy as np
 
+from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
 from kinprop.model import Model, parse_address
 
 
-def angle_indices(model: Model, joint: str) -> list[int]:
+def _tree_joints(model: Model, engine: Engine | None) -> Container[str]:
+    """The tree joints: from ``engine`` (compiled from the model's mechanism) when given, else
+    compiled here (a compile per call: hot paths pass their engine)."""
+    return (engine if engine is not None else compile_engine(model.mechanism)).topology.tree_joints
+
+
+def angle_indices(model: Model, joint: str, engine: Engine | None = None) -> list[int]:
     """Indices of a joint's coordinates that are angles (tree joints only)."""
-    if joint not in compile_engine(model.mechanism).topology.tree_joints:
+    if joint not in _tree_joints(model, engine):
         return []
     return list(model.mechanism.joint(joint).jtype.angle_indices)
 
@@ -36,7 +43,7 @@ def _degrees(model: Model) -> bool:
     return model.units.get("angle") == "deg"
 
 
-def _angle_mask(model: Model, address: str, size: int) -> np.ndarray:
+def _angle_mask(model: Model, address: str, size: int, engine: Engine | None = None) -> np.ndarray:
     """Which components of ``address``'s value (``size`` of them) are joint angles."""
     mask = np.zeros(size, dtype=bool)
     try:
@@ -45,7 +52,7 @@ def _angle_mask(model: Model, address: str, size: int) -> np.ndarray:
         return mask
     if addr.field != "q" or addr.joint not in model.mechanism.joint_names:
         return mask
-    idx = angle_indices(model, addr.joint)
+    idx = angle_indices(model, addr.joint, engine)
     if addr.index is None:
         mask[[i for i in idx if i < size]] = True
     elif addr.index in idx:
@@ -53,7 +60,7 @@ def _angle_mask(model: Model, address: str, size: int) -> np.ndarray:
     return mask
 
 
-def to_solver_units(model: Model, address: str, value: object) -> np.ndarray:
+def to_solver_units(model: Model, address: str, value: object, engine: Engine | None = None) -> np.ndarray:
     """A value for ``address`` given in the model's units -> solver units (radians).
 
     ``J01.q = [45]`` on a degree model -> ``[0.785...]``; lengths, positions and rotation
@@ -62,33 +69,38 @@ def to_solver_units(model: Model, address: str, value: object) -> np.ndarray:
     if not _degrees(model):
         return v
     flat = v.reshape(-1)
-    mask = _angle_mask(model, address, flat.size)
+    mask = _angle_mask(model, address, flat.size, engine)
     flat[mask] = np.radians(flat[mask])
     return flat.reshape(v.shape)
 
 
-def from_solver_units(model: Model, address: str, value: object) -> np.ndarray:
+def from_solver_units(model: Model, address: str, value: object, engine: Engine | None = None) -> np.ndarray:
     """The inverse of :func:`to_solver_units`: solver units (radians) -> the model's units."""
     v = np.array(value, dtype=float)
     if not _degrees(model):
         return v
     flat = v.reshape(-1)
-    mask = _angle_mask(model, address, flat.size)
+    mask = _angle_mask(model, address, flat.size, engine)
     flat[mask] = np.degrees(flat[mask])
     return flat.reshape(v.shape)
 
 
-def changes_to_internal(model: Model, changes: Mapping[str, object]) -> dict[str, np.ndarray]:
-    """``{address: value}`` in the model's units -> solver units (see :func:`to_solver_units`)."""
-    return {a: to_solver_units(model, a, v) for a, v in changes.items()}
+def changes_to_internal(
+    model: Model, changes: Mapping[str, object], engine: Engine | None = None
+) -> dict[str, np.ndarray]:
+    """``{address: value}`` in the model's units -> solver units (see :func:`to_solver_units`;
+    ``engine``: one compiled from the model's mechanism, to skip compiling here)."""
+    return {a: to_solver_units(model, a, v, engine) for a, v in changes.items()}
 
 
-def changes_to_model_units(model: Model, changes: Mapping[str, object]) -> dict[str, np.ndarray]:
+def changes_to_model_units(
+    model: Model, changes: Mapping[str, object], engine: Engine | None = None
+) -> dict[str, np.ndarray]:
     """``{address: value}`` in solver units -> the model's units."""
-    return {a: from_solver_units(model, a, v) for a, v in changes.items()}
+    return {a: from_solver_units(model, a, v, engine) for a, v in changes.items()}
 
 
-def address_unit(model: Model, name: str) -> str:
+def address_unit(model: Model, name: str, engine: Engine | None = None) -> str:
     """The unit, in the model's units, of an address or a layout column label: ``J01.q`` ->
     ``deg`` (a revolute in a degree model), ``J03.q`` -> ``m`` (a slide), ``J12.s_j[0]``,
     ``J12.length``, ``point:...``, ``hardpoint:...`` -> the length unit, ``J.C_i`` -> ``""`` (a
@@ -107,8 +119,8 @@ def address_unit(model: Model, name: str) -> str:
         return ""
     if addr.field == "q" and addr.joint in model.mechanism.joint_names:
         jt = model.mechanism.joint(addr.joint).jtype
-        tree = addr.joint in compile_engine(model.mechanism).topology.tree_joints
-        angles = set(angle_indices(model, addr.joint))
+        tree = addr.joint in _tree_joints(model, engine)
+        angles = set(angle_indices(model, addr.joint, engine))
         euler = set(range(jt.euler.start, jt.euler.stop)) if tree and jt.euler is not None else set()
         k = addr.index
         if k is None:
@@ -119,7 +131,7 @@ def address_unit(model: Model, name: str) -> str:
     return ""
 
 
-def address_scale(model: Model, name: str) -> float:
+def address_scale(model: Model, name: str, engine: Engine | None = None) -> float:
     """Factor from solver units to the model's units of an address's value or of a derivative
     by it: ``180/pi`` for a joint angle or a ``C`` column (per radian of body-frame rotation)
     in a degree model, else 1."""
@@ -131,7 +143,7 @@ def address_scale(model: Model, name: str) -> float:
         return 1.0
     if addr.field in ("C_i", "C_j"):
         return 180.0 / math.pi
-    return 180.0 / math.pi if address_unit(model, name) == "deg" else 1.0
+    return 180.0 / math.pi if address_unit(model, name, engine) == "deg" else 1.0
 
 
 #: joint-value names (:mod:`kinprop.propagation.poses`) that are angles (``rotation_vector``: an
