@@ -99,6 +99,7 @@ def test_sweep_changes_in_degrees_are_the_cli_set(fourbar) -> None:
     res = kp.sweep(m, ["O2=60:70:2"], changes={"O4.q": [90.0]}, free=free, outputs=[])
     solver = kp.sweep(m, ["O2=60:70:2"], changes={"O4.q": [math.radians(90.0)]}, free=free, outputs=[], units="solver")
     assert res.ok and list(res.frame["O4.q"]) == pytest.approx([90.0] * 3)
+    assert res.frame.attrs["column_units"] == {"O2.q": "deg", "A.q": "deg", "O4.q": "deg"}
     np.testing.assert_allclose(res.frame["A.q"], [r["A.q"] for r in obj["rows"]], atol=1e-9)
     np.testing.assert_allclose(res.frame["A.q"], solver.frame["A.q"], atol=1e-9)
     assert res.frame["A.q"].iloc[0] == pytest.approx(-34.839, abs=1e-3)
@@ -184,7 +185,7 @@ def test_radian_model_metrics_in_radians(examples, dw_rad, tmp_path) -> None:
     rad = kp.sweep(kp.load_model(dw_rad), [f"LCA={math.radians(-5)!r}:{math.radians(5)!r}:2"],
                    outputs=["camber", "toe"], tol=1e-9)  # fmt: skip
     cols = [c for c in deg.frame.columns if c.endswith(("camber", "toe"))]
-    assert cols and deg.ok and rad.ok
+    assert cols and deg.ok and rad.ok and rad.frame.attrs["column_units"][cols[0]] == "rad"
     for c in cols:
         np.testing.assert_allclose(rad.frame[c], np.radians(deg.frame[c]), rtol=1e-7, atol=1e-10)
     assert np.abs(deg.frame[cols[0]]).max() > 0.1  # degrees of camber over the travel

@@ -466,6 +466,10 @@ def sweep(
     frame.attrs["units"] = dict(model.units)
     frame.attrs["drives"] = drive_cols
     frame.attrs["angle_columns"] = [c for c, _, _, deg in coord_cols if deg]
+    #: the unit of every quantity column (docs/units.md), as the CSV header states it
+    frame.attrs["column_units"] = {
+        c: u for c in columns if c not in (*META, "message") and (u := unit_of(model, c, engine))
+    }
     return SweepResult(frame, dr, expanded, good)
 
 
