@@ -19,7 +19,7 @@ from typer.testing import CliRunner
 import kinprop as kp
 from kinprop.analysis.sensitivity import output_sensitivity
 from kinprop.analysis.study import parse_vary, run_study
-from kinprop.analysis.tolerance import tolerance_analysis
+from kinprop.analysis.tolerance import monte_carlo, tolerance_analysis
 from kinprop.cli import app
 
 pytestmark = pytest.mark.filterwarnings("ignore::kinprop.SingularityWarning")
@@ -143,6 +143,8 @@ def test_tolerance_monte_carlo_in_model_units(examples) -> None:
     assert lin.nominal[0] == pytest.approx(82.7, abs=0.5)  # degrees (the file's O4.q), not 1.44 rad
     solver = tolerance_analysis(m, {"B.s_i[0]": 5e-4}, ["O4.q"], units="solver")
     assert lin.std[0] == pytest.approx(math.degrees(solver.std[0]), rel=1e-12)
+    mc = monte_carlo(m, {"B.s_i[0]": 5e-4}, ["O4.q"], n=400, seed=1)  # degrees, like the linear std
+    assert mc[0] == pytest.approx(lin.std[0], rel=0.15)
 
 
 def test_targets_changes_in_degrees_are_the_cli_set(examples, tmp_path) -> None:
