@@ -24,6 +24,11 @@ Shape of a generated mechanism:
 
 ``assembled=True`` chooses every cut joint's ``s_j``/``C_j`` (and length) so that the cut
 constraints hold exactly at the generated coordinates.
+
+``couplings=n`` adds up to ``n`` couplings ``C1..Cn`` between pairs of single-coordinate tree
+joints (revolute, translational; either direction), with random coefficients c0..c4 and
+offsets (drawn last, so the rest of a seed's mechanism is the same with or without them; with
+``assembled=True`` each ``c0`` is chosen so that the coupling row holds).
 """
 
 from __future__ import annotations
@@ -35,7 +40,7 @@ import numpy as np
 
 from kinprop.engine import Engine as Assembly
 from kinprop.joints import joint_type
-from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates
+from kinprop.model import Body, Coupling, Design, Joint, Mechanism, Model, as_coordinates
 from kinprop.spatial import exp_so3, rot_x, rot_z
 
 TREE_TYPES = (
@@ -168,6 +173,7 @@ def random_mechanism(
     reverse_probability: float = 0.5,
     field_probability: float = 0.7,
     assembled: bool = False,
+    couplings: int = 0,
 ) -> RandomMechanism:
     """A random mechanism with one tree joint per entry of ``tree_types`` (one moving body each)
     and one cut joint per ``(type, loop kind)`` in ``cuts`` (see the module docstring).
@@ -254,7 +260,19 @@ def random_mechanism(
         if jt.n_cut_coordinates:
             coords[name] = random_coordinates(type_name, rng, tree=False)
 
-    mech = Mechanism(tuple(bodies), tuple(joints), name=f"random-{seed}")
+    coupled: list[Coupling] = []
+    single = [j.name for j in joints if j.cut is False and joint_type(j.type).n_coordinates == 1]
+    for k in range(couplings if len(single) >= 2 else 0):
+        a, b = (str(x) for x in rng.choice(single, size=2, replace=False))
+        c = Coupling(f"C{k + 1}", a, b, float(rng.uniform(-0.5, 0.5)), float(rng.uniform(-0.5, 0.5)))
+        coef = rng.normal(scale=0.7, size=5)
+        if assembled:  # c0 such that the row holds at the generated coordinates
+            x = coords[b][0] - c.q_b0
+            coef[0] = coords[a][0] - c.q_a0 - sum(coef[m] * x**m for m in range(1, 5))
+        design[f"{c.name}.coef"] = coef
+        coupled.append(c)
+
+    mech = Mechanism(tuple(bodies), tuple(joints), name=f"random-{seed}", couplings=tuple(coupled))
     model = Model(mech, Design(design), as_coordinates(coords))
     if assembled:
         model = _assemble_cuts(model, rng)
@@ -293,7 +311,7 @@ def suite_mechanisms(count: int = 24, base_seed: int = 1000) -> list[RandomMecha
         seed = base_seed + k
         cuts = combos[k :: count - 2]
         tree = [TREE_TYPES[(k + m) % len(TREE_TYPES)] for m in range(4 + k % 3)]
-        out.append(random_mechanism(seed, tree, cuts))
+        out.append(random_mechanism(seed, tree, cuts, couplings=k % 3))
     for k in range(2):
         seed = base_seed + count - 2 + k
         tree = [TREE_TYPES[(3 * k + m) % len(TREE_TYPES)] for m in range(5)]

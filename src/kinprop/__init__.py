@@ -4,14 +4,66 @@ Implements Zou, Abdel-Malek & Wang (1997), "Design Propagation in Mechanical Sys
 Kinematic Analysis", ASME J. Mech. Des. 119(3).
 """
 
-from kinprop.analysis import design_sensitivity, evaluate_outputs, mobility, output_sensitivity, sweep
-from kinprop.analysis.targets import TargetPropagation, propagate_targets
-from kinprop.engine import BatchSolution, Engine, Solution, State, Status, compile
-from kinprop.errors import AddressError, ConvergenceError, KinpropError, ModelError, SingularityWarning
-from kinprop.io import dump_model, load_model
-from kinprop.model import Body, Design, Joint, Mechanism, Model
-from kinprop.propagation import Propagation, assemble, propagate, propagate_continuation
-from kinprop.solver import SolveResult
+import importlib
+from typing import TYPE_CHECKING, Any
+
+#: public names -> the module that defines them, imported on first use (PEP 562): ``import
+#: kinprop`` stays cheap, and the command line can choose how kernels run (kinprop.jit) first
+_EXPORTS = {
+    "design_sensitivity": "kinprop.analysis",
+    "evaluate_outputs": "kinprop.analysis",
+    "mobility": "kinprop.analysis",
+    "output_sensitivity": "kinprop.analysis",
+    "sweep": "kinprop.analysis",
+    "TargetPropagation": "kinprop.analysis.targets",
+    "propagate_targets": "kinprop.analysis.targets",
+    "BatchSolution": "kinprop.engine",
+    "Engine": "kinprop.engine",
+    "Solution": "kinprop.engine",
+    "State": "kinprop.engine",
+    "Status": "kinprop.engine",
+    "compile": "kinprop.engine",
+    "AddressError": "kinprop.errors",
+    "ConvergenceError": "kinprop.errors",
+    "KinpropError": "kinprop.errors",
+    "ModelError": "kinprop.errors",
+    "SingularityWarning": "kinprop.errors",
+    "dump_model": "kinprop.io",
+    "load_model": "kinprop.io",
+    "Body": "kinprop.model",
+    "Design": "kinprop.model",
+    "Joint": "kinprop.model",
+    "Mechanism": "kinprop.model",
+    "Model": "kinprop.model",
+    "Propagation": "kinprop.propagation",
+    "assemble": "kinprop.propagation",
+    "propagate": "kinprop.propagation",
+    "propagate_continuation": "kinprop.propagation",
+    "SolveResult": "kinprop.solver",
+}
+
+if TYPE_CHECKING:
+    from kinprop.analysis import design_sensitivity, evaluate_outputs, mobility, output_sensitivity, sweep
+    from kinprop.analysis.targets import TargetPropagation, propagate_targets
+    from kinprop.engine import BatchSolution, Engine, Solution, State, Status, compile
+    from kinprop.errors import AddressError, ConvergenceError, KinpropError, ModelError, SingularityWarning
+    from kinprop.io import dump_model, load_model
+    from kinprop.model import Body, Design, Joint, Mechanism, Model
+    from kinprop.propagation import Propagation, assemble, propagate, propagate_continuation
+    from kinprop.solver import SolveResult
+
+
+def __getattr__(name: str) -> Any:
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(_EXPORTS[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'kinprop' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))
+
 
 __version__ = "0.1.0"
 

@@ -1,6 +1,32 @@
-"""``python -m kinprop``: the command-line interface."""
+"""``python -m kinprop`` and the ``kinprop`` command.
 
-from kinprop.cli import main
+First chooses how the kernels run (``KINPROP_JIT``, :mod:`kinprop.jit`), before any kernel is
+imported: one-shot commands use ``auto`` (compiled when the kernel cache is complete, else
+uncompiled while the cache is built in the background: a first run never waits for a compile
+it does not need); commands that solve many variants compile. A ``KINPROP_JIT`` already set
+is the user's choice and is kept.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+#: commands whose work is many solves: compiling first pays for itself
+BATCH_COMMANDS = frozenset({"sweep", "study", "tolerance", "serve"})
+
+
+def main() -> None:
+    command = next((a for a in sys.argv[1:] if not a.startswith("-")), "")
+    if "KINPROP_JIT" not in os.environ:
+        os.environ["KINPROP_JIT"] = "on" if command in BATCH_COMMANDS else "auto"
+        from kinprop.cli.warmup import announce
+
+        announce()
+    from kinprop.cli import main as cli_main
+
+    cli_main()
+
 
 if __name__ == "__main__":
     main()

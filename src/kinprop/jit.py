@@ -4,6 +4,11 @@ Compiled kernels are cached in a per-user cache directory (``KINPROP_CACHE_DIR``
 platform's user cache dir, e.g. ``~/.cache/kinprop/numba``), in one folder per version of the
 kernel sources, never next to the installed sources, which may be read-only. The same source
 runs uncompiled (plain Python) when ``NUMBA_DISABLE_JIT=1``: one implementation either way.
+
+``KINPROP_JIT`` chooses: ``on`` (the default: compile on first use), ``off`` (never compile),
+``auto`` (what the command line uses for one-shot jobs): compiled when the cache holds a
+complete build (:func:`is_warm`), else uncompiled for this process, while the cache is built
+in the background (``kinprop.cli.warmup``), so a first run never waits for a compile.
 """
 
 from __future__ import annotations
@@ -38,15 +43,63 @@ def cache_dir() -> Path:
     return base / kernel_version()
 
 
+def warm_marker() -> Path:
+    """Written by the warm-up (``kinprop.cli.warmup``) once every entry point is compiled."""
+    return cache_dir() / "complete"
+
+
+def is_warm() -> bool:
+    """Whether the kernel cache holds a complete build of this version of the kernels."""
+    return warm_marker().exists()
+
+
+#: how this process runs the kernels: ``on``, ``off`` or ``auto`` (see the module docstring)
+MODE = os.environ.get("KINPROP_JIT", "on").lower()
+if MODE not in ("on", "off", "auto"):
+    raise ValueError(f"KINPROP_JIT must be on, off or auto, found {MODE!r}")
+_UNCOMPILED = MODE == "off" or (MODE == "auto" and not is_warm())
+
 os.environ["NUMBA_CACHE_DIR"] = os.environ.get("KINPROP_NUMBA_CACHE_DIR") or str(cache_dir())
 
 import numba  # noqa: E402  (after the cache directory is set)
+import numba.core.cpu  # noqa: E402
+from numba.np.linalg import _LAPACK, F_INT_nptype  # noqa: E402
 
 numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
+if _UNCOMPILED:  # before any kernel is decorated; never exported to child processes
+    numba.config.DISABLE_JIT = True
 
 #: ``@njit``: compiled, cached on disk, numpy's floating-point error model, GIL released
 njit = partial(numba.njit, cache=True, error_model="numpy", nogil=True)
+
+#: ``@kernel``: an ``@njit`` function that allocates nothing and only reads and writes the arrays
+#: it is given, compiled without numba's reference counting (its ``_nrt=False`` option). Every
+#: view it takes (``R[j, 0]``, ``Phi[row0:]``, ``ws[k]``) is borrowed from its caller, so counting
+#: references is pure cost: two atomic calls per view, two thirds of an ``evaluate`` (measured:
+#: 3.1 us -> 1.0 us per Stewart evaluation, benchmarks/). A kernel that allocates fails to
+#: compile ("NRT required"), so the rule is checked by the compiler. Numba versions without the
+#: option get a plain ``@njit`` (same results, slower).
+kernel = partial(njit, _nrt=False) if hasattr(numba.core.cpu.CPUTargetOptions, "_nrt") else njit
+#: LAPACK's ``dgelsd`` (the SVD least-squares solver of ``numpy.linalg.lstsq``) as numba binds it
+#: for its own ``lstsq``: an external symbol of numba's helper library, so kernels that call it
+#: stay allocation-free and cacheable; ``LAPACK_INT`` is the integer type of its ``rank`` output.
+GELSD = _LAPACK().numba_ez_gelsd(numba.types.float64)
+LAPACK_INT = F_INT_nptype
 prange = numba.prange
+#: False when numba's compiler is switched off (``NUMBA_DISABLE_JIT=1``): the kernels run as Python
+JIT = not numba.config.DISABLE_JIT
 get_num_threads = numba.get_num_threads
 
-__all__ = ["cache_dir", "get_num_threads", "njit", "prange"]
+__all__ = [
+    "GELSD",
+    "JIT",
+    "LAPACK_INT",
+    "MODE",
+    "cache_dir",
+    "get_num_threads",
+    "is_warm",
+    "kernel",
+    "njit",
+    "prange",
+    "warm_marker",
+]

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from kinprop.jit import njit
+from kinprop.jit import kernel
 
 Array = NDArray[np.float64]
 
@@ -128,7 +128,7 @@ def is_rotation(C: ArrayLike, tol: float = 1e-6) -> bool:
 # --- compiled 3-vector / 3x3 helpers (write into preallocated arrays; used by the kernels) ----
 
 
-@njit
+@kernel
 def mm_into(A: Array, B: Array, out: Array) -> None:
     """``out = A @ B`` (3 x 3)."""
     for a in range(3):
@@ -136,7 +136,7 @@ def mm_into(A: Array, B: Array, out: Array) -> None:
             out[a, b] = A[a, 0] * B[0, b] + A[a, 1] * B[1, b] + A[a, 2] * B[2, b]
 
 
-@njit
+@kernel
 def mmT_into(A: Array, B: Array, out: Array) -> None:
     """``out = A @ B.T`` (3 x 3)."""
     for a in range(3):
@@ -144,7 +144,7 @@ def mmT_into(A: Array, B: Array, out: Array) -> None:
             out[a, b] = A[a, 0] * B[b, 0] + A[a, 1] * B[b, 1] + A[a, 2] * B[b, 2]
 
 
-@njit
+@kernel
 def mTm_into(A: Array, B: Array, out: Array) -> None:
     """``out = A.T @ B`` (3 x 3)."""
     for a in range(3):
@@ -152,14 +152,14 @@ def mTm_into(A: Array, B: Array, out: Array) -> None:
             out[a, b] = A[0, a] * B[0, b] + A[1, a] * B[1, b] + A[2, a] * B[2, b]
 
 
-@njit
+@kernel
 def mv_into(A: Array, v: Array, out: Array) -> None:
     """``out = A @ v``."""
     for a in range(3):
         out[a] = A[a, 0] * v[0] + A[a, 1] * v[1] + A[a, 2] * v[2]
 
 
-@njit
+@kernel
 def cross_into(a: Array, b: Array, out: Array) -> None:
     """``out = a x b = tilde(a) b`` (eq. 3)."""
     out[0] = a[1] * b[2] - a[2] * b[1]
@@ -167,14 +167,14 @@ def cross_into(a: Array, b: Array, out: Array) -> None:
     out[2] = a[0] * b[1] - a[1] * b[0]
 
 
-@njit
+@kernel
 def eye_into(out: Array) -> None:
     for a in range(3):
         for b in range(3):
             out[a, b] = 1.0 if a == b else 0.0
 
 
-@njit
+@kernel
 def rot_z_into(angle: float, out: Array) -> None:
     """``out = Rz(angle)``."""
     c, s = np.cos(angle), np.sin(angle)
@@ -182,7 +182,7 @@ def rot_z_into(angle: float, out: Array) -> None:
     out[0, 0], out[0, 1], out[1, 0], out[1, 1] = c, -s, s, c
 
 
-@njit
+@kernel
 def euler_A_into(p: Array, out: Array) -> None:
     """``out = E(p) G(p)^T`` (eq. 42 text), with ``p`` as given (never renormalised)."""
     e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
@@ -197,7 +197,7 @@ def euler_A_into(p: Array, out: Array) -> None:
     out[2, 2] = e0 * e0 - e1 * e1 - e2 * e2 + e3 * e3
 
 
-@njit
+@kernel
 def euler_E_into(p: Array, scale: float, out: Array, col0: int) -> None:
     """``out[:, col0:col0+4] = scale * E(p)``, E = [-e, tilde(e) + e0 I] (eq. 40)."""
     e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
@@ -207,7 +207,7 @@ def euler_E_into(p: Array, scale: float, out: Array, col0: int) -> None:
     out[2, c], out[2, c + 1], out[2, c + 2], out[2, c + 3] = -e3 * scale, -e2 * scale, e1 * scale, e0 * scale
 
 
-@njit
+@kernel
 def exp_so3_into(w: Array, out: Array) -> None:
     """``out = exp(tilde(w))`` (Rodrigues), stable for small ``|w|``."""
     th = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])

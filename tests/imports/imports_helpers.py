@@ -8,7 +8,6 @@ from pathlib import Path
 import numpy as np
 
 from kinprop import Model, evaluate_outputs
-from kinprop.model import Mechanism
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 MJCF = EXAMPLES / "mjcf"
@@ -21,7 +20,7 @@ def with_frame_points(model: Model) -> Model:
     """The model with points o, ex, ey, ez on every body (its frame, seen through outputs)."""
     mech = model.mechanism
     bodies = tuple(dataclasses.replace(b, points=b.points + tuple(FRAME.items())) for b in mech.bodies)
-    return dataclasses.replace(model, mechanism=Mechanism(bodies, mech.joints, mech.name))
+    return dataclasses.replace(model, mechanism=dataclasses.replace(mech, bodies=bodies))
 
 
 def frame_outputs(body: str) -> list[str]:

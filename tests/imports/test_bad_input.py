@@ -52,11 +52,9 @@ def run_import(tmp_path, text: str, suffix: str = ".xml", name: str = "bad"):
         ('<tendon tendon1="t"/>', "line 14 <tendon>: a tendon equality"),
         ('<distance body1="b" body2="c" distance="1"/>', "a distance equality (removed from MuJoCo"),
         ('<flex flex="f"/>', "a flex equality"),
-        (
-            '<joint joint1="ja" joint2="jc" polycoef="0 2 0 0 0"/>',
-            "joint coupling between ja and jc is not supported yet",
-        ),
-        ('<joint joint1="ja"/>', "joint coupling between ja and a constant is not supported yet"),
+        ('<joint joint1="ja"/>', "line 14 <joint>: a joint equality without joint2 holds ja at a constant"),
+        ('<joint joint1="ja" joint2="nope"/>', "joint2='nope': no such joint"),
+        ('<joint joint1="ja" joint2="jc" polycoef="0 2"/>', "polycoef='0 2': expected 5 numbers, found 2"),
         ('<weld body1="b" body2="b"/>', "weld joins body 'b' to itself"),
         ('<connect site1="s1" site2="s2"/>', "site1='s1': no such site"),
         ("<gear/>", "unknown element <gear> in <equality>"),
@@ -67,6 +65,16 @@ def test_equality_errors(tmp_path, equality: str, expected: str) -> None:
     assert r.exit_code == 2, r.output
     assert f"error: {src}: " in r.output and expected in r.output
     assert not (tmp_path / "out.yaml").exists()
+
+
+def test_a_valid_joint_coupling_imports(tmp_path) -> None:
+    equality = '<joint name="gear" joint1="ja" joint2="jc" polycoef="0 2 0 0 0"/>'
+    r, _ = run_import(tmp_path, BASE.replace("EQUALITY", equality))
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(app, ["check", str(tmp_path / "out.yaml"), "--json"])
+    obj = json.loads(r.stdout)
+    assert obj["couplings"] == [{"name": "gear", "joints": ["ja", "jc"], "rows": ["gear:coupling"]}]
+    assert obj["mobility"] == obj["gruebler"] == 2  # three hinges, one coupling
 
 
 def test_a_valid_connect_imports(tmp_path) -> None:

@@ -3,9 +3,10 @@
 Truth: MuJoCo itself. Cassie: its mobility is nv - rank of MuJoCo's equality Jacobian at the
 reference; a sweep of the knee with the loop joints free reproduces MuJoCo's constrained
 kinematics (Newton on MuJoCo's own constraint residual ``efc_pos`` and Jacobian ``efc_J``,
-moving the same joints). Robotiq: the joint coupling is refused with a located error until
-coupling constraints exist (issue 12); without that element the gripper imports with its two
-four-bar loops, and its mobility is MuJoCo's.
+moving the same joints). Robotiq: the two drivers' ``<equality><joint>`` is a coupling row, so
+the gripper's mobility is MuJoCo's 3 (4 without the coupling), and a sweep of the right driver
+with the left driver, spring links and followers free (couplers held) reproduces MuJoCo's
+constrained kinematics (the same Newton on MuJoCo's ``efc_pos``, coupling row included).
 """
 
 from __future__ import annotations
@@ -93,20 +94,83 @@ def test_cassie_knee_sweep_reproduces_mujoco() -> None:
     assert np.ptp(tarsus) > 0.3  # the tarsus really followed the knee through the achilles loop
 
 
-def test_robotiq_coupling_is_a_located_error() -> None:
-    with pytest.raises(kp.ModelError) as exc:
-        kp.load_model(ROBOTIQ)
-    [problem] = exc.value.problems
-    text = str(problem)
-    assert str(ROBOTIQ) in text and "line 79 <joint>" in text
-    assert "joint coupling between right_driver_joint and left_driver_joint is not supported yet" in text
-    assert "coupling constraints: issue 12" in text
-    r = runner.invoke(app, ["import", str(ROBOTIQ), "-o", "robotiq.yaml"])
-    assert r.exit_code == 2 and "Traceback" not in r.output
-    assert "joint coupling between right_driver_joint and left_driver_joint" in r.output
-    doc = read_mjcf(ROBOTIQ)  # everything but the coupling row is read: the lead adds that row
-    [c] = doc.couplings
-    assert (c.joint1, c.joint2, c.polycoef) == ("right_driver_joint", "left_driver_joint", (0, 1, 0, 0, 0))
+ROBOTIQ_FREE = ["left_driver_joint", "right_spring_link_joint", "right_follower_joint", "left_spring_link_joint",
+                "left_follower_joint"]  # fmt: skip
+
+
+def test_robotiq_imports_with_its_coupling(tmp_path) -> None:
+    model = kp.load_model(ROBOTIQ)
+    [c] = model.mechanism.couplings
+    assert (c.joint_a, c.joint_b, c.q_a0, c.q_b0) == ("right_driver_joint", "left_driver_joint", 0.0, 0.0)
+    np.testing.assert_array_equal(model.design[f"{c.name}.coef"], [0, 1, 0, 0, 0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", kp.SingularityWarning)
+        prop = kp.assemble(model)
+    assert prop.converged and prop.result.residual_norm < 1e-14  # connects and coupling hold at the reference
+    r = runner.invoke(app, ["check", str(ROBOTIQ), "--assemble", "--json"])
+    assert r.exit_code == 0, r.output
+    obj = json.loads(r.stdout)
+    assert obj["mobility"] == 3 and obj["n_constraints"] == 7 and obj["rank"] == 5
+    assert obj["couplings"] == [
+        {"name": c.name, "joints": ["right_driver_joint", "left_driver_joint"], "rows": [f"{c.name}:coupling"]}
+    ]
+    out = tmp_path / "robotiq.yaml"
+    r = runner.invoke(app, ["import", str(ROBOTIQ), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    assert f"(2 cut: connect_right_follower_right_coupler, connect_left_follower_left_coupler), 1 coupling: {c.name}" \
+        in " ".join(r.output.split())  # fmt: skip
+    back = kp.load_model(out)  # the written file keeps the coupling
+    assert back.mechanism.couplings == model.mechanism.couplings
+    np.testing.assert_array_equal(back.design[f"{c.name}.coef"], [0, 1, 0, 0, 0])
+
+
+def test_robotiq_mobility_is_mujocos() -> None:
+    mujoco = pytest.importorskip("mujoco")
+    from imports_helpers import equality_rows
+
+    m = mujoco.MjModel.from_xml_path(str(ROBOTIQ))
+    d = mujoco.MjData(m)
+    m.opt.jacobian = mujoco.mjtJacobian.mjJAC_DENSE
+    mujoco.mj_forward(m, d)
+    r, J = equality_rows(mujoco, m, d)
+    assert len(r) == 7  # two connects (3 rows each) and the joint coupling
+    assert kp.mobility(kp.load_model(ROBOTIQ)).mobility == m.nv - np.linalg.matrix_rank(J, 1e-9) == 3
+
+
+def test_robotiq_driver_sweep_reproduces_mujoco() -> None:
+    mujoco = pytest.importorskip("mujoco")
+    doc = read_mjcf(ROBOTIQ)
+    model = with_frame_points(document_to_model(doc))
+    bodies = [b.name for b in model.mechanism.bodies if not b.fixed]
+    res = kp.sweep(
+        model,
+        ["right_driver_joint=0:0.8:8"],
+        free=[f"{j}.q" for j in ROBOTIQ_FREE],
+        outputs=[o for b in bodies for o in frame_outputs(b)] + ["left_driver_joint.q"],
+        tol=1e-12,
+    )
+    df = res.frame
+    assert (df["status"] == "converged").all()
+    np.testing.assert_allclose(df["left_driver_joint.q"], df["right_driver_joint.q"], rtol=0, atol=1e-12)
+    m = mujoco.MjModel.from_xml_path(str(ROBOTIQ))
+    d = mujoco.MjData(m)
+    dofs = [int(m.jnt_dofadr[m.joint(j).id]) for j in ROBOTIQ_FREE]
+    driver = int(m.jnt_qposadr[m.joint("right_driver_joint").id])
+    qpos = m.qpos0.copy()
+    worst = 0.0
+    follower = []
+    for _, row in df.iterrows():
+        qpos[driver] = row["right_driver_joint.q"] + m.qpos0[driver]
+        qpos = mujoco_project(mujoco, m, d, qpos, dofs)
+        mujoco.mj_kinematics(m, d)
+        for name, (p, R) in mujoco_poses(mujoco, m, d).items():
+            if name in ("base_mount", "base"):
+                continue
+            p_k, R_k = pose_from_row(row.to_dict(), name)
+            worst = max(worst, float(np.abs(p_k - p).max()), float(np.abs(R_k - R).max()))
+        follower.append(qpos[int(m.jnt_qposadr[m.joint("left_follower_joint").id])])
+    assert worst < 1e-9, worst
+    assert np.ptp(follower) > 0.3  # the left finger really followed the right driver through the coupling
 
 
 def test_robotiq_without_the_coupling_has_mujocos_mobility() -> None:
@@ -157,8 +221,8 @@ def test_imported_yaml_loads_back_with_the_same_poses(tmp_path) -> None:
 
 
 def test_coupling_record_matches_mujocos_residual() -> None:
-    """For the coupling-constraint work: the recorded coupling, in kinprop coordinates
-    (q = qpos - ref), is MuJoCo's residual q[joint1] - poly(q[joint2])."""
+    """The recorded coupling, in kinprop coordinates (q = qpos - ref), is MuJoCo's residual
+    q[joint1] - poly(q[joint2]), and so is the imported model's coupling row."""
     mujoco = pytest.importorskip("mujoco")
     xml = """<mujoco><compiler angle="radian"/><worldbody>
       <body><inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/><joint name="a" axis="0 1 0" ref="0.3"/></body>
@@ -175,3 +239,6 @@ def test_coupling_record_matches_mujocos_residual() -> None:
         x = float(q[c.joint2][0])
         ours = float(q[c.joint1][0]) - sum(a * x**k for k, a in enumerate(c.polycoef))
         assert ours == pytest.approx(float(d.efc_pos[0]), abs=1e-14)
+        model = document_to_model(doc)
+        row = kp.compile(model).residual(model.design, q)
+        assert row[0] == pytest.approx(float(d.efc_pos[0]), abs=1e-14)

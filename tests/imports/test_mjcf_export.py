@@ -28,6 +28,7 @@ from typer.testing import CliRunner
 import kinprop as kp
 from kinprop.cli import app
 from kinprop.imports.mjcf_export import model_to_mjcf
+from kinprop.io.files import model_from_data
 
 mujoco = pytest.importorskip("mujoco")
 runner = CliRunner()
@@ -51,6 +52,55 @@ def test_cassie_round_trip_keeps_every_body_pose(tmp_path) -> None:
     r_eq, _ = equality_rows(mujoco, b, db)
     assert b.neq == 2 and np.abs(r_eq).max() < 1e-15
     assert (b.nq, b.nv) == (a.nq, a.nv)
+
+
+def test_robotiq_round_trip_keeps_the_coupling(tmp_path) -> None:
+    src = MJCF / "robotiq_2f85_kinematic.xml"
+    out = tmp_path / "robotiq_out.xml"
+    r = runner.invoke(app, ["convert", str(src), "--to", "mjcf", "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    a = mujoco.MjModel.from_xml_path(str(src))
+    da = mujoco.MjData(a)
+    mujoco.mj_kinematics(a, da)
+    b = mujoco.MjModel.from_xml_path(str(out))
+    db = mujoco.MjData(b)
+    mujoco.mj_forward(b, db)
+    before, after = mujoco_poses(mujoco, a, da), mujoco_poses(mujoco, b, db)
+    worst = max(max(np.abs(before[n][0] - after[n][0]).max(), np.abs(before[n][1] - after[n][1]).max()) for n in before)
+    assert worst < 1e-12, worst
+    assert b.neq == 3 and list(b.eq_type).count(mujoco.mjtEq.mjEQ_JOINT) == 1
+    k = list(b.eq_type).index(mujoco.mjtEq.mjEQ_JOINT)
+    np.testing.assert_array_equal(b.eq_data[k][:5], [0, 1, 0, 0, 0])
+    assert kp.load_model(out).mechanism.couplings[0].joint_a == "right_driver_joint"
+
+
+def test_exported_coupling_is_kinprops_row_about_the_current_pose() -> None:
+    """A cubic coupling with offsets, exported away from its offsets: MuJoCo's polynomial is
+    about qpos0 (the current coordinates), so the exported coefficients are re-expanded there;
+    MuJoCo's residual equals kinprop's coupling row at other coordinates too."""
+    data = {
+        "kinprop": 1,
+        "units": {"length": "m", "angle": "deg"},
+        "bodies": {"ground": {"fixed": True}, "a": {}, "b": {}},
+        "joints": {
+            "RA": {"type": "revolute", "bodies": ["ground", "a"], "q": [20]},
+            "PB": {"type": "translational", "bodies": ["ground", "b"], "s_i": [1, 0, 0], "q": [0.3]},
+        },
+        "couplings": {"C": {"joints": ["RA", "PB"], "coef": [5, 40, -10, 7], "q0": [-3, 0.1]}},
+    }
+    model = kp.assemble(model_from_data(data), free=["RA.q"]).after
+    xml, warns = model_to_mjcf(model)
+    assert not warns
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    eng = kp.compile(model)
+    qa0, qb0 = float(model.coordinates["RA"][0]), float(model.coordinates["PB"][0])
+    for dqa, dqb in ((0.0, 0.0), (0.2, -0.4), (-0.5, 0.7)):
+        d.qpos[:] = [dqa, dqb]
+        mujoco.mj_forward(m, d)
+        r, _ = equality_rows(mujoco, m, d)
+        ours = eng.residual(model.design, {"RA": [qa0 + dqa], "PB": [qb0 + dqb]})
+        assert r[0] == pytest.approx(ours[0], abs=1e-12)
 
 
 def _universal_model(reversed_: bool) -> kp.Model:
@@ -132,6 +182,7 @@ EXAMPLE_DRIVERS = {
     "double_wishbone.yaml": "LCA",
     "double_wishbone_hardpoints.yaml": "LCA",
     "fourbar.yaml": "O2",
+    "fourbar_geared.yaml": "G",
     "fourbar_double_rocker.yaml": None,
     "fourbar_spatial.yaml": None,
     "mcpherson.yaml": None,

@@ -43,7 +43,16 @@ from random_mechanisms import CUT_TYPES, LOOP_KINDS, TREE_TYPES, random_mechanis
 EPS = 1e-6
 RTOL = 1e-6
 
-MECHANISMS = suite_mechanisms(count=24, base_seed=1000)
+#: the suite (some with couplings) and two with four couplings between revolutes and slides
+MECHANISMS = suite_mechanisms(count=24, base_seed=1000) + [
+    random_mechanism(
+        seed,
+        ["revolute", "translational", "revolute", "translational", "spherical"],
+        [("revolute", "branch"), ("distance", "ground")],
+        couplings=4,
+    )
+    for seed in (2000, 2007)
+]
 IDS = [f"seed{m.seed}" for m in MECHANISMS]
 
 
@@ -52,7 +61,7 @@ def directions(asm: Assembly, coords) -> list[tuple[str, np.ndarray]]:
     labels = column_labels(asm.layout)
     out: list[tuple[str, np.ndarray]] = []
     for v in asm.layout.variables:
-        jt = asm.mechanism.joint(v.joint).jtype
+        jt = asm.mechanism.joint(v.joint).jtype if v.group != "coef" else None
         euler = jt.euler if (v.group == "q" and v.joint in asm.topology.tree_joints) else None
         for k in range(v.size):
             if euler is not None and euler.start <= k < euler.stop:
@@ -137,6 +146,7 @@ def test_jacobian_at_an_assembled_state(rm):
         [(rm.mechanism.joint(k).type, kind) for k, kind in rm.loop_kinds.items()],
         n_fixed=sum(b.fixed for b in rm.mechanism.bodies),
         assembled=True,
+        couplings=len(rm.mechanism.couplings),
     )
     asm = am.assembly()
     Phi = asm.residual(am.design, am.coordinates)
@@ -184,6 +194,17 @@ def test_suite_covers_every_type_and_both_loop_cases():
     assert fields == {(f, rev) for f in ("s_i", "s_j", "C_i", "C_j") for rev in (False, True)}
     assert cases == {1, 2}
     assert junctions == {"world", "fixed", "moving"}
+    coupled = {
+        (rm.mechanism.joint(c.joint_a).type, rm.mechanism.joint(c.joint_b).type, t.reversed)
+        for rm in MECHANISMS
+        for c in rm.mechanism.couplings
+        for t in rm.assembly().topology.tree
+        if t.joint == c.joint_a
+    }
+    assert {(a, b) for a, b, _ in coupled} == {
+        (a, b) for a in ("revolute", "translational") for b in ("revolute", "translational")
+    }
+    assert {rev for _, _, rev in coupled} == {False, True}
 
 
 # --- perturbations: retract does exactly the documented updates ---------------------------------

@@ -10,7 +10,11 @@ import pytest
 
 from kinprop import ConvergenceError, propagate
 from kinprop.engine import Engine as Assembly
+from kinprop.jit import kernel
+from kinprop.kinematics import kernels
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates
+from kinprop.solver import newton
+from kinprop.solver.newton import min_norm_step
 from oracle.forward import read
 from random_mechanisms import CUT_TYPES, LOOP_KINDS, TREE_TYPES, random_mechanism
 
@@ -43,6 +47,30 @@ def test_perturbed_random_mechanism_reassembles(seed):
     assert res.residual_history[0] > 1e-2 and len(res.residual_history) == res.iterations + 1
     assert prop.after.design == start.design  # only q was free
     assert "converged" in res.message
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_perturbed_mechanism_with_couplings_reassembles(seed):
+    """A coupling between revolutes and slides (random quartic coefficients) holds after a
+    re-assembly from perturbed coordinates; then a coefficient change is followed, and the
+    coupling row holds for the new coefficients."""
+    tree = ["revolute", "translational", "revolute", "translational", "spherical"]
+    rm = random_mechanism(700 + seed, tree, [("distance", "branch")], assembled=True, couplings=1)
+    assert len(rm.mechanism.couplings) == 1
+    asm = Assembly(rm.mechanism)
+    assert np.linalg.norm(asm.residual(rm.design, rm.coordinates)) < 1e-12
+    start = perturbed(rm.model, np.random.default_rng(seed), scale=0.02)
+    prop = propagate(start, {}, free=("q",))
+    assert prop.result.status == "converged", f"{rm.describe()}: {prop.result.message}"
+    assert np.linalg.norm(asm.residual(prop.after.design, prop.after.coordinates)) <= 1e-10
+    c = rm.mechanism.couplings[0]
+    coef = np.array(prop.after.design[f"{c.name}.coef"])
+    coef[1] += 0.05
+    moved = propagate(prop.after, {f"{c.name}.coef": coef}, free=("q",))
+    assert moved.result.status == "converged", moved.result.message
+    x = float(moved.after.coordinates[c.joint_b][0]) - c.q_b0
+    qa = float(moved.after.coordinates[c.joint_a][0]) - c.q_a0
+    assert qa == pytest.approx(sum(coef[k] * x**k for k in range(5)), abs=1e-10)
 
 
 def test_max_iter_one_is_a_result_not_an_exception():
@@ -169,3 +197,31 @@ def test_newton_defaults():
         warnings.simplefilter("error")
         res = propagate(slider_with_rod(), {}, free=("T1.q",)).result
     assert res.converged and res.residual_norm < 1e-10
+
+
+@pytest.mark.parametrize("shape", [(3, 5), (5, 3), (4, 4), (6, 6), (1, 7), (7, 1)])
+def test_min_norm_step_is_numpy_lstsq_including_rank_deficient(shape):
+    """The step is ``-pinv(J) rhs`` as ``numpy.linalg.lstsq`` gives it (LU when square and
+    regular, LAPACK dgelsd otherwise), also when rows repeat (rank deficient)."""
+    rng = np.random.default_rng(sum(shape))
+    for deficient in (False, True):
+        J = rng.normal(size=shape)
+        if deficient and shape[0] > 1:
+            J[-1] = 2.0 * J[0]
+        rhs = rng.normal(size=shape[0])
+        out = np.zeros(shape[1])
+        sign = min_norm_step(J, rhs, out)
+        ref = -np.linalg.lstsq(J, rhs, rcond=None)[0]
+        np.testing.assert_allclose(out, ref, rtol=1e-10, atol=1e-12)
+        if shape[0] == shape[1]:
+            assert sign == (0 if deficient else int(np.sign(np.linalg.det(J))))
+
+
+def test_kernels_compile_without_reference_counting():
+    """Allocation-free kernels are compiled without numba's reference counting (kinprop.jit):
+    a kernel that allocated would not compile, and the loop's hot functions are kernels."""
+    if kernel.keywords.get("_nrt", True):
+        pytest.skip("this numba has no _nrt option: kernels are plain njit functions")
+    for f in (kernels.evaluate, kernels.forward_kinematics, kernels.retract, newton.newton_step, newton.solve,
+              newton.follow):  # fmt: skip
+        assert f.targetoptions.get("_nrt") is False, f.__name__

@@ -16,7 +16,8 @@ Redundant rows are those left out of a rank-revealing (column-pivoted) QR of ``P
 removing them leaves the rank unchanged. They are one removable set; any row with a
 component in the left null space (``dependent``) could take the place of one of them.
 
-The Gruebler-Kutzbach count is ``6 n_moving - sum_joints (6 - f_joint)``; it ignores the
+The Gruebler-Kutzbach count is ``6 n_moving - sum_joints (6 - f_joint) - n_couplings`` (a
+coupling between two joint coordinates is one constraint row); it ignores the
 geometry, so it is -2 for a planar four-bar built from spatial revolutes and for the Bennett
 linkage, whose true mobility is 1.
 """
@@ -58,7 +59,7 @@ class MobilityReport:
 
     @property
     def redundant_joints(self) -> list[str]:
-        """Cut joints owning redundant rows, in row order."""
+        """Cut joints (and couplings) owning redundant rows, in row order."""
         return list(dict.fromkeys(r.split(":", 1)[0] for r in self.redundant))
 
     @property
@@ -80,12 +81,13 @@ def joint_freedom(jtype, is_tree: bool) -> int:
 
 
 def gruebler(model: Model) -> int:
-    """Spatial Gruebler-Kutzbach count ``6 (n_moving) - sum (6 - f_joint)``."""
+    """Spatial Gruebler-Kutzbach count ``6 (n_moving) - sum (6 - f_joint) - n_couplings``."""
     mech = model.mechanism
     asm = compile_engine(mech)
     tree = set(asm.topology.tree_joints)
     moving = sum(1 for b in mech.bodies if not b.fixed)
-    return 6 * moving - sum(6 - joint_freedom(j.jtype, j.name in tree) for j in mech.joints)
+    joints = sum(6 - joint_freedom(j.jtype, j.name in tree) for j in mech.joints)
+    return 6 * moving - joints - len(mech.couplings)
 
 
 def numerical_rank(sv: np.ndarray, rtol: float = RANK_RTOL) -> int:

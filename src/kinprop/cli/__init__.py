@@ -1,4 +1,8 @@
-"""Command-line interface. Each command lives in its own module and registers on ``app``."""
+"""Command-line interface. Each command lives in its own module and registers on ``app``.
+
+The ``kinprop`` command enters through :mod:`kinprop.__main__`, which chooses how the
+kernels run before this package (and the library) is imported.
+"""
 
 from kinprop.cli import check, convert, examples, paper, plot, sensitivity, solve, sweep  # noqa: F401  (registers commands)
 from kinprop.cli import importer as _importer  # noqa: F401  (kinprop import)

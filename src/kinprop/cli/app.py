@@ -94,7 +94,7 @@ def _sigterm_as_interrupt() -> Any:
 #: ``--free`` and ``--weight``, shared by every command that solves
 FreeOption = Annotated[
     list[str] | None,
-    typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l inputs) or addresses; default q"),
+    typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l coef inputs) or addresses; default q"),
 ]
 WeightOption = Annotated[
     list[str] | None, typer.Option("--weight", metavar="ADDRESS=W", help="ADDRESS_OR_GROUP=W: larger moves more")

@@ -68,6 +68,9 @@ def check_json(model: Model, rep: MobilityReport, evaluated_at: str) -> dict[str
             }
             for j in mech.joints
         ],
+        "couplings": [
+            {"name": c.name, "joints": [c.joint_a, c.joint_b], "rows": rows.get(c.name, [])} for c in mech.couplings
+        ],
         "tree_joints": list(topo.tree_joints),
         "cut_joints": list(topo.cut_joints),
         "loops": [
@@ -129,7 +132,15 @@ def _tables(obj: dict[str, Any]) -> list[Table]:
             " ".join(lp["path_i"]) or "-",
             " ".join(lp["path_j"]) or "-",
         )
-    return [bodies, joints, loops]
+    if not obj.get("couplings"):
+        return [bodies, joints, loops]
+    couplings = Table(title="couplings (q_a - q_a0 = c0 + c1 (q_b - q_b0) + ... + c4 (q_b - q_b0)^4)",
+                      title_justify="left")  # fmt: skip
+    for c in ("coupling", "joint a (driven)", "joint b", "constraint rows"):
+        couplings.add_column(c, overflow="fold")
+    for c in obj["couplings"]:
+        couplings.add_row(c["name"], c["joints"][0], c["joints"][1], " ".join(r.split(":", 1)[1] for r in c["rows"]))
+    return [bodies, joints, loops, couplings]
 
 
 def print_report(obj: dict[str, Any], path: Path) -> None:
@@ -186,7 +197,7 @@ def check_cmd(
     rank of the Jacobian, the mobility and the redundant rows are computed at the model's
     coordinates as given (or after --assemble); ||Phi|| there is reported. JSON keys: mobility,
     gruebler, n_coordinates, n_constraints, rank, tree_joints, cut_joints, loops, redundant,
-    residual_norm, assembled, bodies, joints.
+    residual_norm, assembled, bodies, joints, couplings (one constraint row each).
     """
     m = load_model_cli(model)
     evaluated_at = "the model's coordinates as given"

@@ -74,9 +74,12 @@ def import_cmd(
     atomic_write(output, text)
     mech = model.mechanism
     cut = build_topology(mech).cut_joints
+    nc = len(mech.couplings)
+    couplings = f", {nc} coupling{'s' if nc > 1 else ''}: {', '.join(c.name for c in mech.couplings)}" if nc else ""
     out.print(
         escape(
             f"wrote {output}: {len(mech.bodies)} bodies, {len(mech.joints)} joints ({len(cut)} cut: {', '.join(cut)})"
+            + couplings
         ),
         soft_wrap=True,
     )

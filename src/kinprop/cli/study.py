@@ -35,7 +35,8 @@ from kinprop.cli.checks import (
 from kinprop.errors import AddressError
 
 Free = Annotated[
-    list[str] | None, typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l) or addresses; default q")
+    list[str] | None,
+    typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l coef) or addresses; default q"),
 ]
 EXIT_INTERRUPTED = 130
 Sets = Annotated[

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from kinprop.constraints.coupling import N_COEF
 from kinprop.errors import AddressError
 from kinprop.jit import get_num_threads
 from kinprop.kinematics import kernels
@@ -55,7 +56,8 @@ _FIELD_SIDE = {"s_i": 0, "s_j": 1, "C_i": 0, "C_j": 1}
 class State:
     """Design variables and coordinates as arrays, optionally with a leading batch axis:
     ``Q`` (..., nq) coordinates (layout q columns), ``S`` (..., nj, 2, 3) s'_i/s'_j,
-    ``C`` (..., nj, 2, 3, 3) C_i/C_j, ``L`` (..., nj) lengths."""
+    ``C`` (..., nj, 2, 3, 3) C_i/C_j, ``L`` (..., nj + 5 nc) lengths, then each coupling's
+    coefficients c0..c4."""
 
     Q: Array
     S: Array
@@ -71,6 +73,13 @@ class State:
 
     def __getitem__(self, k: Any) -> State:
         return State(self.Q[k], self.S[k], self.C[k], self.L[k])
+
+    def writable(self) -> State:
+        """The arrays as the kernels take them: writable and C-contiguous (copied only when not),
+        so one compiled version of each kernel serves every call (numba compiles a separate
+        one for read-only arrays)."""
+        return State(*(a if a.flags.writeable and a.flags.c_contiguous else np.array(a)
+                       for a in (self.Q, self.S, self.C, self.L)))  # fmt: skip
 
     def frozen(self) -> State:
         for a in (self.Q, self.S, self.C, self.L):
@@ -224,6 +233,8 @@ class Engine:
         self.tables: Tables = build_tables(mechanism, self.topology, self.layout, self.row_blocks)
         self.nnz = int(kernels.count_entries(self.tables))
         self.joint_index = {j.name: k for k, j in enumerate(mechanism.joints)}
+        #: slot of each coupling's c0 in the state's ``L`` (after the joints' lengths)
+        self.coupling_slot = {c.name: len(mechanism.joints) + N_COEF * k for k, c in enumerate(mechanism.couplings)}
         self.body_index = {b.name: k for k, b in enumerate(mechanism.bodies)}
         self.n_coordinates = sum(v.size for v in self.layout.group("q"))
         # first column of each column's variable (the Newton loop's ``need`` mask)
@@ -248,11 +259,11 @@ class Engine:
     @cached_property
     def pattern(self) -> tuple[Array, Array]:
         """Row and column of every Jacobian entry the kernel emits (fixed order)."""
-        st = self.default_state()
+        st = self.default_state().writable()
         rows, cols = np.zeros(self.nnz, np.int64), np.zeros(self.nnz, np.int64)
         need = np.ones(self.n_columns, np.int8)
         k = kernels.evaluate(self.tables, st.Q, st.S, st.C, st.L, kernels.workspace(self.tables),
-                             np.zeros(self.n_rows), np.zeros(self.nnz), need, rows, cols, True)  # fmt: skip
+                             np.zeros(self.n_rows), np.zeros(self.nnz), need, rows, cols)  # fmt: skip
         if k != self.nnz:  # pragma: no cover - the count and the kernel's emission must agree
             raise AssertionError(f"the kernel emitted {k} Jacobian entries, the count says {self.nnz}")
         return rows, cols
@@ -308,7 +319,8 @@ class Engine:
         for v in self.layout.group("q"):
             jt = self.mechanism.joint(v.joint).jtype
             Q[v.columns] = jt.default_coordinates() if v.size == jt.n_coordinates else jt.default_cut_coordinates()
-        return State(Q, np.zeros((nj, 2, 3)), np.tile(np.eye(3), (nj, 2, 1, 1)), np.ones(nj))
+        L = np.ones(nj + N_COEF * len(self.mechanism.couplings))
+        return State(Q, np.zeros((nj, 2, 3)), np.tile(np.eye(3), (nj, 2, 1, 1)), L)
 
     def pack(self, design: Design, coordinates: Mapping[str, Array]) -> State:
         """A :class:`State` from a design and coordinates (missing coordinates: defaults)."""
@@ -317,6 +329,8 @@ class Engine:
             st.S[k, 0], st.S[k, 1] = design.value(j.name, "s_i"), design.value(j.name, "s_j")
             st.C[k, 0], st.C[k, 1] = design.value(j.name, "C_i"), design.value(j.name, "C_j")
             st.L[k] = float(design[f"{j.name}.length"]) if f"{j.name}.length" in design else 0.0
+        for c in self.mechanism.couplings:
+            st.L[self.coupling_slot[c.name] : self.coupling_slot[c.name] + N_COEF] = design[f"{c.name}.coef"]
         for v in self.layout.group("q"):
             val = coordinates.get(v.joint)
             if val is not None:
@@ -335,13 +349,15 @@ class Engine:
         vals: dict[str, object] = {}
         coords: dict[str, Array] = {}
         for v in self.layout.variables:
-            j = self.joint_index[v.joint]
+            j = self.coupling_slot[v.joint] if v.group == "coef" else self.joint_index[v.joint]
             if v.group == "q":
                 coords[v.joint] = state.Q[v.columns].copy()
             elif v.group == "s":
                 vals[v.key] = state.S[j, _FIELD_SIDE[v.field]].copy()
             elif v.group == "C":
                 vals[v.key] = state.C[j, _FIELD_SIDE[v.field]].copy()
+            elif v.group == "coef":
+                vals[v.key] = state.L[j : j + N_COEF].copy()
             else:
                 vals[v.key] = float(state.L[j])
         return Design(vals), as_coordinates(coords)
@@ -362,8 +378,9 @@ class Engine:
             v = self.layout[addr.key]
             if addr.index is not None and addr.index >= (9 if v.group == "C" else v.size):
                 raise AddressError(f"{address!r}: index out of range for a variable of size {v.size}")
-            t = Target(address, v.key, v.group, self.joint_index[v.joint], _FIELD_SIDE.get(v.field, 0), v.start, v.size,
-                       addr.index)  # fmt: skip
+            # ``joint``: the joint's index; for a coupling's coefficients, the slot of c0 in ``L``
+            j = self.coupling_slot[v.joint] if v.group == "coef" else self.joint_index[v.joint]
+            t = Target(address, v.key, v.group, j, _FIELD_SIDE.get(v.field, 0), v.start, v.size, addr.index)
             self._targets[address] = t
         return t
 
@@ -375,6 +392,8 @@ class Engine:
             full = state.S[..., t.joint, t.side, :]
         elif t.group == "C":
             full = state.C[..., t.joint, t.side, :, :].reshape(*state.batch, 9)
+        elif t.group == "coef":
+            full = state.L[..., t.joint : t.joint + N_COEF]
         else:
             full = state.L[..., t.joint, None]
         return full.copy() if t.index is None else full[..., t.index].copy()
@@ -396,7 +415,7 @@ class Engine:
         if not np.all(np.isfinite(val)):
             raise AddressError(f"{address!r}: value must be finite")
         bound = ABSURD * max(1.0, self.length_scale or 1.0)
-        if t.group != "C" and np.max(np.abs(val)) > bound:
+        if t.group not in ("C", "coef") and np.max(np.abs(val)) > bound:
             raise AddressError(
                 f"{address!r}: {float(np.max(np.abs(val))):.3g} is beyond {ABSURD:g} times the model's length scale "
                 f"({bound:.3g}); no mechanism assembles there"
@@ -417,6 +436,8 @@ class Engine:
             if not is_rotation(C):
                 raise AddressError(f"{address!r}: not a proper rotation matrix (C^T C = I, det C = +1)")
             state.C[t.joint, t.side] = C
+        elif t.group == "coef":
+            state.L[t.joint + (t.index or 0) : t.joint + (t.index or 0) + (1 if t.index is not None else N_COEF)] = val
         else:
             length = float(val.reshape(()))
             if not length > 0:
@@ -432,12 +453,12 @@ class Engine:
     ) -> tuple[Array, Array | None]:
         """``(Phi, Phi_x)`` of a single state (or design and coordinates), the Jacobian dense
         over every layout column."""
-        state = self._as_state(state, coordinates)
+        state = self._as_state(state, coordinates).writable()
         Phi, vals = np.zeros(self.n_rows), np.zeros(self.nnz)
         need = np.full(self.n_columns, int(jacobian), np.int8)
         dummy = np.zeros(0, np.int64)
         kernels.evaluate(self.tables, state.Q, state.S, state.C, state.L, kernels.workspace(self.tables), Phi, vals,
-                         need, dummy, dummy, False)  # fmt: skip
+                         need, dummy, dummy)  # fmt: skip
         if not jacobian:
             return Phi, None
         J = np.zeros((self.n_rows, self.n_columns))
@@ -451,7 +472,7 @@ class Engine:
     def poses(self, state: State) -> tuple[Array, Array, Array, Array]:
         """Body positions ``r`` (nb, 3), orientations ``A`` (nb, 3, 3) and joint frames ``P``
         (nj, 2, 3), ``R`` (nj, 2, 3, 3) (global origins and axes of frames i and j) of a single state."""
-        ws = kernels.workspace(self.tables)
+        ws, state = kernels.workspace(self.tables), state.writable()
         kernels.forward_kinematics(self.tables, state.Q, state.S, state.C, ws)
         return ws[0], ws[1], ws[2], ws[3]
 
@@ -469,7 +490,8 @@ class Engine:
         ``C <- exp(tilde(dxi')) C``), as a new state."""
         st = state.copy()
         cols = np.flatnonzero(np.asarray(dx)).astype(np.int64)
-        kernels.retract(self.tables, cols, np.ascontiguousarray(np.asarray(dx, float)[cols]), st.Q, st.S, st.C, st.L)
+        dxc = np.ascontiguousarray(np.asarray(dx, float)[cols])
+        kernels.retract(self.tables, cols, dxc, st.Q, st.S, st.C, st.L, kernels.workspace(self.tables))
         return st
 
     def _length_scale(self, state: State) -> float:
@@ -494,10 +516,13 @@ class Engine:
         """Per-row scale of the residual the stopping test reads: length rows (spherical, dot-2)
         times U, distance rows (length^2) times U^2, dot-1 and normalisation rows 1, with U the
         metres per model length unit. Models in mm and in m meet the same accuracy; for metre
-        models the residual is the paper's."""
+        models the residual is the paper's. A coupling row is in the unit of its driven joint's
+        coordinate: U for a slide, 1 for an angle."""
         U = self.unit
         per_kind = {"spherical": U, "dot2": U, "distance": U * U}
-        return np.array([per_kind.get(lab.split("[")[0], 1.0) for b in self.row_blocks for lab in b.labels])
+        slides = {c.name for c in self.mechanism.couplings if not self.mechanism.joint(c.joint_a).jtype.angle_indices}
+        return np.array([U if b.kind == "coupling" and b.joint in slides else per_kind.get(lab.split("[")[0], 1.0)
+                         for b in self.row_blocks for lab in b.labels])  # fmt: skip
 
     @cached_property
     def col_scale(self) -> Array:
@@ -570,7 +595,7 @@ class Engine:
         plan = self.plan(cols, self.weights_for(cols, weights))
         cfg = self.settings(tol, max_iter, branch=branch, state=start)
         st = start.copy()
-        goal = target if target is not None else start
+        goal = (target if target is not None else start).writable()
         hist = np.zeros(max_iter + 1)
         code, it, frac, subs, norm, flags, hlen = newton.follow_one(
             self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, goal.Q, goal.S, goal.C, goal.L,
@@ -638,6 +663,7 @@ class Engine:
         cols = free if isinstance(free, np.ndarray) else self.columns(free, exclude)
         plan = self.plan(cols)
         cfg = self.settings(tol, max_iter, branch=branch, state=base)
+        targets = targets.writable()
         N = targets.Q.shape[0]
         st = State(*(np.array(np.broadcast_to(getattr(base, a), getattr(targets, a).shape)) for a in "QSCL"))
         out = np.zeros((N, 6))

@@ -18,8 +18,11 @@ compiler and constraint solver. What is read, and how:
 * ``<equality>``: ``connect`` -> a cut spherical joint (anchor on body1; its point on body2 is
   where the anchor lies at the reference configuration, MuJoCo's rule), ``weld`` -> a cut
   fixed joint (``relpose``, or the reference relative pose), both also in their site forms.
-  ``<joint>`` (a polynomial coupling of two joint coordinates) is not supported yet and is a
-  located error; ``tendon``, ``flex`` and ``distance`` equalities are errors too.
+  ``<joint joint1 joint2 polycoef>`` -> a coupling (:class:`kinprop.model.Coupling`) of two
+  hinge/slide joints, ``joint1`` driven: MuJoCo's ``y - y0 = poly(x - x0)`` about ``qpos0``
+  is, with ``q = qpos - ref``, ``q[joint1] = sum(c_k q[joint2]^k)`` (offsets 0, ``polycoef`` as
+  is, in radians and metres). A ``<joint>`` without ``joint2`` (a joint held at a constant)
+  and ``tendon``, ``flex`` and ``distance`` equalities are located errors.
 * Named sites become named body points (outputs ``point:BODY.SITE``).
 * Geoms, meshes, inertials, tendons, actuators, sensors, contacts, ... are ignored with one note
   per kind; mesh files are never opened.
@@ -34,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from kinprop.constraints.coupling import N_COEF
 from kinprop.errors import ModelError, Problem
 from kinprop.imports.rotations import (
     axis_angle_matrix,
@@ -46,12 +50,12 @@ from kinprop.imports.rotations import (
 from kinprop.imports.xmltree import Node, parse_xml
 from kinprop.io.hardpoints import axis_frame
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates
+from kinprop.model import Coupling as ModelCoupling
 from kinprop.spatial import Array
 
 WORLD_BODY = "world"
 #: larger numbers would overflow in the kinematics (products of coordinates)
 MAX_NUMBER = 1e100
-COUPLING_ISSUE = "coupling constraints: issue 12"
 
 #: top-level sections that do not change the kinematics (one note each when present)
 IGNORED_SECTIONS = {
@@ -109,7 +113,7 @@ class MjcfBody:
 
 @dataclass
 class Coupling:
-    """An MJCF ``<equality><joint>`` (not in models yet: :func:`document_to_model` refuses it).
+    """An MJCF ``<equality><joint>`` (a :class:`kinprop.model.Coupling` in the model).
 
     MuJoCo's constraint is ``y - y0 = a0 + a1 (x - x0) + ... + a4 (x - x0)^4`` with ``y`` the
     position of ``joint1``, ``x`` that of ``joint2`` and ``y0``, ``x0`` their ``qpos0`` (= ``ref``)
@@ -602,18 +606,38 @@ def _fixed_bodies(doc: MjcfDocument) -> set[str]:
     return fixed
 
 
+def _couplings(doc: MjcfDocument) -> tuple[tuple[ModelCoupling, ...], dict[str, Array]]:
+    """kinprop couplings (offsets 0: ``q = qpos - ref``) and their coefficients ``NAME.coef``;
+    a coupling kinprop cannot express is a located error."""
+    types = {j.name: j.type for j in doc.joints}
+    taken = {j.name for j in doc.joints} | {f"{b}__weld" for b in doc.bodies} | {j.name for j in doc.cut_joints}
+    out: list[ModelCoupling] = []
+    values: dict[str, Array] = {}
+    problems: list[Problem] = []
+    for c in doc.couplings:
+        if c.joint2 is None:
+            problems.append(Problem(c.node.where(), f"a joint equality without joint2 holds {c.joint1} at a constant: "
+                                    "not supported (declare the joint an input instead)", doc.file))  # fmt: skip
+            continue
+        bad = [n for n in (c.joint1, c.joint2) if types.get(n) not in ("hinge", "slide")]
+        if bad:
+            problems += [Problem(c.node.where(), f"{n} is a {types.get(n)} joint: a coupling takes hinge and slide "
+                                 "joints", doc.file) for n in bad]  # fmt: skip
+            continue
+        if len(c.polycoef) != N_COEF:
+            continue  # the reader reported it
+        name = c.name if c.name not in taken else f"{c.name}__coupling"
+        taken.add(name)
+        out.append(ModelCoupling(name, c.joint1, c.joint2))
+        values[f"{name}.coef"] = np.array(c.polycoef, dtype=float)
+    if problems:
+        raise ModelError(problems)
+    return tuple(out), values
+
+
 def document_to_model(doc: MjcfDocument, keyframe: str | None = None) -> Model:
     """The kinprop Model of an MJCF document, at the reference configuration or a keyframe."""
-    if doc.couplings:
-        problems = []
-        for c in doc.couplings:
-            other = f"{c.joint1} and {c.joint2}" if c.joint2 else f"{c.joint1} and a constant"
-            problems.append(
-                Problem(
-                    c.node.where(), f"joint coupling between {other} is not supported yet ({COUPLING_ISSUE})", doc.file
-                )
-            )
-        raise ModelError(problems)
+    couplings, coefs = _couplings(doc)
     poses = global_poses(doc.bodies)
     fixed = _fixed_bodies(doc)
     world_used = any(WORLD_BODY in (j.body_i, j.body_j) for j in doc.cut_joints) or any(
@@ -667,8 +691,9 @@ def document_to_model(doc: MjcfDocument, keyframe: str | None = None) -> Model:
             known = ", ".join(doc.keyframes) or "none"
             raise ModelError([Problem("keyframe", f"no keyframe {keyframe!r}; keyframes: {known}", doc.file)])
         coords.update(doc.coordinates(doc.keyframes[keyframe]))
+    values.update(coefs)
     try:
-        mech = Mechanism(tuple(bodies), tuple(joints), doc.name)
+        mech = Mechanism(tuple(bodies), tuple(joints), doc.name, couplings=couplings)
     except ModelError as exc:
         raise ModelError(exc.problems, doc.file) from None
     units = {"length": "m", "angle": "rad"}

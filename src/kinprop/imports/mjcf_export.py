@@ -13,6 +13,9 @@ hinged about z''_i for R-S; on a slider along z''_i for T-D) with a ``<connect>`
 to body j; S-T -> a slider on body j's axis connected to body i's point; translational,
 cylindrical and universal -> a copy of body j carried from body i by the joint's MuJoCo
 joints (``NAME__copy``) and welded to body j. Dot-1 and dot-2 joints have no MJCF form.
+Couplings -> ``<joint joint1 joint2 polycoef>``: MuJoCo's polynomial is about ``qpos0`` (the
+current coordinates), so kinprop's ``q_a - q_a0 = P(q_b - q_b0)`` is re-expanded exactly about
+the current ``q_b`` (:func:`recentred_coefficients`).
 MuJoCo places a connect's point on body2 from the reference configuration, so export an
 assembled model (``kinprop assemble -o`` first). Fixed bodies other than a world at the
 origin are bodies welded to ``<worldbody>``. Named body points are written as sites. Moving
@@ -21,6 +24,7 @@ bodies get a placeholder ``<inertial>`` (MuJoCo needs mass to compile); no geoms
 
 from __future__ import annotations
 
+import math
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -100,6 +104,17 @@ def joint_elements(el: ET.Element, name: str, jt: str, design: Design, reversed_
     elif jt != "fixed":
         return False
     return True
+
+
+def recentred_coefficients(coef: Array, s: float, t: float) -> Array:
+    """Coefficients ``c'`` with ``sum c'_m x^m = P(x + s) - t`` for ``P(x) = sum c_k x^k``:
+    ``c'_m = sum_{k >= m} binom(k, m) c_k s^(k - m)``, then ``c'_0 -= t`` (exact for degree 4).
+    With ``x = q_b - q_b,now``, ``s = q_b,now - q_b0`` and ``t = q_a,now - q_a0`` this is the
+    coupling about the current coordinates (MuJoCo's ``qpos0``); ``c'_0`` is the gap there."""
+    n = len(coef)
+    out = np.array([sum(math.comb(k, m) * coef[k] * s ** (k - m) for k in range(m, n)) for m in range(n)])
+    out[0] -= t
+    return out
 
 
 def model_to_mjcf(model: Model) -> tuple[str, list[str]]:
@@ -266,6 +281,14 @@ def model_to_mjcf(model: Model) -> tuple[str, list[str]]:
                 f"joints.{name}: not assembled (gap {gap:.3g}); MuJoCo takes its reference configuration as "
                 "satisfying the constraint (run kinprop assemble first)"
             )
+    for c in mech.couplings:
+        qa, qb = (float(np.asarray(model.coordinates[n])[0]) for n in (c.joint_a, c.joint_b))
+        coef = recentred_coefficients(np.asarray(design[f"{c.name}.coef"], float), qb - c.q_b0, qa - c.q_a0)
+        ET.SubElement(equality, "joint", name=c.name, joint1=c.joint_a, joint2=c.joint_b, polycoef=_vec(coef))
+        if abs(coef[0]) > GAP_TOL:
+            gap = abs(coef[0])
+            warnings.append(f"couplings.{c.name}: not assembled (gap {gap:.3g}); MuJoCo takes its reference "
+                            "configuration as satisfying the constraint (run kinprop assemble first)")  # fmt: skip
     if problems:
         raise ModelError(problems, model.source)
     if len(equality):
@@ -274,4 +297,4 @@ def model_to_mjcf(model: Model) -> tuple[str, list[str]]:
     return ET.tostring(root, encoding="unicode") + "\n", warnings
 
 
-__all__ = ["model_to_mjcf"]
+__all__ = ["model_to_mjcf", "recentred_coefficients"]

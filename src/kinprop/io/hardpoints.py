@@ -38,11 +38,12 @@ from kinprop.analysis.points import snapshot
 from kinprop.engine import JointFrames
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, ModelError, Problem
+from kinprop.io.couplings import build_couplings, couplings_to_data
 from kinprop.io.loader import build_or_report
 from kinprop.io.schema import HardpointFile, HardpointJointSpec
 from kinprop.joints import joint_type
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates, parse_address
-from kinprop.model.mechanism import validate_structure
+from kinprop.model.mechanism import validate_couplings, validate_structure
 from kinprop.spatial import EY, EZ, Array, is_rotation, log_so3
 from kinprop.topology import WORLD, build_topology
 
@@ -251,10 +252,15 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
         fields = frozenset({"length"}) if jt is not None and jt.has_length else frozenset()
         provisional.append(Joint(name, j.type, j.bodies[0], j.bodies[1], fields, j.cut))
     problems += [Problem(p.location, p.message, file) for p in validate_structure(tuple(bodies), tuple(provisional))]
+    couplings, coefs, cproblems = build_couplings(
+        spec.couplings, {j.name: j for j in provisional}, spec.units.angle == "deg", file
+    )
+    problems += cproblems
+    problems += [Problem(p.location, p.message, file) for p in validate_couplings(tuple(provisional), couplings)]
     if problems:
         raise ModelError(problems)
     try:
-        topo = build_topology(Mechanism(tuple(bodies), tuple(provisional), spec.name))
+        topo = build_topology(Mechanism(tuple(bodies), tuple(provisional), spec.name, couplings=couplings))
     except ModelError as exc:
         raise ModelError(exc.problems, file) from None
     for name in topo.cut_joints:
@@ -316,7 +322,8 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
         final.append(Body(b.name, b.fixed, b.position, b.orientation, pts))
     if problems:
         raise ModelError(problems)
-    mech = Mechanism(tuple(final), tuple(joints), spec.name, tuple(spec.inputs))
+    mech = Mechanism(tuple(final), tuple(joints), spec.name, tuple(spec.inputs), couplings)
+    values.update(coefs)
     units = {"length": spec.units.length, "angle": spec.units.angle, "axes": spec.units.axes}
     return Model(mech, Design(values), as_coordinates(coords), units, file)
 
@@ -408,7 +415,14 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
         "bodies": bodies,
         "joints": joints,
         **({"inputs": list(mech.inputs)} if mech.inputs else {}),
+        **({"couplings": couplings_to_data(model, _coupled_now(model))} if mech.couplings else {}),
     }
+
+
+def _coupled_now(model: Model) -> dict[str, float]:
+    """Current coordinates of the coupled joints: a hardpoint file's coordinates are zero
+    there, so the couplings' offsets shift by them."""
+    return {n: float(model.coordinates[n][0]) for n in model.mechanism.coupled_joints if n in model.coordinates}
 
 
 def joint_mismatch(model: Model) -> dict[str, float]:

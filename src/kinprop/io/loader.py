@@ -18,10 +18,11 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from kinprop.errors import ModelError, Problem
+from kinprop.io.couplings import build_couplings
 from kinprop.io.schema import ModelFile
 from kinprop.joints import REGISTRY, joint_type
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates
-from kinprop.model.mechanism import validate_structure
+from kinprop.model.mechanism import validate_couplings, validate_structure
 from kinprop.spatial import euler_to_matrix, is_rotation
 from kinprop.topology import WORLD, build_topology
 
@@ -323,9 +324,13 @@ def build_model(spec: ModelFile, file: str) -> Model:
             values[f"{name}.length"] = float(j.length)
         joints.append(Joint(name, j.type, j.bodies[0], j.bodies[1], fields, j.cut))
     problems += [Problem(p.location, p.message, file) for p in validate_structure(tuple(bodies), tuple(joints))]
+    couplings, coefs, cproblems = build_couplings(spec.couplings, {j.name: j for j in joints}, deg, file)
+    values.update(coefs)
+    problems += cproblems
+    problems += [Problem(p.location, p.message, file) for p in validate_couplings(tuple(joints), couplings)]
     if problems:
         raise ModelError(problems)
-    mech = Mechanism(tuple(bodies), tuple(joints), spec.name, tuple(spec.inputs))
+    mech = Mechanism(tuple(bodies), tuple(joints), spec.name, tuple(spec.inputs), couplings)
     try:
         topo = build_topology(mech)
     except ModelError as exc:

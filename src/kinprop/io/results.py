@@ -18,10 +18,11 @@ def _num(v: np.ndarray) -> float | list[float]:
 
 
 def design_json(model) -> dict[str, Any]:
-    """Every design variable: floats for lengths, lists for s' and C (row-major 9 numbers)."""
+    """Every design variable: floats for lengths, lists for s' and C (row-major 9 numbers),
+    coupling coefficients in the model's units."""
     out: dict[str, Any] = {}
     for k, v in model.design.items():
-        a = np.asarray(v, dtype=float)
+        a = from_solver_units(model, k, np.asarray(v, dtype=float))
         out[k] = float(a) if a.ndim == 0 else a.ravel().tolist()
     return out
 
@@ -42,7 +43,8 @@ def units_json(model) -> dict[str, Any]:
         "length": model.units.get("length", "m"),
         "angle": model.units.get("angle", "rad"),
         "coordinates": coords,
-        "design": "s_i, s_j, length in the length unit; C_i, C_j rotation matrices (no unit)",
+        "design": "s_i, s_j, length in the length unit; C_i, C_j rotation matrices (no unit); COUPLING.coef c_k "
+        "in [q_a]/[q_b]^k",
     }
 
 

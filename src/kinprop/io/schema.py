@@ -71,6 +71,17 @@ class JointSpec(Strict):
         return [v] if isinstance(v, (int, float)) and not isinstance(v, bool) else v
 
 
+class CouplingSpec(Strict):
+    """A coupling ``q_a - q_a0 = c0 + c1 (q_b - q_b0) + ... + c4 (q_b - q_b0)^4`` between the
+    coordinates of ``joints: [a, b]`` (a driven), in the model's units (:mod:`kinprop.io.couplings`)."""
+
+    joints: Annotated[list[str], Field(min_length=2, max_length=2)]
+    #: c0..c4 (1 to 5 numbers; the missing ones are 0)
+    coef: list[Finite]
+    #: offsets ``[q_a0, q_b0]`` (default 0)
+    q0: Annotated[list[Finite], Field(min_length=2, max_length=2)] | None = None
+
+
 class ModelFile(Strict):
     kinprop: Literal[1] = 1
     name: str = "mechanism"
@@ -81,6 +92,8 @@ class ModelFile(Strict):
     joints: dict[str, JointSpec]
     #: driven joints (``JOINT`` or ``JOINT.q[k]``): held unless named in a free set
     inputs: list[str] = Field(default_factory=list)
+    #: couplings between joint coordinates (one constraint row each)
+    couplings: dict[str, CouplingSpec] = Field(default_factory=dict)
 
 
 class HardpointBodySpec(Strict):
@@ -121,3 +134,5 @@ class HardpointFile(Strict):
     joints: dict[str, HardpointJointSpec]
     #: driven joints (``JOINT`` or ``JOINT.q[k]``): held unless named in a free set
     inputs: list[str] = Field(default_factory=list)
+    #: couplings between joint coordinates (one constraint row each)
+    couplings: dict[str, CouplingSpec] = Field(default_factory=dict)

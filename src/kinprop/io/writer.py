@@ -14,6 +14,7 @@ import numpy as np
 import yaml
 
 from kinprop.engine import compile as compile_engine
+from kinprop.io.couplings import couplings_to_data
 from kinprop.io.hardpoints import model_to_hardpoints
 from kinprop.io.loader import parse_text
 from kinprop.model import Model
@@ -80,6 +81,7 @@ def model_to_data(model: Model) -> dict[str, Any]:
         "bodies": bodies,
         "joints": joints,
         **({"inputs": list(mech.inputs)} if mech.inputs else {}),
+        **({"couplings": couplings_to_data(model)} if mech.couplings else {}),
     }
 
 

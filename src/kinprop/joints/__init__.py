@@ -7,7 +7,7 @@ tree joint, one branch to :func:`placement` and :func:`motion` below. Nothing el
 
 from __future__ import annotations
 
-from kinprop.jit import njit
+from kinprop.jit import kernel
 from kinprop.joints import composite, cylindrical, prismatic, revolute, spherical, universal
 from kinprop.joints.base import JointType, no_motion, no_placement
 from kinprop.joints.basic import DistanceJoint, Dot1Joint, Dot2Joint, SphericalPoint
@@ -61,7 +61,7 @@ ALIASES = {
 }
 
 
-@njit
+@kernel
 def placement(code, q, A, d):
     """``A''(q)``, ``d''(q)`` of a tree joint of type ``code``, written into ``A``, ``d``."""
     if code == revolute.CODE:
@@ -82,7 +82,7 @@ def placement(code, q, A, d):
         no_placement(q, A, d)
 
 
-@njit
+@kernel
 def motion(code, q, A, d, dd, H):
     """``dd''/dq``, ``H''`` (3 x n) of a tree joint of type ``code`` at its placement ``A``, ``d``."""
     if code == revolute.CODE:

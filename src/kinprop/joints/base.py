@@ -20,18 +20,18 @@ from typing import ClassVar
 import numpy as np
 
 from kinprop.constraints.basic import BasicConstraint
-from kinprop.jit import njit
+from kinprop.jit import kernel
 from kinprop.spatial import Array, eye_into
 
 
-@njit
+@kernel
 def no_placement(q: Array, A: Array, d: Array) -> None:
     """Joints without tree coordinates: frame j coincides with frame i."""
     eye_into(A)
     d[:] = 0.0
 
 
-@njit
+@kernel
 def no_motion(q: Array, A: Array, d: Array, dd: Array, H: Array) -> None:
     dd[:, :] = 0.0
     H[:, :] = 0.0

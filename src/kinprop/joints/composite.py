@@ -6,21 +6,21 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from kinprop.constraints.basic import Distance, Dot2
-from kinprop.jit import njit
+from kinprop.jit import kernel
 from kinprop.joints.base import JointType
 from kinprop.spatial import EX, EY, EZ, euler_A_into, euler_E_into
 
 ST_CODE, FREE_CODE, TD_CODE = 6, 7, 8
 
 
-@njit
+@kernel
 def st_placement(q, A, d):
     euler_A_into(q[0:4], A)
     for x in range(3):
         d[x] = A[x, 2] * q[4]
 
 
-@njit
+@kernel
 def st_motion(q, A, d, dd, H):
     H[:, :] = 0.0
     euler_E_into(q[0:4], 2.0, H, 0)
@@ -88,13 +88,13 @@ class TranslationalDistance(JointType):
         return EZ * qc[0], EZ[:, None].copy()
 
 
-@njit
+@kernel
 def free_placement(q, A, d):
     euler_A_into(q[3:7], A)
     d[0], d[1], d[2] = q[0], q[1], q[2]
 
 
-@njit
+@kernel
 def free_motion(q, A, d, dd, H):
     dd[:, :] = 0.0
     H[:, :] = 0.0

@@ -6,20 +6,20 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from kinprop.constraints.basic import Dot1, Dot2
-from kinprop.jit import njit
+from kinprop.jit import kernel
 from kinprop.joints.base import JointType
 from kinprop.spatial import EX, EY, EZ, eye_into
 
 CODE = 1
 
 
-@njit
+@kernel
 def placement(q, A, d):
     eye_into(A)
     d[0], d[1], d[2] = 0.0, 0.0, q[0]
 
 
-@njit
+@kernel
 def motion(q, A, d, dd, H):
     dd[:, :] = 0.0
     H[:, :] = 0.0

@@ -6,20 +6,20 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from kinprop.constraints.basic import Spherical as SphericalConstraint
-from kinprop.jit import njit
+from kinprop.jit import kernel
 from kinprop.joints.base import JointType
 from kinprop.spatial import euler_A_into, euler_E_into
 
 CODE = 4
 
 
-@njit
+@kernel
 def placement(q, A, d):
     euler_A_into(q[0:4], A)
     d[:] = 0.0
 
 
-@njit
+@kernel
 def motion(q, A, d, dd, H):
     dd[:, :] = 0.0
     euler_E_into(q[0:4], 2.0, H, 0)  # H'' = 2E(p) (eq. 39)

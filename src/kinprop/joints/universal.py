@@ -12,14 +12,14 @@ from typing import ClassVar
 import numpy as np
 
 from kinprop.constraints.basic import Dot1, Spherical
-from kinprop.jit import njit
+from kinprop.jit import kernel
 from kinprop.joints.base import JointType
 from kinprop.spatial import EY, EZ
 
 CODE = 3
 
 
-@njit
+@kernel
 def placement(q, A, d):
     c, s = np.cos(q[0]), np.sin(q[0])
     c1, s1 = np.cos(q[1]), np.sin(q[1])
@@ -29,7 +29,7 @@ def placement(q, A, d):
     d[:] = 0.0
 
 
-@njit
+@kernel
 def motion(q, A, d, dd, H):
     dd[:, :] = 0.0
     H[:, :] = 0.0

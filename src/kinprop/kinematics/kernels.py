@@ -33,9 +33,11 @@ from __future__ import annotations
 import numpy as np
 
 from kinprop.constraints.basic import basic_rows
-from kinprop.jit import njit
+from kinprop.jit import kernel, njit
 from kinprop.joints import motion, placement
 from kinprop.joints.composite import TD_CODE
+from kinprop.kinematics.couplings import ENTRIES as COUPLING_ENTRIES
+from kinprop.kinematics.couplings import coupling_rows
 from kinprop.kinematics.tables import (
     B_KIND,
     B_ON_J,
@@ -90,24 +92,27 @@ def workspace(tb):
             np.zeros((2, MAX_CUT_ROWS, 6)))  # fmt: skip
 
 
-@njit
+@kernel
 def forward_kinematics(tb, Q, S, C, ws):
     """Body poses ``r``, ``A`` and global joint frames ``P``, ``R`` of every joint (eq. 28), into ``ws``."""
     r, A, P, R = ws[0], ws[1], ws[2], ws[3]
+    joint, tree, cut, fixed, r0, A0 = tb.joint, tb.tree, tb.cut, tb.fixed, tb.r0, tb.A0
     Ap, App, T1 = ws[6][0], ws[6][1], ws[6][2]
     dpp, w = ws[7][0], ws[7][1]
-    for b in range(tb.fixed.shape[0]):
-        if tb.fixed[b]:
-            r[b] = tb.r0[b]
-            A[b] = tb.A0[b]
-    for t in range(tb.tree.shape[0]):
-        j, par, chi = tb.tree[t, T_JOINT], tb.tree[t, T_PARENT], tb.tree[t, T_CHILD]
-        q0, nq = tb.joint[j, J_QCOL], tb.joint[j, J_NQ]
-        placement(tb.joint[j, J_CODE], Q[max(q0, 0) : max(q0, 0) + nq], App, dpp)
+    for b in range(fixed.shape[0]):
+        if fixed[b]:
+            for x in range(3):
+                r[b, x] = r0[b, x]
+                for y in range(3):
+                    A[b, x, y] = A0[b, x, y]
+    for t in range(tree.shape[0]):
+        j, par, chi = tree[t, T_JOINT], tree[t, T_PARENT], tree[t, T_CHILD]
+        q0, nq = joint[j, J_QCOL], joint[j, J_NQ]
+        placement(joint[j, J_CODE], Q[max(q0, 0) : max(q0, 0) + nq], App, dpp)
         for x in range(3):
             for y in range(3):
                 Ap[x, y] = A[par, x, y]
-        a, b = (0, 1) if tb.tree[t, T_REVERSED] == 0 else (1, 0)  # parent side a, child side b
+        a, b = (0, 1) if tree[t, T_REVERSED] == 0 else (1, 0)  # parent side a, child side b
         mv_into(Ap, S[j, a], w)
         for x in range(3):
             P[j, a, x] = r[par, x] + w[x]
@@ -129,17 +134,17 @@ def forward_kinematics(tb, Q, S, C, ws):
         mv_into(T1, S[j, b], w)
         for x in range(3):
             r[chi, x] = P[j, b, x] - w[x]
-    for c in range(tb.cut.shape[0]):
-        j = tb.cut[c, K_JOINT]
+    for c in range(cut.shape[0]):
+        j = cut[c, K_JOINT]
         for side in range(2):
-            body = tb.joint[j, J_BODY_I + side]
+            body = joint[j, J_BODY_I + side]
             mv_into(A[body], S[j, side], w)
             for x in range(3):
                 P[j, side, x] = r[body, x] + w[x]
             mm_into(A[body], C[j, side], R[j, side])
 
 
-@njit
+@kernel
 def tree_twists(tb, Q, ws):
     """B (q columns) and M, N (s', C columns) of every tree joint as global twists (eqs. 34-35), into ``ws``."""
     A, P, R, Tq, Td = ws[1], ws[2], ws[3], ws[4], ws[5]
@@ -173,13 +178,14 @@ def tree_twists(tb, Q, ws):
                 Td[t, 2 + b, 3 + x, y] = -A[chi, x, y]
         for y in range(3):
             cross_into(P[j, a], A[par, :, y], x3)
-            Td[t, 2 + a, 0:3, y] = x3
+            for x in range(3):
+                Td[t, 2 + a, x, y] = x3[x]
             cross_into(P[j, b], A[chi, :, y], x3)
             for x in range(3):
                 Td[t, 2 + b, x, y] = -x3[x]
 
 
-@njit
+@kernel
 def _emit(k, value, r, c, vals, rows, cols, record):
     vals[k] = value
     if record:
@@ -187,15 +193,16 @@ def _emit(k, value, r, c, vals, rows, cols, record):
     return k + 1
 
 
-@njit
-def evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols, record):
+@kernel
+def evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols):
     """Phi and the Jacobian entries at one state; returns the number of entries.
 
     ``need`` (per layout column, int8): entries of a variable whose first column is 0 there
-    are skipped (left as they are); with ``record`` the entries' rows and columns are written
-    too (the sparsity pattern, same order). ``ws`` from :func:`workspace` holds the poses and
-    frames afterwards.
+    are skipped (left as they are); when ``rows``, ``cols`` are not empty the entries' rows
+    and columns are written too (the sparsity pattern, same order). ``ws`` from
+    :func:`workspace` holds the poses and frames afterwards.
     """
+    record = rows.shape[0] > 0
     A, P, R, Tq, Td = ws[1], ws[2], ws[3], ws[4], ws[5]
     forward_kinematics(tb, Q, S, C, ws)
     tree_twists(tb, Q, ws)
@@ -231,13 +238,13 @@ def evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols, record):
                 if f == 0:
                     g[0], g[1], g[2] = -Pd[x, 0], -Pd[x, 1], -Pd[x, 2]
                 elif f == 1:
-                    g[:] = Pd[x]
+                    g[0], g[1], g[2] = Pd[x, 0], Pd[x, 1], Pd[x, 2]
                 elif f == 2:
                     cross_into(Pd[x], Ru, x3)
                     for y in range(3):
                         g[y] = Wi[x, y] + x3[y]
                 else:
-                    g[:] = Wj[x]
+                    g[0], g[1], g[2] = Wj[x, 0], Wj[x, 1], Wj[x, 2]
                 for y in range(3):  # row g^T A_body
                     val = g[0] * A[body, 0, y] + g[1] * A[body, 1, y] + g[2] * A[body, 2, y]
                     k = _emit(k, val, row0 + x, col + y, vals, rows, cols, record)
@@ -295,6 +302,7 @@ def evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols, record):
             else:
                 k += 1
         Phi[row] = s - 1.0
+    k = coupling_rows(tb, Q, L, Phi, vals, need, rows, cols, record, k)  # kinematics/couplings.py
     return k
 
 
@@ -306,15 +314,16 @@ def count_entries(tb) -> int:
     m = tb.cut[:, K_NROWS]
     per_path = moved[tb.tree[tb.path[:, P_TREE], T_JOINT]] if tb.path.size else np.zeros(0, np.int64)
     path_sum = np.array([per_path[a:b].sum() for a, b in tb.cut[:, [K_PATH0, K_PATH1]]], dtype=np.int64)
-    return int(np.sum(m * (own[tb.cut[:, K_JOINT]] + path_sum)) + 4 * tb.euler.shape[0])
+    return int(np.sum(m * (own[tb.cut[:, K_JOINT]] + path_sum)) + 4 * tb.euler.shape[0]
+               + COUPLING_ENTRIES * tb.coupling.shape[0])  # fmt: skip
 
 
-@njit
-def retract(tb, free, dx, Q, S, C, L):
+@kernel
+def retract(tb, free, dx, Q, S, C, L, ws):
     """``state (+) dx`` over the ``free`` columns (sorted): additive for q, s', l (Euler
-    parameters too, never renormalised); ``C <- exp(tilde(dxi')) C`` for orientations."""
-    Cn, w = np.empty((3, 3)), np.empty(3)
-    E = np.empty((3, 3))
+    parameters too, never renormalised); ``C <- exp(tilde(dxi')) C`` for orientations
+    (scratch from the workspace ``ws``)."""
+    Cn, E, w = ws[6][0], ws[6][1], ws[7][0]
     i, nf = 0, free.shape[0]
     while i < nf:
         c = free[i]
@@ -335,7 +344,9 @@ def retract(tb, free, dx, Q, S, C, L):
             if w[0] != 0.0 or w[1] != 0.0 or w[2] != 0.0:
                 exp_so3_into(w, E)
                 mm_into(E, C[j, side], Cn)
-                C[j, side] = Cn
+                for x in range(3):
+                    for y in range(3):
+                        C[j, side, x, y] = Cn[x, y]
         i += 1
 
 

@@ -2,7 +2,8 @@
 
 Columns are ordered by group — coordinates ``q`` (tree joints' relative coordinates and cut
 joints' own coordinates), position vectors ``s``, orientations ``C`` (three virtual-rotation
-columns ``xi'`` each, body frame) and lengths ``l`` — then by joint order in the model.
+columns ``xi'`` each, body frame), lengths ``l`` — then by joint order in the model; last the
+coupling coefficients ``coef`` (``c0..c4`` of each coupling, in coupling order).
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from kinprop.constraints.coupling import N_COEF
 from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.model.design import GROUPS, parse_address
 from kinprop.model.mechanism import Mechanism
@@ -22,9 +24,9 @@ SIZES = {"s_i": 3, "s_j": 3, "C_i": 3, "C_j": 3, "length": 1}
 @dataclass(frozen=True)
 class Variable:
     key: str  # "J12.s_j" or "J01.q"
-    joint: str
-    field: str  # s_i, s_j, C_i, C_j, length, q
-    group: str  # q, s, C, l
+    joint: str  # the joint's name (a coupling's for ``coef``)
+    field: str  # s_i, s_j, C_i, C_j, length, q, coef
+    group: str  # q, s, C, l, coef
     start: int
     size: int
 
@@ -59,7 +61,7 @@ class VariableLayout:
 
     def columns(self, selectors: list[str] | tuple[str, ...], exclude: set[str] = frozenset()) -> np.ndarray:
         """Column indices for groups (``q`` — the coordinates other than the declared inputs —,
-        ``inputs``, ``s``, ``C``, ``l``) and addresses, minus the ``exclude`` variable keys."""
+        ``inputs``, ``s``, ``C``, ``l``, ``coef``) and addresses, minus the ``exclude`` variable keys."""
         cols: list[int] = []
         for sel in selectors:
             if sel in GROUPS or sel == "inputs":
@@ -101,6 +103,8 @@ def build_layout(mech: Mechanism, topo: Topology) -> VariableLayout:
             for f in fields:
                 if f in j.fields:
                     rows.append((j.name, f, group, SIZES[f]))
+    for c in mech.couplings:
+        rows.append((c.name, "coef", "coef", N_COEF))
     variables, start = [], 0
     for joint, field, group, size in rows:
         variables.append(Variable(f"{joint}.{field}", joint, field, group, start, size))

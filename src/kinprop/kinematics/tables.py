@@ -13,12 +13,18 @@ Every table has one row per item and named column constants, used by the kernels
 * ``basic`` per basic constraint: ``B_KIND``, ``B_ON_J``; ``basic_axes`` (float) ``[a''_i, a''_j]``;
 * ``path`` per loop-path entry: ``P_TREE`` (tree index), ``P_SIDE`` (0: body i's path, 1: body j's);
 * ``euler`` per normalisation row: ``E_ROW``, ``E_COL`` (first Euler-parameter column);
+* ``coupling`` per coupling: ``CP_ROW`` its row, ``CP_QA``/``CP_QB`` the coordinate columns
+  of the driven joint a and the driving joint b, ``CP_L0`` the slot of ``c0`` in the state's
+  ``L`` (``c0..c4`` at ``CP_L0..CP_L0+4``), ``CP_COL`` the first layout column of the
+  coefficients; ``coupling_q0`` (float) the offsets ``[q_a0, q_b0]``;
 * ``column`` per layout column: ``V_KIND`` (``VAR_Q``, ``VAR_S``, ``VAR_C``, ``VAR_L``),
-  ``V_JOINT``, ``V_SIDE`` (0: ``_i``, 1: ``_j``), ``V_COMPONENT``;
+  ``V_JOINT``, ``V_SIDE`` (0: ``_i``, 1: ``_j``), ``V_COMPONENT``; a coupling coefficient is a
+  ``VAR_L`` column whose ``V_JOINT`` is its slot in ``L``;
 * ``fixed``, ``r0``, ``A0`` per body: fixed flag and pose of fixed bodies.
 
 State of one variant (the design variables and coordinates as arrays): ``Q`` (layout q
-columns), ``S`` (nj, 2, 3) = s'_i, s'_j; ``C`` (nj, 2, 3, 3) = C_i, C_j; ``L`` (nj,) lengths.
+columns), ``S`` (nj, 2, 3) = s'_i, s'_j; ``C`` (nj, 2, 3, 3) = C_i, C_j; ``L`` (nj + 5 nc,) the
+joints' lengths, then each coupling's coefficients c0..c4.
 """
 
 from __future__ import annotations
@@ -27,6 +33,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from kinprop.constraints.coupling import N_COEF
 from kinprop.kinematics.layout import VariableLayout
 from kinprop.model.mechanism import Mechanism
 from kinprop.spatial import Array
@@ -39,6 +46,7 @@ B_KIND, B_ON_J = range(2)
 P_TREE, P_SIDE = range(2)
 E_ROW, E_COL = range(2)
 V_KIND, V_JOINT, V_SIDE, V_COMPONENT = range(4)
+CP_ROW, CP_QA, CP_QB, CP_L0, CP_COL = range(5)
 VAR_Q, VAR_S, VAR_C, VAR_L = range(4)
 #: design fields in the order of the J_COL_* columns and of the state's side axis
 FIELDS = ("s_i", "s_j", "C_i", "C_j", "length")
@@ -56,20 +64,22 @@ class Tables(NamedTuple):
     fixed: Array
     r0: Array
     A0: Array
+    coupling: Array
+    coupling_q0: Array
 
 
 class RowBlock(NamedTuple):
     """Rows of Phi belonging to one cut joint or one normalisation."""
 
     joint: str
-    kind: str  # "cut" or "euler"
+    kind: str  # "cut", "euler" or "coupling" (``joint`` is then the coupling's name)
     rows: slice
     labels: tuple[str, ...]
 
 
 def row_blocks(mech: Mechanism, topo: Topology) -> tuple[RowBlock, ...]:
     """Each cut joint's basic constraints in joint order, then one Euler normalisation row
-    ``p.p - 1`` (eq. 41) per tree joint with Euler parameters."""
+    ``p.p - 1`` (eq. 41) per tree joint with Euler parameters, then one row per coupling."""
     blocks, m = [], 0
     for name in topo.cut_joints:
         raw: list[str] = []
@@ -84,6 +94,9 @@ def row_blocks(mech: Mechanism, topo: Topology) -> tuple[RowBlock, ...]:
         if mech.joint(t.joint).jtype.euler is not None:
             blocks.append(RowBlock(t.joint, "euler", slice(m, m + 1), ("normalisation",)))
             m += 1
+    for cp in mech.couplings:
+        blocks.append(RowBlock(cp.name, "coupling", slice(m, m + 1), ("coupling",)))
+        m += 1
     return tuple(blocks)
 
 
@@ -127,11 +140,20 @@ def build_tables(mech: Mechanism, topo: Topology, layout: VariableLayout, blocks
         if b.kind == "euler"
     ]
     column = np.zeros((layout.n, 4), dtype=np.int64)
-    kinds = {"q": VAR_Q, "s": VAR_S, "C": VAR_C, "l": VAR_L}
+    kinds = {"q": VAR_Q, "s": VAR_S, "C": VAR_C, "l": VAR_L, "coef": VAR_L}
+    slot = {cp.name: len(mech.joints) + N_COEF * k for k, cp in enumerate(mech.couplings)}
     for v in layout.variables:
         side = 1 if v.field in ("s_j", "C_j") else 0
         for x in range(v.size):
-            column[v.start + x] = kinds[v.group], jidx[v.joint], side, x
+            where = slot[v.joint] + x if v.group == "coef" else jidx[v.joint]
+            column[v.start + x] = kinds[v.group], where, side, x
+    crow = {b.joint: b.rows.start for b in blocks if b.kind == "coupling"}
+    coupling = [
+        [crow[cp.name], layout[f"{cp.joint_a}.q"].start, layout[f"{cp.joint_b}.q"].start, slot[cp.name],
+         layout[f"{cp.name}.coef"].start]
+        for cp in mech.couplings
+    ]  # fmt: skip
+    coupling_q0 = [[cp.q_a0, cp.q_b0] for cp in mech.couplings]
     nb = len(mech.bodies)
     fixed = np.array([int(b.fixed) for b in mech.bodies], dtype=np.int64)
     r0, A0 = np.zeros((nb, 3)), np.tile(np.eye(3), (nb, 1, 1))
@@ -143,7 +165,7 @@ def build_tables(mech: Mechanism, topo: Topology, layout: VariableLayout, blocks
         return np.ascontiguousarray(np.array(x, dtype=dtype).reshape(-1, width))
 
     out = Tables(joint, tree, arr(cut, 7), arr(basic, 2), arr(axes, 6, float), arr(path, 2), arr(euler, 2),
-                 column, fixed, r0, A0)  # fmt: skip
+                 column, fixed, r0, A0, arr(coupling, 5), arr(coupling_q0, 2, float))  # fmt: skip
     for a in out:
         a.setflags(write=False)
     return out

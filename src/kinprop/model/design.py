@@ -3,7 +3,8 @@
 Addresses: ``JOINT.s_i``, ``JOINT.s_j`` (position vector of the joint frame on the joint's
 first / second body, body frame), ``JOINT.C_i``, ``JOINT.C_j`` (joint frame to body frame),
 ``JOINT.length``. Components: ``JOINT.s_i[2]``. Joint coordinates: ``JOINT.q``,
-``JOINT.q[k]``. Groups: ``q``, ``s``, ``C``, ``l``.
+``JOINT.q[k]``. Coupling coefficients c0..c4: ``COUPLING.coef``, ``COUPLING.coef[k]``.
+Groups: ``q``, ``s``, ``C``, ``l``, ``coef``.
 """
 
 from __future__ import annotations
@@ -18,11 +19,17 @@ import numpy as np
 from kinprop.errors import AddressError
 from kinprop.spatial import Array
 
-GROUPS = {"q": "coordinates", "s": "position vectors", "C": "orientations", "l": "lengths"}
-FIELD_GROUP = {"s_i": "s", "s_j": "s", "C_i": "C", "C_j": "C", "length": "l", "q": "q"}
+GROUPS = {
+    "q": "coordinates",
+    "s": "position vectors",
+    "C": "orientations",
+    "l": "lengths",
+    "coef": "coupling coefficients",
+}
+FIELD_GROUP = {"s_i": "s", "s_j": "s", "C_i": "C", "C_j": "C", "length": "l", "q": "q", "coef": "coef"}
 DEFAULTS = {"s_i": np.zeros(3), "s_j": np.zeros(3), "C_i": np.eye(3), "C_j": np.eye(3)}
 
-_ADDRESS = re.compile(r"^(?P<joint>[^\s\[\]]+)\.(?P<field>s_i|s_j|C_i|C_j|length|q)(\[(?P<index>\d+)\])?$")
+_ADDRESS = re.compile(r"^(?P<joint>[^\s\[\]]+)\.(?P<field>s_i|s_j|C_i|C_j|length|q|coef)(\[(?P<index>\d+)\])?$")
 
 
 @dataclass(frozen=True)
@@ -50,7 +57,7 @@ def parse_address(text: str) -> Address:
     if not m:
         raise AddressError(
             f"bad address {text!r}: expected JOINT.s_i, JOINT.s_j, JOINT.C_i, JOINT.C_j, "
-            "JOINT.length or JOINT.q (optionally with [k])"
+            "JOINT.length, JOINT.q or COUPLING.coef (optionally with [k])"
         )
     idx = m.group("index")
     return Address(m.group("joint"), m.group("field"), None if idx is None else int(idx))

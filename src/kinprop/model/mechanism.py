@@ -59,6 +59,24 @@ class Joint:
 
 
 @dataclass(frozen=True)
+class Coupling:
+    """A coupling between two single-coordinate tree joints (MuJoCo's ``<equality><joint>``):
+
+    ``q_a - q_a0 = c0 + c1 (q_b - q_b0) + c2 (q_b - q_b0)^2 + c3 (q_b - q_b0)^3 + c4 (q_b - q_b0)^4``
+
+    ``joint_a`` is driven by ``joint_b``; ``q_a0``, ``q_b0`` (solver units: radians for angles)
+    are fixed offsets, the coefficients ``c0..c4`` are the design variable ``NAME.coef``
+    (group ``coef``). One constraint row, ``NAME:coupling``.
+    """
+
+    name: str
+    joint_a: str
+    joint_b: str
+    q_a0: float = 0.0
+    q_b0: float = 0.0
+
+
+@dataclass(frozen=True)
 class Mechanism:
     """Bodies and joints. Validated on construction; every problem is reported at once."""
 
@@ -68,12 +86,15 @@ class Mechanism:
     #: driven joints (input coordinates): held unless named in a free set; ``JOINT`` (all its
     #: coordinates) or ``JOINT.q[k]``
     inputs: tuple[str, ...] = ()
+    #: couplings between joint coordinates (one constraint row each)
+    couplings: tuple[Coupling, ...] = ()
 
     _bodies: dict[str, Body] = field(init=False, repr=False, compare=False, hash=False)
     _joints: dict[str, Joint] = field(init=False, repr=False, compare=False, hash=False)
 
     def __post_init__(self) -> None:
         problems = validate_structure(self.bodies, self.joints, self.inputs)
+        problems += validate_couplings(self.joints, self.couplings)
         if problems:
             raise ModelError(problems)
         object.__setattr__(self, "_bodies", {b.name: b for b in self.bodies})
@@ -92,6 +113,11 @@ class Mechanism:
     @property
     def joint_names(self) -> list[str]:
         return [j.name for j in self.joints]
+
+    @property
+    def coupled_joints(self) -> frozenset[str]:
+        """Joints named by a coupling: they must be tree joints (their ``q`` is a coordinate)."""
+        return frozenset(n for c in self.couplings for n in (c.joint_a, c.joint_b))
 
 
 def validate_structure(
@@ -141,4 +167,41 @@ def validate_structure(
                 problems.append(Problem(f"{loc}.cut", f"joint type {jt.name!r} cannot be cut"))
             if j.cut is False and not jt.tree:
                 problems.append(Problem(f"{loc}.cut", f"joint type {jt.name!r} can only be a cut joint"))
+    return problems
+
+
+def validate_couplings(joints: tuple[Joint, ...], couplings: tuple[Coupling, ...]) -> list[Problem]:
+    """Each coupling names two different joints that can be tree joints with one coordinate
+    (revolute, translational); its name is new among joints and couplings (addresses)."""
+    problems: list[Problem] = []
+    by_name = {j.name: j for j in joints}
+    seen: set[str] = set()
+    for c in couplings:
+        loc = f"couplings.{c.name}"
+        if c.name in by_name or c.name in seen:
+            problems.append(Problem(loc, f"duplicate name {c.name!r} (joints and couplings share one address space)"))
+        seen.add(c.name)
+        if c.joint_a == c.joint_b:
+            problems.append(Problem(f"{loc}.joints", f"couples joint {c.joint_a!r} to itself"))
+        if not (np.isfinite(c.q_a0) and np.isfinite(c.q_b0)):
+            problems.append(Problem(f"{loc}.q0", f"expected finite offsets, found {[c.q_a0, c.q_b0]}"))
+        for k, name in enumerate((c.joint_a, c.joint_b)):
+            j = by_name.get(name)
+            where = f"{loc}.joints[{k}]"
+            if j is None:
+                problems.append(Problem(where, f"unknown joint {name!r}; joints are {sorted(by_name)}"))
+                continue
+            try:
+                jt = joint_type(j.type)
+            except KeyError:
+                continue  # reported with the joint
+            if not jt.tree:
+                problems.append(Problem(where, f"a {jt.name} joint cannot be a tree joint, so it has no coordinate "
+                                               "to couple"))  # fmt: skip
+            elif jt.n_coordinates != 1:
+                problems.append(Problem(where, f"a {jt.name} joint has {jt.n_coordinates} coordinates; a coupling "
+                                               "takes single-coordinate joints (revolute, translational)"))  # fmt: skip
+            elif j.cut is True:
+                problems.append(Problem(where, f"joint {name!r} is marked 'cut: true'; a coupled joint must be a "
+                                               "tree joint"))  # fmt: skip
     return problems

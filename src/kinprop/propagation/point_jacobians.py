@@ -50,7 +50,7 @@ class PointJacobians:
         )
         self.engine = engine
         self.points = tuple(points)
-        self.probe = compile_engine(Mechanism(mech.bodies, mech.joints + probes, mech.name))
+        self.probe = compile_engine(Mechanism(mech.bodies, mech.joints + probes, mech.name, couplings=mech.couplings))
         if self.probe.column_labels != engine.column_labels:  # pragma: no cover - probes add no columns
             raise AddressError("internal: probe joints changed the variable layout")
         blocks = {b.joint: b.rows for b in self.probe.row_blocks}
@@ -65,7 +65,7 @@ class PointJacobians:
         nj, npb = self.nj, len(self._moving)
         S = np.concatenate([state.S, np.zeros((npb, 2, 3))])
         C = np.concatenate([state.C, np.tile(np.eye(3), (npb, 2, 1, 1))])
-        L = np.concatenate([state.L, np.zeros(npb)])
+        L = np.concatenate([state.L[:nj], np.zeros(npb), state.L[nj:]])  # lengths, probes, coupling coefficients
         for n, k in enumerate(self._moving):
             S[nj + n, 1] = self._s(state, self.points[k])
         return State(state.Q, S, C, L)

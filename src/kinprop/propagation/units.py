@@ -9,7 +9,8 @@ model's length unit and radians. This module converts between the two; nothing e
 Which numbers are angles: the angle components of a tree joint's coordinates (a revolute's
 ``q``, a cylindrical joint's ``q[0]``, both of a universal joint; ``JOINT.q`` addresses) and, for
 derivatives, the body-frame rotation of a ``C`` column. Euler parameters, slides, positions,
-lengths and rotation matrices have no angle unit. Suspension metrics (``metric:W.camber``) are
+lengths and rotation matrices have no angle unit. A coupling coefficient ``COUPLING.coef[k]``
+has the unit ``[q_a] / [q_b]^k`` of its two joints (:func:`coef_factors`). Suspension metrics (``metric:W.camber``) are
 computed in degrees; their units are added by :mod:`kinprop.analysis.units` (the layer that
 knows the metrics). The public door is :mod:`kinprop.io.units`, which re-exports both.
 """
@@ -21,9 +22,12 @@ from collections.abc import Container, Mapping
 
 import numpy as np
 
+from kinprop.constraints.coupling import N_COEF
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
-from kinprop.model import Model, parse_address
+from kinprop.joints import joint_type
+from kinprop.model import Joint, Model, parse_address
+from kinprop.spatial import Array
 
 
 def _tree_joints(model: Model, engine: Engine | None) -> Container[str]:
@@ -60,6 +64,39 @@ def _angle_mask(model: Model, address: str, size: int, engine: Engine | None = N
     return mask
 
 
+def _angle_factor(joint: Joint | None, deg: bool) -> float:
+    """Radians per model unit of a single-coordinate joint's coordinate."""
+    if joint is None or not deg:
+        return 1.0
+    try:
+        return math.pi / 180.0 if joint_type(joint.type).angle_indices else 1.0
+    except KeyError:
+        return 1.0
+
+
+def coef_factors(joint_a: Joint | None, joint_b: Joint | None, deg: bool) -> tuple[Array, float, float]:
+    """``(F, f_a, f_b)`` of a coupling: solver value = model value times ``F[k]`` for ``c_k``
+    (``f_a / f_b^k``), ``f_a`` for ``q_a0``, ``f_b`` for ``q_b0`` (``f = pi/180`` for an angle in
+    a degree model, else 1)."""
+    fa, fb = _angle_factor(joint_a, deg), _angle_factor(joint_b, deg)
+    return np.array([fa / fb**k for k in range(N_COEF)]), fa, fb
+
+
+def _coef_scale(model: Model, address: str, size: int) -> np.ndarray | None:
+    """Solver value / model value of each component of a coupling-coefficient address
+    (``f_a / f_b^k``), or None when ``address`` is not one."""
+    try:
+        addr = parse_address(address)
+    except Exception:
+        return None
+    couplings = {c.name: c for c in model.mechanism.couplings}
+    if addr.field != "coef" or addr.joint not in couplings:
+        return None
+    c = couplings[addr.joint]
+    F = coef_factors(model.mechanism.joint(c.joint_a), model.mechanism.joint(c.joint_b), _degrees(model))[0]
+    return np.full(size, F[addr.index]) if addr.index is not None and addr.index < F.size else np.resize(F, size)
+
+
 def to_solver_units(model: Model, address: str, value: object, engine: Engine | None = None) -> np.ndarray:
     """A value for ``address`` given in the model's units -> solver units (radians).
 
@@ -69,6 +106,9 @@ def to_solver_units(model: Model, address: str, value: object, engine: Engine | 
     if not _degrees(model):
         return v
     flat = v.reshape(-1)
+    coef = _coef_scale(model, address, flat.size)
+    if coef is not None:
+        return (flat * coef).reshape(v.shape)
     mask = _angle_mask(model, address, flat.size, engine)
     flat[mask] = np.radians(flat[mask])
     return flat.reshape(v.shape)
@@ -80,6 +120,9 @@ def from_solver_units(model: Model, address: str, value: object, engine: Engine 
     if not _degrees(model):
         return v
     flat = v.reshape(-1)
+    coef = _coef_scale(model, address, flat.size)
+    if coef is not None:
+        return (flat / coef).reshape(v.shape)
     mask = _angle_mask(model, address, flat.size, engine)
     flat[mask] = np.degrees(flat[mask])
     return flat.reshape(v.shape)
@@ -117,6 +160,8 @@ def address_unit(model: Model, name: str, engine: Engine | None = None) -> str:
         return length
     if addr.field in ("C_i", "C_j"):
         return ""
+    if addr.field == "coef":
+        return _coef_unit(model, addr.joint, addr.index, engine)
     if addr.field == "q" and addr.joint in model.mechanism.joint_names:
         jt = model.mechanism.joint(addr.joint).jtype
         tree = addr.joint in _tree_joints(model, engine)
@@ -131,6 +176,22 @@ def address_unit(model: Model, name: str, engine: Engine | None = None) -> str:
     return ""
 
 
+def _coef_unit(model: Model, coupling: str, k: int | None, engine: Engine | None = None) -> str:
+    """``[q_a] / [q_b]^k`` of a coupling coefficient ``c_k`` (``""`` for ``c1`` between like
+    units; ``deg/deg^k`` for the whole ``coef`` without an index)."""
+    c = next((c for c in model.mechanism.couplings if c.name == coupling), None)
+    if c is None:
+        return ""
+    ua, ub = address_unit(model, f"{c.joint_a}.q", engine), address_unit(model, f"{c.joint_b}.q", engine)
+    if k is None:
+        return f"{ua}/{ub}^k"
+    if k == 0:
+        return ua
+    if k == 1:
+        return "" if ua == ub else f"{ua}/{ub}"
+    return f"{ua}/{ub}^{k}"
+
+
 def address_scale(model: Model, name: str, engine: Engine | None = None) -> float:
     """Factor from solver units to the model's units of an address's value or of a derivative
     by it: ``180/pi`` for a joint angle or a ``C`` column (per radian of body-frame rotation)
@@ -143,6 +204,9 @@ def address_scale(model: Model, name: str, engine: Engine | None = None) -> floa
         return 1.0
     if addr.field in ("C_i", "C_j"):
         return 180.0 / math.pi
+    if addr.field == "coef":  # model value = solver value / (f_a / f_b^k)
+        scale = _coef_scale(model, name, 1)
+        return 1.0 if scale is None or addr.index is None else float(1.0 / scale[0])
     return 180.0 / math.pi if address_unit(model, name, engine) == "deg" else 1.0
 
 
@@ -180,6 +244,7 @@ __all__ = [
     "changes_to_internal",
     "changes_to_model_units",
     "check_units",
+    "coef_factors",
     "from_solver_units",
     "joint_values_to_model_units",
     "to_solver_units",

@@ -13,7 +13,7 @@ import numpy as np
 from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import output_names
 from kinprop.analysis.points import joint_hardpoints, named_points
-from kinprop.io.units import angle_indices
+from kinprop.io.units import angle_indices, from_solver_units, unit_of
 from kinprop.model import Model
 from kinprop.plot.scene import Scene, bounds, build_scene, scale
 from kinprop.plot.style import AXIS, FADED_ALPHA, MARKERS, POINT, segment_colour
@@ -138,6 +138,12 @@ def variables_json(model: Model, session: Session) -> list[dict[str, Any]]:
     rows = []
     for key, v in model.design.items():
         joint, _, fld = key.partition(".")
+        if fld == "coef":  # a coupling's coefficients: no body, the coupling's units
+            role = "set" if key in set_keys else ("moved" if key in changed else "")
+            rows.append({"address": key, "group": "coef", "joint": joint, "body": "", "unit": unit_of(model, key),
+                         "value": _xyz(from_solver_units(model, key, v)), "before": None, "role": role,
+                         "global": None})  # fmt: skip
+            continue
         j = model.mechanism.joint(joint)
         group = GROUPS.get(fld, fld)
         body = j.body_i if fld.endswith("_i") else j.body_j if fld.endswith("_j") else ""

@@ -16,13 +16,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from kinprop.jit import njit, prange
+from kinprop.jit import GELSD, JIT, LAPACK_INT, kernel, njit, prange
 from kinprop.kinematics.kernels import evaluate, retract, workspace
 from kinprop.kinematics.tables import V_COMPONENT, V_JOINT, V_KIND, V_SIDE, VAR_C, VAR_Q, VAR_S
 from kinprop.spatial import exp_so3_into, mm_into, mmT_into
 
 #: relative singular-value threshold for the rank (``s_k > RANK_RTOL * s_max``)
 RANK_RTOL = 1e-9
+_KIND_D = ord("d")  # LAPACK's double-precision routines
 
 
 class Status(StrEnum):
@@ -46,6 +47,8 @@ CONVERGED, NOT_CONVERGED, DIVERGED, NO_FREE, INFEASIBLE, STEP_LIMIT = 0, 1, 2, 3
 SUBDIVIDED, JUMPED, SIGN_FLIP, FROM_ESTIMATES = 1, 2, 4, 8
 #: a converged residual below this (scaled, ~ metres) is at round-off already: no polishing step
 POLISHED = 1e-14
+#: ``follow``'s ``start_sign`` when the caller does not know it (it is computed)
+UNKNOWN_SIGN = 2
 
 
 class Settings(NamedTuple):
@@ -63,7 +66,7 @@ class Settings(NamedTuple):
     branch: bool  # keep the start's branch (jump and det-sign tests, subdivision); False: plain Newton
 
 
-@njit
+@kernel
 def _lu_solve(M, b, x):
     """``M x = b`` by Gaussian elimination with partial pivoting (destroys M, b); returns the
     sign of det M (+1 or -1), 0 when singular."""
@@ -104,11 +107,43 @@ def _lu_solve(M, b, x):
     return sign
 
 
+@kernel
+def _lstsq(M, m, n, b, sv, rank):
+    """LAPACK ``dgelsd`` (SVD, as ``numpy.linalg.lstsq``: singular values below ``eps max(m, n)
+    s_max`` dropped) on the column-major ``m x n`` matrix in ``M`` (destroyed): ``b`` (at
+    least ``max(m, n)`` long) holds the right side on entry and the minimum-norm least-squares
+    solution in ``b[:n]`` on exit. ``sv``, ``rank``: scratch. Returns LAPACK's info (0: ok).
+    Called through numba's own LAPACK binding, so it allocates nothing numba counts;
+    uncompiled (``NUMBA_DISABLE_JIT``), through ``numpy.linalg.lstsq`` (the same routine)."""
+    if not JIT:
+        b[:n] = np.linalg.lstsq(M[: m * n].reshape((n, m)).T, b[:m], rcond=None)[0]
+        return 0
+    return GELSD(_KIND_D, m, n, 1, M.ctypes, max(m, 1), b.ctypes, max(m, n, 1), sv.ctypes,
+                 2.220446049250313e-16 * max(m, n), rank.ctypes)  # fmt: skip
+
+
+@njit
+def _svd_step(J, rhs, out):
+    """``out = -pinv(J) rhs`` by :func:`_lstsq`; destroys nothing."""
+    m, n = J.shape
+    out[:] = 0.0
+    if m == 0 or n == 0:
+        return
+    M, b = np.empty(m * n), np.zeros(max(m, n))
+    for i in range(m):
+        b[i] = rhs[i]
+        for y in range(n):
+            M[y * m + i] = J[i, y]
+    _lstsq(M, m, n, b, np.zeros(min(m, n)), np.zeros(1, LAPACK_INT))
+    for i in range(n):
+        out[i] = -b[i]
+
+
 @njit
 def min_norm_step(J, rhs, out):
     """``out = -pinv(J) rhs``: pivoted LU when square and well conditioned, else the SVD
-    pseudo-inverse (singular values below ``eps max(m, n) s_max`` dropped, as ``lstsq``).
-    Returns the sign of det J when square and regular, else 0."""
+    pseudo-inverse (:func:`_svd_step`). Returns the sign of det J when square and regular,
+    else 0. (The solver's loop does the same block by block without allocating.)"""
     m, n = J.shape
     if n == 0:
         return 1
@@ -116,82 +151,126 @@ def min_norm_step(J, rhs, out):
         M, b = J.copy(), rhs.copy()
         sign = _lu_solve(M, b, out)
         if sign != 0:
-            ok = True
             for i in range(n):
                 out[i] = -out[i]
-                ok = ok and np.isfinite(out[i])
-            if ok:
+            if np.all(np.isfinite(out)):
                 return sign
-    out[:] = 0.0
-    if m == 0:
-        return 0
-    U, s, Vt = np.linalg.svd(J, full_matrices=False)
-    cut = 2.220446049250313e-16 * max(m, n) * (s[0] if s.shape[0] else 0.0)
-    for k in range(s.shape[0]):
-        if s[k] > cut:
-            c = 0.0
-            for i in range(m):
-                c += U[i, k] * rhs[i]
-            c /= s[k]
-            for i in range(n):
-                out[i] -= c * Vt[k, i]
+    _svd_step(J, rhs, out)
     return 0
 
 
 #: slots of :func:`buffers`
-B_PHI, B_VALS, B_STORE, B_DX, B_DISP, B_WS, B_DX1 = range(7)
+B_PHI, B_VALS, B_STORE, B_DX, B_DISP, B_WS, B_DX1, B_LU, B_RHS, B_OUT, B_NONE, B_SV, B_RANK = range(13)
 
 
 @njit
 def buffers(tb, plan, nnz):
-    """Work arrays of one solve (slots ``B_*``): Phi, entry values, block storage, step,
-    displacement, the kinematics workspace, and the first step."""
-    nf = plan.free.shape[0]
-    return np.zeros(plan.n_rows), np.zeros(nnz), np.zeros(plan.store_ptr[-1]), np.zeros(nf), np.zeros(nf), \
-        workspace(tb), np.zeros(nf)  # fmt: skip
+    """Work arrays of one solve (slots ``B_*``), allocated once: Phi, entry values, block
+    storage, step, displacement, the kinematics workspace, the first step; one block's
+    weighted matrix, right side and solution; an empty index array (no sparsity pattern
+    recorded); LAPACK's singular values and rank."""
+    nf, nr = plan.free.shape[0], plan.n_rows
+    big = max(nf, nr, 1)
+    return np.zeros(nr), np.zeros(nnz), np.zeros(plan.store_ptr[-1]), np.zeros(nf), np.zeros(nf), \
+        workspace(tb), np.zeros(nf), np.zeros(plan.store_ptr[-1]), np.zeros(big), np.zeros(nf), \
+        np.zeros(0, np.int64), np.zeros(big), np.zeros(1, LAPACK_INT)  # fmt: skip
 
 
-@njit
-def newton_step(plan, Phi, vals, store, dx):
-    """The minimum-norm step over the free columns (block by block) into ``dx`` (free order);
-    returns the sign of det of the free Jacobian (product over square blocks; 0: unknown)."""
+@kernel
+def _scatter(plan, vals, store):
+    """The free Jacobian's blocks from the entry values (``plan.entry_slot``)."""
     store[:] = 0.0
     slot = plan.entry_slot
     for k in range(slot.shape[0]):
         if slot[k] >= 0:
             store[slot[k]] += vals[k]
+
+
+@kernel
+def _block_system(plan, Phi, vals, buf, b, colmajor):
+    """Block ``b``'s weighted matrix ``J W^(1/2)`` into ``buf[B_LU]`` (row- or column-major) and
+    its right side (Phi of its rows plus the coupling to the blocks already solved) into
+    ``buf[B_RHS]``; returns its shape."""
+    store, dx, M, rhs = buf[B_STORE], buf[B_DX], buf[B_LU], buf[B_RHS]
+    r0, c0 = plan.row_ptr[b], plan.col_ptr[b]
+    mb, nb = plan.row_ptr[b + 1] - r0, plan.col_ptr[b + 1] - c0
+    s0 = plan.store_ptr[b]
+    for i in range(mb):
+        rhs[i] = Phi[plan.block_rows[r0 + i]]
+    for e in range(plan.coupling_ptr[b], plan.coupling_ptr[b + 1]):  # solved blocks -> right side
+        rhs[plan.coupling_row[e]] += vals[plan.coupling_entry[e]] * dx[plan.coupling_free[e]]
+    for y in range(nb):
+        w = plan.sqrt_weights[plan.block_cols[c0 + y]]
+        for i in range(mb):
+            M[y * mb + i if colmajor else i * nb + y] = store[s0 + i * nb + y] * w
+    return mb, nb
+
+
+@kernel
+def _block_out(plan, buf, b, sign):
+    """``dx`` of block ``b``'s columns from its solution in ``buf[B_OUT]`` (``-`` it when the
+    solution is of ``J x = rhs``: ``sign`` -1)."""
+    dx, out = buf[B_DX], buf[B_OUT]
+    c0 = plan.col_ptr[b]
+    for y in range(plan.col_ptr[b + 1] - c0):
+        f = plan.block_cols[c0 + y]
+        dx[f] = sign * out[y] * plan.sqrt_weights[f]
+
+
+@kernel
+def _lu_blocks(plan, Phi, vals, buf, b0):
+    """Blocks ``b0, b0+1, ...`` solved by LU while square and regular; returns ``(the first
+    block that needs the SVD or -1, sign of det over the blocks solved)``."""
     sign = 1
-    for b in range(plan.row_ptr.shape[0] - 1):
-        r0, r1 = plan.row_ptr[b], plan.row_ptr[b + 1]
-        c0, c1 = plan.col_ptr[b], plan.col_ptr[b + 1]
-        mb, nb = r1 - r0, c1 - c0
+    for b in range(b0, plan.row_ptr.shape[0] - 1):
+        mb, nb = _block_system(plan, Phi, vals, buf, b, False)
         if nb == 0:
             continue
-        J = store[plan.store_ptr[b] : plan.store_ptr[b + 1]].reshape((mb, nb))
-        rhs = np.empty(mb)
-        for i in range(mb):
-            rhs[i] = Phi[plan.block_rows[r0 + i]]
-        for e in range(plan.coupling_ptr[b], plan.coupling_ptr[b + 1]):  # solved blocks -> right side
-            rhs[plan.coupling_row[e]] += vals[plan.coupling_entry[e]] * dx[plan.coupling_free[e]]
+        if mb != nb:
+            return b, sign
+        M = buf[B_LU][: mb * nb].reshape((mb, nb))
+        s = _lu_solve(M, buf[B_RHS][:mb], buf[B_OUT][:nb])
+        ok = s != 0
         for y in range(nb):
-            w = plan.sqrt_weights[plan.block_cols[c0 + y]]
-            for i in range(mb):
-                J[i, y] *= w
-        out = np.empty(nb)
-        sign *= min_norm_step(J, rhs, out)
-        for y in range(nb):
-            f = plan.block_cols[c0 + y]
-            dx[f] = out[y] * plan.sqrt_weights[f]
+            ok = ok and np.isfinite(buf[B_OUT][y])
+        if not ok:
+            return b, sign
+        sign *= s
+        _block_out(plan, buf, b, -1.0)
+    return -1, sign
+
+
+@kernel
+def newton_step(plan, Phi, vals, buf):
+    """The minimum-norm step over the free columns (block by block, in the plan's order, each
+    block's right side including the blocks solved before it) into ``buf[B_DX]`` (free order):
+    pivoted LU for square regular blocks, ``dgelsd`` (the SVD pseudo-inverse) for the others.
+    Returns the sign of det of the free Jacobian (product over square blocks; 0: unknown)."""
+    _scatter(plan, vals, buf[B_STORE])
+    b, sign = _lu_blocks(plan, Phi, vals, buf, 0)
+    while b >= 0:  # a rectangular or singular block: the pseudo-inverse
+        sign = 0
+        mb, nb = _block_system(plan, Phi, vals, buf, b, True)
+        rhs = buf[B_RHS]
+        for i in range(mb, rhs.shape[0]):
+            rhs[i] = 0.0
+        if _lstsq(buf[B_LU], mb, nb, rhs, buf[B_SV], buf[B_RANK]) != 0:
+            for i in range(nb):  # LAPACK failed: a non-finite step (the solve reports it)
+                rhs[i] = np.nan
+        out = buf[B_OUT]
+        for i in range(nb):
+            out[i] = rhs[i]
+        _block_out(plan, buf, b, -1.0)
+        b, _ = _lu_blocks(plan, Phi, vals, buf, b + 1)
     return sign
 
 
-@njit
+@kernel
 def _residual(tb, plan, Q, S, C, L, row_scale, buf):
     """Evaluate Phi (kept in ``buf``) and the Jacobian entries the plan needs; return the
     scaled norm of Phi."""
-    Phi, vals, ws = buf[B_PHI], buf[B_VALS], buf[B_WS]
-    dummy = np.zeros(0, np.int64)
-    evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, dummy, dummy, False)
+    Phi, vals, ws, none = buf[B_PHI], buf[B_VALS], buf[B_WS], buf[B_NONE]
+    evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, none, none)
     s = 0.0
     for i in range(Phi.shape[0]):
         r = Phi[i] * row_scale[i]
@@ -199,7 +278,7 @@ def _residual(tb, plan, Q, S, C, L, row_scale, buf):
     return np.sqrt(s)
 
 
-@njit
+@kernel
 def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
     """Newton on ``Phi(x) = 0`` from ``Q, S, C, L`` (updated in place), to ``tol``.
 
@@ -209,7 +288,7 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
     Jacobian at the first and last step taken (0: not square or singular).
     ``history[k]`` receives the residual after k updates (may be shorter than ``max_iter + 1``).
     """
-    Phi, vals, store, dx, disp, dx1 = buf[B_PHI], buf[B_VALS], buf[B_STORE], buf[B_DX], buf[B_DISP], buf[B_DX1]
+    Phi, vals, dx, disp, dx1 = buf[B_PHI], buf[B_VALS], buf[B_DX], buf[B_DISP], buf[B_DX1]
     free = plan.free
     nf = free.shape[0]
     norm = _residual(tb, plan, Q, S, C, L, row_scale, buf)
@@ -223,7 +302,7 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
         if nf == 0:
             status = NO_FREE
             break
-        sign1 = newton_step(plan, Phi, vals, store, dx)
+        sign1 = newton_step(plan, Phi, vals, buf)
         if it == 0:
             sign0 = sign1
             for i in range(nf):
@@ -231,7 +310,7 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
                 step1 += (dx[i] * col_scale[free[i]]) ** 2
         for i in range(nf):
             disp[i] += dx[i]
-        retract(tb, free, dx, Q, S, C, L)
+        retract(tb, free, dx, Q, S, C, L, buf[B_WS])
         it += 1
         norm = _residual(tb, plan, Q, S, C, L, row_scale, buf)
         if it < history.shape[0]:
@@ -242,8 +321,8 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
     if norm < tol:
         status = CONVERGED
         if cfg.polish and nf > 0 and norm > POLISHED:  # one more step to round-off, kept if better
-            newton_step(plan, Phi, vals, store, dx)
-            retract(tb, free, dx, Q, S, C, L)
+            newton_step(plan, Phi, vals, buf)
+            retract(tb, free, dx, Q, S, C, L, buf[B_WS])
             polished = _residual(tb, plan, Q, S, C, L, row_scale, buf)
             if polished < norm:
                 norm = polished
@@ -252,7 +331,7 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
             else:
                 for i in range(nf):
                     dx[i] = -dx[i]
-                retract(tb, free, dx, Q, S, C, L)
+                retract(tb, free, dx, Q, S, C, L, buf[B_WS])
     corr = 0.0
     if it > 0:  # how far the corrections took the solution from the predictor x_0 + dx_1
         for i in range(nf):
@@ -260,7 +339,7 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
     return status, it, norm, np.sqrt(step1), np.sqrt(corr), sign0, sign1
 
 
-@njit
+@kernel
 def log_so3_into(R, w):
     """``w`` with ``exp(tilde(w)) = R`` (angle in [0, pi])."""
     c = min(1.0, max(-1.0, 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0)))
@@ -273,17 +352,34 @@ def log_so3_into(R, w):
         for i in range(1, 3):
             if R[i, i] > R[k, k]:
                 k = i
-        a = np.empty(3)
-        a[k] = np.sqrt(max(0.0, 0.5 * (R[k, k] + 1.0)))
+        ak = np.sqrt(max(0.0, 0.5 * (R[k, k] + 1.0)))
+        for i in range(3):  # the axis into w, then scaled to length th
+            w[i] = ak if i == k else 0.5 * (R[i, k] + R[k, i]) / (2.0 * ak)
+        n = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
         for i in range(3):
-            if i != k:
-                a[i] = 0.5 * (R[i, k] + R[k, i]) / (2.0 * a[k])
-        n = np.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
-        for i in range(3):
-            w[i] = th * a[i] / n
+            w[i] *= th / n
     else:
         f = th / (2.0 * np.sin(th))
         w[0], w[1], w[2] = f * v0, f * v1, f * v2
+
+
+@kernel
+def _copy(a, b):
+    for i in range(a.shape[0]):
+        b[i] = a[i]
+
+
+@kernel
+def copy_state(Q, S, C, L, Qd, Sd, Cd, Ld):
+    """``Qd, Sd, Cd, Ld = Q, S, C, L`` (element by element: no temporary)."""
+    _copy(Q, Qd)
+    _copy(L, Ld)
+    for j in range(S.shape[0]):
+        for side in range(2):
+            for a in range(3):
+                Sd[j, side, a] = S[j, side, a]
+                for b in range(3):
+                    Cd[j, side, a, b] = C[j, side, a, b]
 
 
 @njit
@@ -292,22 +388,22 @@ def follow_buffers(Q, S, C, L):
     nj = S.shape[0]
     return (Q.copy(), S.copy(), C.copy(), L.copy(), Q.copy(), S.copy(), C.copy(), L.copy(), np.zeros((nj, 2, 3)),
             np.zeros((nj, 2), np.bool_), np.zeros(Q.shape[0], np.bool_), np.zeros((nj, 2, 3), np.bool_),
-            np.zeros((nj, 2), np.bool_), np.zeros(nj, np.bool_))  # fmt: skip
+            np.zeros((nj, 2), np.bool_), np.zeros(L.shape[0], np.bool_))  # fmt: skip
 
 
-@njit
+@kernel
 def _sign_at(tb, plan, Q, S, C, L, buf):
     """Sign of det of the free Jacobian at a state (0: not square or singular); no step taken."""
-    Phi, vals, store, dx, ws = buf[B_PHI], buf[B_VALS], buf[B_STORE], buf[B_DX], buf[B_WS]
+    Phi, vals, ws, none = buf[B_PHI], buf[B_VALS], buf[B_WS], buf[B_NONE]
     if plan.free.shape[0] == 0:
         return 0
-    dummy = np.zeros(0, np.int64)
-    evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, dummy, dummy, False)
-    return newton_step(plan, Phi, vals, store, dx)
+    evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, none, none)
+    return newton_step(plan, Phi, vals, buf)
 
 
-@njit
-def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, buf, fbuf, history):
+@kernel
+def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, buf, fbuf, history,
+           start_sign=UNKNOWN_SIGN):  # fmt: skip
     """Follow a change from the assembled state ``Q, S, C, L`` (design p0) to the design of
     ``Q1, S1, C1, L1`` (its entries outside the free columns) on the start's branch:
     predictor-corrector over sub-steps ``t -> t + h`` of the straight path
@@ -325,12 +421,11 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
     nj = S.shape[0]
     Q0, S0, C0, L0, Qs, Ss, Cs, Ls = fbuf[0], fbuf[1], fbuf[2], fbuf[3], fbuf[4], fbuf[5], fbuf[6], fbuf[7]
     W, turn = fbuf[8], fbuf[9]
-    Q0[:], S0[:], C0[:], L0[:] = Q, S, C, L
+    copy_state(Q, S, C, L, Q0, S0, C0, L0)
     ws = buf[B_WS]
     if cfg.branch and assembled < 0:  # is the start assembled? (no Jacobian entries needed)
-        Phi, vals = buf[B_PHI], buf[B_VALS]
-        dummy = np.zeros(0, np.int64)
-        evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need_none, dummy, dummy, False)
+        Phi, vals, none = buf[B_PHI], buf[B_VALS], buf[B_NONE]
+        evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need_none, none, none)
         r2 = 0.0
         for i in range(Phi.shape[0]):
             r2 += (Phi[i] * row_scale[i]) ** 2
@@ -347,7 +442,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         if st != CONVERGED and st != NO_FREE:
             return st, it, 0.0, 1, nr, flags, it + 1
         its0 = it
-        Q0[:], S0[:], C0[:], L0[:] = Q, S, C, L
+        copy_state(Q, S, C, L, Q0, S0, C0, L0)
     # the change is what differs between start and target outside the free columns (the free
     # ones are the solution's: after assembling from estimates they differ from the target's)
     fq, fs, fc, fl = fbuf[10], fbuf[11], fbuf[12], fbuf[13]
@@ -364,7 +459,8 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         else:
             fl[j] = True
     # det sign of the free Jacobian at the assembled start: the reference of the branch test
-    sign_ref = _sign_at(tb, plan, Q, S, C, L, buf)
+    # (given by a batch whose variants share an assembled start)
+    sign_ref = start_sign if start_sign != UNKNOWN_SIGN and its0 == 0 else _sign_at(tb, plan, Q, S, C, L, buf)
     T = ws[6][0]
     for j in range(nj):
         for side in range(2):
@@ -387,13 +483,14 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
             status = STEP_LIMIT
             break
         tn = 1.0 if t + h >= 1.0 - 1e-12 else t + h
-        Qs[:], Ss[:], Cs[:], Ls[:] = Q, S, C, L
+        copy_state(Q, S, C, L, Qs, Ss, Cs, Ls)
         for k in range(Q.shape[0]):
             if Q1[k] != Q0[k] and not fq[k]:
                 Q[k] = Q0[k] + tn * (Q1[k] - Q0[k])
-        for j in range(nj):
+        for j in range(L.shape[0]):  # lengths, then coupling coefficients
             if L1[j] != L0[j] and not fl[j]:
                 L[j] = L0[j] + tn * (L1[j] - L0[j])
+        for j in range(nj):
             for side in range(2):
                 for a in range(3):
                     if S1[j, side, a] != S0[j, side, a] and not fs[j, side, a]:
@@ -432,7 +529,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         if flip:
             flags |= SIGN_FLIP
         flags |= SUBDIVIDED
-        Q[:], S[:], C[:], L[:] = Qs, Ss, Cs, Ls
+        copy_state(Qs, Ss, Cs, Ls, Q, S, C, L)
         h *= 0.5
         if h < cfg.min_step:
             status = INFEASIBLE
@@ -442,7 +539,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
     return status, its, t, subs, norm, flags, hlen
 
 
-@njit
+@kernel
 def _store(out, k, r):
     out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4], out[k, 5] = r[0], r[1], r[2], r[3], r[4], r[5]
 
@@ -455,17 +552,46 @@ def follow_one(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, 
                   follow_buffers(Q, S, C, L), history)  # fmt: skip
 
 
+@kernel
+def _same_start(Q, S, C, L, v, u):
+    """Whether variants ``v`` and ``u`` of a batch start from the same state."""
+    for a in range(Q.shape[1]):
+        if Q[v, a] != Q[u, a]:
+            return False
+    for j in range(S.shape[1]):
+        if L[v, j] != L[u, j]:
+            return False
+        for side in range(2):
+            for a in range(3):
+                if S[v, j, side, a] != S[u, j, side, a]:
+                    return False
+                for b in range(3):
+                    if C[v, j, side, a, b] != C[u, j, side, a, b]:
+                        return False
+    return True
+
+
+@njit
+def _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, out, v0, v1):
+    """:func:`follow` for variants ``v0 .. v1 - 1`` with one set of buffers; the start's det
+    sign is computed once for consecutive variants that share an assembled start."""
+    buf = buffers(tb, plan, nnz)
+    fbuf = follow_buffers(Q[0], S[0], C[0], L[0])
+    hist = np.zeros(0)
+    sign = UNKNOWN_SIGN
+    for v in range(v0, v1):
+        if assembled == 1 and cfg.branch and (v == v0 or not _same_start(Q, S, C, L, v, v - 1)):
+            sign = _sign_at(tb, plan, Q[v], S[v], C[v], L[v], buf)
+        r = follow(tb, plan, Q[v], S[v], C[v], L[v], Q1[v], S1[v], C1[v], L1[v], assembled, row_scale, col_scale,
+                   cfg, buf, fbuf, hist, sign)  # fmt: skip
+        _store(out, v, r)
+
+
 @njit
 def follow_batch(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, out):
     """:func:`follow` for every variant of a leading batch axis; ``out[v]`` = (status,
     iterations, fraction, sub-steps, residual, flags)."""
-    buf = buffers(tb, plan, nnz)
-    fbuf = follow_buffers(Q[0], S[0], C[0], L[0])
-    hist = np.zeros(0)
-    for v in range(Q.shape[0]):
-        r = follow(tb, plan, Q[v], S[v], C[v], L[v], Q1[v], S1[v], C1[v], L1[v], assembled, row_scale, col_scale,
-                   cfg, buf, fbuf, hist)  # fmt: skip
-        _store(out, v, r)
+    _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, out, 0, Q.shape[0])
 
 
 @njit(parallel=True)
@@ -473,13 +599,8 @@ def follow_batch_threaded(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, 
     """:func:`follow_batch` split into ``nth`` contiguous chunks, one per thread."""
     N = Q.shape[0]
     for c in prange(nth):
-        buf = buffers(tb, plan, nnz)
-        fbuf = follow_buffers(Q[0], S[0], C[0], L[0])
-        hist = np.zeros(0)
-        for v in range(c * N // nth, (c + 1) * N // nth):
-            r = follow(tb, plan, Q[v], S[v], C[v], L[v], Q1[v], S1[v], C1[v], L1[v], assembled, row_scale,
-                       col_scale, cfg, buf, fbuf, hist)  # fmt: skip
-            _store(out, v, r)
+        _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, out,
+                      c * N // nth, (c + 1) * N // nth)  # fmt: skip
 
 
 @njit
@@ -503,10 +624,10 @@ def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, row_scale, col_
         _store(out, s, r)
         if r[0] == CONVERGED:
             Qout[s] = Q
-            Qg[:], Sg[:], Cg[:], Lg[:] = Q, S, C, L
+            copy_state(Q, S, C, L, Qg, Sg, Cg, Lg)
         else:
             Qout[s] = np.nan
-            Q[:], S[:], C[:], L[:] = Qg, Sg, Cg, Lg
+            copy_state(Qg, Sg, Cg, Lg, Q, S, C, L)
 
 
 __all__ = [

@@ -1,12 +1,13 @@
 """Topology: body-joint multigraph, spanning tree, cut joints and loops (sections 2, 4).
 
-The spanning tree is a minimum spanning tree of the multigraph in which fixed bodies hang
-from a virtual world node, joints the user asked to cut and cut-only joint types are left
-out, and a tree joint costs its number of coordinates — so joints with the fewest
-constraint rows (spherical before universal before revolute) are the ones cut, as in the
-paper's slider-crank. Each cut joint closes a loop whose junction body is the lowest common
-ancestor of its two bodies: case 1 when the pair is still joined by a tree joint, case 2
-otherwise (eqs. 44-51).
+The spanning tree is a minimum spanning tree of the multigraph in which fixed bodies hang from
+a virtual world node, joints the user asked to cut and cut-only joint types are left out, and a
+tree joint costs its number of coordinates — so joints with the fewest constraint rows
+(spherical before universal before revolute) are the ones cut, as in the paper's slider-crank.
+Joints marked ``cut: false`` and joints named by a coupling (their coordinate is a variable of
+the coupling row) are kept in the tree. Each cut joint closes a loop whose junction body is the
+lowest common ancestor of its two bodies: case 1 when the pair is still joined by a tree joint,
+case 2 otherwise (eqs. 44-51).
 """
 
 from __future__ import annotations
@@ -94,13 +95,13 @@ def build_topology(mech: Mechanism) -> Topology:
         if b.fixed:
             G.add_edge(WORLD, b.name, key=f"{WORLD}:{b.name}", weight=-1.0)
     n = max(len(mech.joints), 1)
+    keep = mech.coupled_joints
     for k, j in enumerate(mech.joints):
         jt = j.jtype
         if j.cut is True or not jt.tree:
             continue
-        G.add_edge(
-            j.body_i, j.body_j, key=j.name, weight=jt.n_coordinates + k / (10.0 * n) - (1000 if j.cut is False else 0)
-        )
+        forced = j.cut is False or j.name in keep
+        G.add_edge(j.body_i, j.body_j, key=j.name, weight=jt.n_coordinates + k / (10.0 * n) - (1000 if forced else 0))
     T = nx.minimum_spanning_tree(G, weight="weight", algorithm="kruskal")
     tree_keys = {key for _, _, key in T.edges(keys=True)}
 
@@ -131,6 +132,16 @@ def build_topology(mech: Mechanism) -> Topology:
     for j in mech.joints:
         if j.cut is False and j.name not in tree_keys:
             problems.append(Problem(f"joints.{j.name}.cut", "marked as a tree joint but it closes a loop"))
+    for c in mech.couplings:
+        for k, name in enumerate((c.joint_a, c.joint_b)):
+            if name not in tree_keys and mech.joint(name).cut is not False:
+                problems.append(
+                    Problem(
+                        f"couplings.{c.name}.joints[{k}]",
+                        f"joint {name!r} must be a tree joint to be coupled, but it closes a loop of other "
+                        "tree-only or coupled joints",
+                    )
+                )
     if problems:
         raise ModelError(problems)
 

@@ -1,0 +1,107 @@
+"""Building the kernel cache once after installation: ``python -m kinprop.cli.warmup``.
+
+The first command-line run with an empty kernel cache (kinprop.jit) runs its job uncompiled
+and starts this module in a background process, which compiles every kernel entry point
+(single solves, batches serial and threaded, sequences, poses, sensitivities) into the cache
+and then writes the cache's completion marker; later runs load the compiled kernels. A lock
+file keeps concurrent first runs from starting more than one build.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from rich.console import Console
+
+#: a build older than this (seconds) is taken as dead (its lock is removed)
+STALE_LOCK = 600.0
+
+
+def _lock() -> Path:
+    from kinprop.jit import cache_dir
+
+    return cache_dir() / "building.lock"
+
+
+def start_background_build() -> bool:
+    """Start the cache build in a detached process unless one is running; True if started."""
+    lock = _lock()
+    lock.parent.mkdir(parents=True, exist_ok=True)
+    if lock.exists() and time.time() - lock.stat().st_mtime > STALE_LOCK:
+        lock.unlink(missing_ok=True)
+    try:
+        fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+    except FileExistsError:
+        return False
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_JIT"} | {"KINPROP_JIT": "on"}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "kinprop.cli.warmup", "--lock", str(lock)],
+        env=env,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
+    )
+    os.write(fd, f"{proc.pid}\n".encode())
+    os.close(fd)
+    return True
+
+
+def announce() -> None:
+    """Say once, on stderr, when this run does not use compiled kernels or compiles them."""
+    from kinprop import jit
+
+    if jit.is_warm():
+        return
+    err = Console(stderr=True, highlight=False)
+    if not jit.JIT and jit.MODE == "auto":
+        if start_background_build():
+            err.print("kinprop: first run of this version: its kernels are being compiled in the background "
+                      "(about a minute, once); this run uses them uncompiled.", soft_wrap=True)  # fmt: skip
+    elif jit.JIT:
+        err.print("kinprop: first run of this version: compiling the kernels this command needs "
+                  "(up to a minute, once) ...", soft_wrap=True)  # fmt: skip
+
+
+def build() -> None:
+    """Compile every kernel entry point into the cache and write its completion marker."""
+    import numpy as np
+
+    import kinprop as kp
+    from kinprop.jit import warm_marker
+    from kinprop.resources import examples_dir
+
+    for name, change in (("slider_crank.yaml", {"J12.s_j": [-2.8, 0.2, 0.1]}), ("stewart.yaml", {"L3.length": 0.52})):
+        model = kp.load_model(examples_dir() / name)
+        engine = kp.compile(model)
+        kp.propagate(model, change, engine=engine)
+        kp.mobility(model)
+        sol = engine.propagate(change, ("q", "s"))
+        engine.kinematics(sol.state)
+        engine.retract(sol.state, np.zeros(engine.n_columns))
+        batch = engine.stack([engine.reference] * 2)
+        engine.solve_batch(batch, threads=False)
+        engine.solve_batch(batch, threads=True)
+        q = engine.target(f"{model.mechanism.joints[0].name}.q")
+        if q.group == "q" and q.size == 1:
+            engine.solve_sequence(engine.reference, [q.key], np.array([[0.0]]) + engine.get(engine.reference, q.key))
+    warm_marker().parent.mkdir(parents=True, exist_ok=True)
+    warm_marker().write_text(f"kinprop kernels compiled {time.strftime('%Y-%m-%d %H:%M:%S')}\n")
+
+
+def main(argv: list[str]) -> int:
+    lock = Path(argv[argv.index("--lock") + 1]) if "--lock" in argv else None
+    try:
+        build()
+    finally:
+        if lock is not None:
+            lock.unlink(missing_ok=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
