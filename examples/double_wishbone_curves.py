@@ -26,8 +26,8 @@ OUTPUTS = ["wheel_centre_dz", "camber", "toe"]
 def curves(out: Path) -> None:
     model = assemble(load_model(HERE / "double_wishbone.yaml")).after
     # the lower arm angle that gives +-TRAVEL (plus a margin) at the design position
-    rate = output_sensitivity(model, ["wheel_centre_dz"], ["LCA.q"]).iloc[0, 0]  # mm per rad
-    q = np.degrees(1.3 * TRAVEL / rate)  # the file's angles are in degrees
+    rate = output_sensitivity(model, ["wheel_centre_dz"], ["LCA.q"]).iloc[0, 0]  # mm per deg (model units)
+    q = 1.3 * TRAVEL / rate  # degrees, the file's angle unit
     drive = [f"LCA={-q:.4f}:{q:.4f}:104"]
     before = sweep(model, drive, outputs=OUTPUTS, tol=1e-9).frame
     s = np.array(model.design["UCA.s_i"])

@@ -51,8 +51,8 @@ def main(out: Path) -> None:
         if np.linalg.norm(b - a) > 1e-6:
             print(f"  at 0 mm travel {key:<6} [{a[0]:.3f}, {a[1]:.3f}, {a[2]:.3f}] -> [{b[0]:.3f}, {b[1]:.3f}, "
                   f"{b[2]:.3f}] mm ({np.linalg.norm(b - a):.3f} mm)")  # fmt: skip
-    rate = output_sensitivity(model, ["wheel_centre_dz"], ["LCA.q"]).iloc[0, 0]  # mm per rad
-    q = np.degrees(1.3 * TRAVEL / rate)
+    rate = output_sensitivity(model, ["wheel_centre_dz"], ["LCA.q"]).iloc[0, 0]  # mm per deg (model units)
+    q = 1.3 * TRAVEL / rate  # degrees
     drive = [f"LCA={-q:.4f}:{q:.4f}:104"]
     frames = {"before (Chrono HMMWV hardpoints)": curves(model, drive),
               "after: targets met (UBJ, tie-rod inner moved)": curves(tp.after, drive)}  # fmt: skip

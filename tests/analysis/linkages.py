@@ -56,7 +56,7 @@ def set_crank(model: Model, degrees: float) -> Model:
     """The four-bar with its crank O2 moved to ``degrees`` (small steps, same branch)."""
     cur = float(np.degrees(model.coordinates["O2"][0]))
     for t in np.linspace(cur, degrees, int(abs(degrees - cur) // 5) + 2)[1:]:
-        prop = propagate(model, {"O2.q": [np.radians(t)]}, ("A.q", "O4.q"), tol=1e-12)
+        prop = propagate(model, {"O2.q": [t]}, ("A.q", "O4.q"), tol=1e-12)  # degrees: the model's unit
         assert prop.converged
         model = prop.after
     return model
@@ -157,7 +157,7 @@ def set_input(model: Model, joint: str, degrees: float, free: tuple[str, ...]) -
     """``model`` with the input ``joint`` moved to ``degrees`` in 5 deg steps (same branch)."""
     cur = float(np.degrees(model.coordinates[joint][0]))
     for t in np.linspace(cur, degrees, int(abs(degrees - cur) // 5) + 2)[1:]:
-        prop = propagate(model, {f"{joint}.q": [np.radians(t)]}, free, tol=1e-12)
+        prop = propagate(model, {f"{joint}.q": [np.radians(t)]}, free, tol=1e-12, units="solver")  # any model
         assert prop.converged
         model = prop.after
     return model

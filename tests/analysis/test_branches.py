@@ -199,12 +199,13 @@ TURNS = [
     TURNS,
 )
 def test_large_input_turn_in_one_call_lands_on_the_start_branch(name, delta):
-    """The input turned by ``delta`` degrees in ONE kp.propagate call (default mode)."""
+    """The input turned by ``delta`` degrees in ONE kp.propagate call (default mode); in solver
+    units (radians), as the closed forms are."""
     m, inp, free, out, exact = _case(name)
     t = float(m.coordinates[inp][0]) + np.radians(delta)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SingularityWarning)
-        prop = kp.propagate(m, {f"{inp}.q": [t]}, free, tol=1e-12)
+        prop = kp.propagate(m, {f"{inp}.q": [t]}, free, tol=1e-12, units="solver")
     assert prop.converged, prop.result.message
     got = float(prop.after.coordinates[out][0])
     tol = 1e-12 if name == "slider" else TOL_DEG
@@ -217,8 +218,8 @@ def test_plain_newton_lands_on_the_other_branch_the_default_does_not(name, delta
     on the other root of the same closed form, ``other_deg`` degrees away."""
     m, inp, free, out, exact = _case(name)
     t = float(m.coordinates[inp][0]) + np.radians(delta)
-    plain = kp.propagate(m, {f"{inp}.q": [t]}, free, tol=1e-12, branch=False)
-    default = kp.propagate(m, {f"{inp}.q": [t]}, free, tol=1e-12)
+    plain = kp.propagate(m, {f"{inp}.q": [t]}, free, tol=1e-12, branch=False, units="solver")
+    default = kp.propagate(m, {f"{inp}.q": [t]}, free, tol=1e-12, units="solver")
     assert plain.converged and default.converged
     p, d = float(plain.after.coordinates[out][0]), float(default.after.coordinates[out][0])
     assert _distance(name, p, exact(t, -1)) == pytest.approx(other_deg, abs=0.01)
@@ -233,7 +234,7 @@ def test_turn_past_the_input_limit_in_one_call_is_infeasible():
     t0 = float(m.coordinates["O2"][0])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SingularityWarning)
-        prop = kp.propagate(m, {"O2.q": [t0 + np.radians(90.0)]}, free, tol=1e-12)
+        prop = kp.propagate(m, {"O2.q": [t0 + np.radians(90.0)]}, free, tol=1e-12, units="solver")
     assert not prop.converged and prop.result.status == "infeasible"
     frac = float(re.search(r"only to ([0-9.e-]+)", prop.result.message).group(1))
     exact_frac = (input_limit(*DOUBLE_ROCKER) - t0) / np.radians(90.0)

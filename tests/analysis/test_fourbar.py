@@ -57,11 +57,11 @@ def test_singularity_warning_near_toggle(examples):
     a, b, c, d = CRANK_ROCKER
     t4min = np.arccos(((a + b) ** 2 - d * d - c * c) / (2 * d * c))  # 77.36 deg
     with pytest.warns(SingularityWarning, match="near-singular"):
-        near = propagate(m, {"O4.q": [t4min + np.radians(0.01)]}, ("O2.q", "A.q"))
+        near = propagate(m, {"O4.q": [np.degrees(t4min) + 0.01]}, ("O2.q", "A.q"))  # degrees: the model's unit
     assert near.converged and near.singularity_ratio < 1e-2
     with warnings.catch_warnings():
         warnings.simplefilter("error", SingularityWarning)
-        far = propagate(m, {"O4.q": [t4min + np.radians(10.0)]}, ("O2.q", "A.q"))
+        far = propagate(m, {"O4.q": [np.degrees(t4min) + 10.0]}, ("O2.q", "A.q"))
     assert far.converged
 
 
@@ -79,8 +79,8 @@ def test_singularity_measure_is_unit_independent():
     singular values would differ (distance-like rows grow, angle columns do not)."""
     m = load_solved("fourbar.yaml")
     mm = m.with_state(m.design.replace({k: 1000.0 * v for k, v in m.design.items()}), m.coordinates)
-    a = propagate(m, {"O2.q": [1.0]}, ("A.q", "O4.q"), tol=1e-12)
-    b = propagate(mm, {"O2.q": [1.0]}, ("A.q", "O4.q"), tol=1e-9)
+    a = propagate(m, {"O2.q": [1.0]}, ("A.q", "O4.q"), tol=1e-12, units="solver")  # 1 rad
+    b = propagate(mm, {"O2.q": [1.0]}, ("A.q", "O4.q"), tol=1e-9, units="solver")
     assert a.converged and b.converged
     assert b.singularity_ratio == pytest.approx(a.singularity_ratio, rel=1e-6)
     assert 0.1 < a.singularity_ratio < 1.0

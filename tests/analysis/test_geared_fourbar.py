@@ -58,12 +58,12 @@ def test_cli_sweep_and_degree_units(tmp_path) -> None:
     out = tmp_path / "g.csv"
     r = runner.invoke(app, ["sweep", str(GEARED), "--drive", "G=-60:120:9", "-o", str(out), "--tol", "1e-12"])
     assert r.exit_code == 0, r.output
-    rows = list(csv.DictReader(io.StringIO(out.read_text())))
-    g = np.array([float(x["G.q"]) for x in rows])
+    rows = list(csv.DictReader(io.StringIO(out.read_text())))  # headers carry units (docs/units.md)
+    g = np.array([float(x["G.q [deg]"]) for x in rows])
     assert all(x["status"] == "converged" for x in rows)
-    np.testing.assert_allclose([float(x["O2.q"]) for x in rows], 60 - 0.5 * g, atol=1e-9)
+    np.testing.assert_allclose([float(x["O2.q [deg]"]) for x in rows], 60 - 0.5 * g, atol=1e-9)
     t4 = np.degrees(freudenstein(*CRANK_ROCKER, np.radians(60 - 0.5 * g)))
-    np.testing.assert_allclose(np.degrees(wrap(np.radians([float(x["O4.q"]) for x in rows] - t4))), 0, atol=1e-9)
+    np.testing.assert_allclose(np.degrees(wrap(np.radians([float(x["O4.q [deg]"]) for x in rows] - t4))), 0, atol=1e-9)
     # --set in the model's units: c2 in deg/deg^2
     r = runner.invoke(app, ["propagate", str(GEARED), "--set", "G.q=20", "--set", "DRIVE.coef[2]=0.01", "--json"])
     assert r.exit_code == 0, r.output

@@ -62,7 +62,8 @@ CASES = {
 def test_output_sensitivity_matches_resolve_fd(case, request):
     model = request.getfixturevalue(case)
     of, wrt, wheels, tol, h = CASES[case]
-    D = output_sensitivity(model, of, wrt, wheels=wheels)
+    # the oracle differences output_function, in solver units (radians, metric angles in degrees)
+    D = output_sensitivity(model, of, wrt, wheels=wheels, units="solver")
     f, names = output_function(model, of, wheels=wheels)
     assert list(D.index) == names and D.shape[1] >= len(wrt)
     worst = 0.0
@@ -77,7 +78,7 @@ def test_locked_free_set_matches_resolve_fd(double_wishbone):
     # LCA locked: the jounce is frozen, the upper arm and the upright absorb the change
     free = ("UCA.q", "LBJ.q")
     of = ["UCA.q", "camber", "toe", "point:upright.wheel_centre"]
-    D = output_sensitivity(double_wishbone, of, ["UCA.s_i[2]", "TR.length"], free)
+    D = output_sensitivity(double_wishbone, of, ["UCA.s_i[2]", "TR.length"], free, units="solver")
     f, _ = output_function(double_wishbone, of)
     for col in D.columns:
         fd = resolve_fd(double_wishbone, f, col, 1e-4, free=free, tol=1e-9)
@@ -128,11 +129,13 @@ def test_cli_json_matches_api(slider_crank):
     assert obj["of"] == ["J01.q", "hardpoint:J12.i[x]", "hardpoint:J12.i[y]", "hardpoint:J12.i[z]"]
     assert obj["wrt"] == ["J12.s_j[0]", "J12.s_j[1]", "J12.s_j[2]"]
     assert obj["assembly"]["initial_residual"] > 1e-4  # the file is not assembled: it says so
-    D = output_sensitivity(slider_crank, ["J01.q", "hardpoint:J12.i"], ["J12.s_j"]).to_numpy().copy()
-    # the CLI reports the model's units (docs/units.md): the J01.q row in deg per m, not rad per m
+    D = output_sensitivity(slider_crank, ["J01.q", "hardpoint:J12.i"], ["J12.s_j"]).to_numpy()
+    # both report the model's units (docs/units.md): the J01.q row in deg per m, not rad per m
     assert obj["units"]["of"] == ["deg", "m", "m", "m"] and obj["units"]["wrt"] == ["m", "m", "m"]
-    D[0] = np.degrees(D[0])
     np.testing.assert_allclose(obj["matrix"], D, atol=1e-8)
+    solver = output_sensitivity(slider_crank, ["J01.q"], ["J12.s_j"], units="solver").to_numpy()
+    np.testing.assert_allclose(D[0], np.degrees(solver[0]), rtol=1e-12)
+    assert abs(D[0, 0]) > 1.0  # a real number: degrees of crank per metre of pin move
 
 
 def test_cli_table_and_default_outputs():

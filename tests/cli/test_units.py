@@ -1,6 +1,7 @@
 """One unit convention (issue 11, item 3; docs/units.md): every number a user gives or reads is
-in the model's declared units. Each command is checked against the library in solver units
-(radians) converted by hand."""
+in the model's declared units. Each command is checked against the library given the same
+numbers (the Python API takes and returns the model's units too) and against the library in
+solver units (``units="solver"``, radians) converted by hand."""
 
 from __future__ import annotations
 
@@ -46,20 +47,29 @@ def test_tolerance_sigma_in_degrees(examples) -> None:
     11.9 deg, before). Reference: the library with the sigma in radians."""
     path = examples / "double_wishbone.yaml"
     obj = _json("tolerance", path, "--tolerance", "LCA.q=1", "--of", "camber", "--of", "UCA.q", "--json")
-    ref = tolerance_analysis(kp.load_model(path), {"LCA.q": math.radians(1.0)}, ["camber", "UCA.q"])
+    m = kp.load_model(path)
+    api = tolerance_analysis(m, {"LCA.q": 1.0}, ["camber", "UCA.q"])  # the same number: one degree
+    ref = tolerance_analysis(m, {"LCA.q": math.radians(1.0)}, ["camber", "UCA.q"], units="solver")
     assert obj["units"]["outputs"] == ["deg", "deg"] and obj["units"]["inputs"] == ["deg"]
-    assert obj["sigma"] == pytest.approx([1.0])
+    assert list(api.output_units) == ["deg", "deg"] and list(api.input_units) == ["deg"]
+    assert obj["sigma"] == pytest.approx([1.0]) and api.sigma.tolist() == pytest.approx([1.0])
     assert obj["std"][0] == pytest.approx(ref.std[0], rel=1e-9) and obj["std"][0] == pytest.approx(0.2083, abs=1e-4)
     assert obj["std"][1] == pytest.approx(math.degrees(ref.std[1]), rel=1e-9)  # a coordinate: rad -> deg
     assert obj["nominal"][1] == pytest.approx(math.degrees(ref.nominal[1]), abs=1e-9)
+    np.testing.assert_allclose(obj["std"], api.std, rtol=1e-9)
+    np.testing.assert_allclose(obj["nominal"], api.nominal, rtol=1e-9, atol=1e-12)
 
 
 def test_propagate_json_in_model_units(examples) -> None:
     path = examples / "fourbar.yaml"
     obj = _json("propagate", path, "--set", "O2.q=70", "--json")
-    ref = kp.propagate(kp.load_model(path), {"O2.q": [math.radians(70.0)]})
+    api = kp.propagate(kp.load_model(path), {"O2.q": [70.0]})  # the same number: 70 degrees
+    ref = kp.propagate(kp.load_model(path), {"O2.q": [math.radians(70.0)]}, units="solver")
     assert obj["coordinates"]["O2"] == [70.0] and obj["changes"] == {"O2.q": [70.0]}
     assert obj["coordinates"]["O4"][0] == pytest.approx(math.degrees(ref.after.coordinates["O4"][0]), abs=1e-9)
+    assert obj["coordinates"]["O4"][0] == pytest.approx(api.coordinates["O4"][0], abs=1e-9)
+    assert obj["coordinates"]["O4"][0] == pytest.approx(86.4506, abs=1e-4)
+    assert api.changes["O2.q"].tolist() == [70.0] and api.solver_changes["O2.q"].tolist() == [math.radians(70.0)]
     assert obj["units"]["coordinates"]["O4"] == ["deg"]
 
 
@@ -67,10 +77,13 @@ def test_sensitivity_per_model_units(examples) -> None:
     path = examples / "slider_crank.yaml"
     obj = _json("sensitivity", path, "--wrt", "J12.s_j", "--wrt", "J01.C_i", "--json")
     model = kp.assemble(kp.load_model(path)).after
-    ref = design_sensitivity(model, ["J12.s_j", "J01.C_i"])
+    api = design_sensitivity(model, ["J12.s_j", "J01.C_i"])  # the model's units, like the command
+    ref = design_sensitivity(model, ["J12.s_j", "J01.C_i"], units="solver")
     assert obj["of"] == ref.rows and obj["wrt"] == ref.columns
     assert obj["units"]["of"] == ["deg", "m", "deg", "deg"] and obj["units"]["wrt"][:3] == ["m", "m", "m"]
+    assert list(api.row_units) == obj["units"]["of"] and list(api.column_units[:3]) == ["m", "m", "m"]
     D = np.array(obj["matrix"])
+    np.testing.assert_allclose(D, api.matrix, rtol=1e-9, atol=1e-12)
     deg = 180 / math.pi
     np.testing.assert_allclose(D[0, :3], ref.matrix[0, :3] * deg, rtol=1e-9, atol=1e-12)  # deg per m
     np.testing.assert_allclose(D[1, :3], ref.matrix[1, :3], rtol=1e-9, atol=1e-12)  # m per m
@@ -87,8 +100,10 @@ def test_study_stores_model_units(examples, tmp_path) -> None:
     assert df["O2.q"].between(60, 70).all()
     m = kp.load_model(path)
     for _, row in df.iterrows():
-        ref = kp.propagate(m, {"O2.q": [math.radians(row["O2.q"])]}, free=["A.q", "O4.q"])
+        api = kp.propagate(m, {"O2.q": [row["O2.q"]]}, free=["A.q", "O4.q"])  # degrees, as stored
+        ref = kp.propagate(m, {"O2.q": [math.radians(row["O2.q"])]}, free=["A.q", "O4.q"], units="solver")
         assert row["O4.q"] == pytest.approx(math.degrees(ref.after.coordinates["O4"][0]), abs=1e-8)
+        assert row["O4.q"] == pytest.approx(api.coordinates["O4"][0], abs=1e-8)
 
 
 def test_sweep_json_states_units(examples) -> None:

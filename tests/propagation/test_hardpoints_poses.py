@@ -66,18 +66,19 @@ def test_cut_joint_value_equals_its_coordinate_when_the_same_joint_is_in_the_tre
     path = tmp_path / "recut.yaml"
     path.write_text(yaml.safe_dump(data))
     recut = load_model(path)
-    prop = propagate(recut, {"O2.q": original.coordinates["O2"]}, ["q"], tol=1e-13)
+    prop = propagate(recut, {"O2.q": np.degrees(original.coordinates["O2"])}, ["q"], tol=1e-13)  # degrees
     assert prop.converged
     before = propagate(original, {}, ["q"])
-    # A: tree in the original, cut in the re-cut model
-    assert prop.joint_values["A"]["angle"] == pytest.approx(float(original.coordinates["A"][0]), abs=1e-9)
+    # A: tree in the original, cut in the re-cut model (joint values in the model's unit: degrees)
+    assert prop.joint_values["A"]["angle"] == pytest.approx(np.degrees(original.coordinates["A"][0]), abs=1e-7)
+    assert prop.solver_joint_values["A"]["angle"] == pytest.approx(float(original.coordinates["A"][0]), abs=1e-9)
     # B: cut in the original, tree (Euler parameters + slide) in the re-cut model
     qB = np.array(prop.after.coordinates["B"], dtype=float)
     qB[:4] *= np.sign(qB[0])
     np.testing.assert_allclose(before.joint_values["B"]["euler"], qB[:4], atol=1e-9)
     assert before.joint_values["B"]["displacement"] == pytest.approx(qB[4], abs=1e-9)
     # tree joints report their own coordinates; body poses agree between the two models
-    assert before.joint_values["O4"]["angle"] == pytest.approx(float(original.coordinates["O4"][0]), abs=1e-12)
+    assert before.joint_values["O4"]["angle"] == pytest.approx(np.degrees(original.coordinates["O4"][0]), abs=1e-10)
     for body in ("crank", "coupler", "rocker"):
         np.testing.assert_allclose(prop.bodies[body]["t"], before.bodies[body]["t"], atol=1e-9)
         np.testing.assert_allclose(prop.bodies[body]["R"], before.bodies[body]["R"], atol=1e-9)

@@ -24,10 +24,12 @@ import numpy as np
 
 from kinprop.analysis.metrics import WheelSpec
 from kinprop.analysis.outputs import output_function
+from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
 from kinprop.model import Model
 from kinprop.propagation.propagate import engine_for
 from kinprop.propagation.sensitivity import Sensitivity, design_sensitivity, weight_vector
+from kinprop.propagation.units import check_units
 from kinprop.spatial import Array
 
 if TYPE_CHECKING:  # pandas (the 'data' extra) is imported only when a frame is built
@@ -58,9 +60,11 @@ def output_sensitivity_matrix(
     reference: Model | None = None,
     wheels: Mapping[str, WheelSpec] | None = None,
     engine: Engine | None = None,
+    units: str = "model",
 ) -> tuple[Array, list[str], list[str], float]:
     """``(D, output names, design column labels, ||Phi||)`` of :func:`output_sensitivity`,
     as plain arrays and lists (no pandas)."""
+    model_units = check_units(units)
     engine = engine_for(model, engine)
     state = engine.state_of(model)
     residual = float(np.linalg.norm(engine.residual(state)))
@@ -70,7 +74,7 @@ def output_sensitivity_matrix(
             RuntimeWarning,
             stacklevel=3,
         )
-    sens = design_sensitivity(model, wrt, free, weights, engine=engine)
+    sens = design_sensitivity(model, wrt, free, weights, engine=engine, units="solver")
     f, names = output_function(model, of, reference=reference, wheels=wheels, engine=engine)
     D = np.zeros((len(names), sens.wrt_columns.size))
     for k, col in enumerate(sens.wrt_columns):
@@ -81,6 +85,10 @@ def output_sensitivity_matrix(
         plus = engine.model_of(engine.retract(state, h * direction), model)
         minus = engine.model_of(engine.retract(state, -h * direction), model)
         D[:, k] = (f(plus) - f(minus)) / (2.0 * h)
+    if model_units and D.size:
+        so = np.array([derivative_scale(model, n) for n in names])
+        si = np.array([derivative_scale(model, c) for c in sens.columns])
+        D = D * so[:, None] / si[None, :]
     return D, list(names), list(sens.columns), residual
 
 
@@ -94,21 +102,24 @@ def output_sensitivity(
     reference: Model | None = None,
     wheels: Mapping[str, WheelSpec] | None = None,
     engine: Engine | None = None,
+    units: str = "model",
 ) -> pd.DataFrame:
     """``d(output)/d(p)``: rows the (expanded) outputs ``of``, columns the design columns ``wrt``.
 
     The model must be assembled (``Phi = 0``); a warning is issued when ``||Phi||`` exceeds
     :data:`RESIDUAL_WARN`. ``attrs`` of the frame carry ``residual_norm``, ``free`` and
-    ``weights``. Units: output unit per design-variable unit (coordinates in radians or
-    length, metric angles in degrees, C columns per radian of body-frame rotation).
+    ``weights`` and ``units``. Units: output unit per design-variable unit, in the model's
+    declared units (``units="model"``: deg per mm, mm per deg, metric angles in the angle unit, C
+    columns per angle unit of body-frame rotation; docs/units.md); ``units="solver"``: as
+    computed (coordinates per radian, metric angles in degrees, C columns per radian).
     """
     D, names, columns, residual = output_sensitivity_matrix(
-        model, of, wrt, free, weights, reference=reference, wheels=wheels, engine=engine
+        model, of, wrt, free, weights, reference=reference, wheels=wheels, engine=engine, units=units
     )
     import pandas as pd
 
     frame = pd.DataFrame(D, index=names, columns=columns)
-    frame.attrs.update(residual_norm=residual, free=list(free), weights=dict(weights or {}))
+    frame.attrs.update(residual_norm=residual, free=list(free), weights=dict(weights or {}), units=units)
     return frame
 
 

@@ -37,12 +37,14 @@ import numpy as np
 
 from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
+from kinprop.analysis.units import derivative_scale
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.kinematics.layout import column_labels
 from kinprop.model import Design, Model
 from kinprop.model.design import as_coordinates, parse_address
 from kinprop.propagation.propagate import apply_changes
+from kinprop.propagation.units import changes_to_internal, check_units
 from kinprop.spatial import Array
 
 if TYPE_CHECKING:  # pandas (the data extra) is imported where a frame is built
@@ -128,8 +130,9 @@ class StudySpec:
     model_hash: str = ""
     #: "auto" (compiled batched Newton when the mechanism compiles), "fast" or "reference"
     engine: str = "auto"
-    #: column -> factor from solver units (radians) to the stored units; a factor's plan values
-    #: are in the stored units and divided by it before solving (kinprop study: the model's units)
+    #: column -> factor from solver units (radians; metric angles: degrees) to the stored units; a
+    #: factor's plan values are in the stored units and divided by it before solving
+    #: (:func:`model_unit_scale`: the model's units)
     scale: dict[str, float] = field(default_factory=dict)
 
 
@@ -205,6 +208,20 @@ def _pandas():
     return pandas
 
 
+def model_unit_scale(model: Model, addresses: Sequence[str], outputs: Sequence[str] | None = None) -> dict[str, float]:
+    """Column -> factor from solver units to the model's units, for the varied ``addresses``,
+    every coordinate column and the metric ``outputs`` (default: the wheel metrics): ``180/pi``
+    for angles of a degree model, ``pi/180`` for metric angles of a radian model; columns
+    already in the model's units are left out."""
+    engine = compile_engine(model.mechanism)
+    labels = column_labels(engine.layout)
+    names = list(outputs) if outputs is not None else _default_outputs(model)
+    qlabels = [lab for lab in labels if parse_address(lab).field == "q"]
+    cols = [*addresses, *qlabels, *(expand_outputs(model, names) if names else [])]
+    scale = {c: derivative_scale(model, c, engine) for c in dict.fromkeys(cols)}
+    return {k: v for k, v in scale.items() if v != 1.0}
+
+
 def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, start: int) -> pd.DataFrame:
     """Rows of variants ``start .. start + len(values) - 1`` (runs on a Dask worker too)."""
     model = _model_from_payload(payload)
@@ -268,7 +285,7 @@ def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, s
         for x, ax in enumerate("xyz"):
             rows[f"{name}[{ax}]"] = P[:, k, x]
     for key in outs:
-        rows[key] = outs[key]
+        rows[key] = outs[key] * spec.scale.get(key, 1.0)
     import pandas as pd
 
     return pd.DataFrame(rows)
@@ -319,6 +336,7 @@ def run_study(
     on_chunk: Callable[[int], None] | None = None,
     engine: str = "auto",
     scale: Mapping[str, float] | None = None,
+    units: str = "model",
 ) -> pd.DataFrame:
     """Run a design study and return one row per variant (see the module docstring).
 
@@ -328,11 +346,16 @@ def run_study(
     (the manifest must match). ``scheduler``: a Dask scheduler address (``tcp://host:8786``)
     or a ``distributed.Client``. ``on_chunk(index)`` is called after each chunk is stored.
     ``engine``: ``"auto"`` (compiled when possible), ``"fast"`` or ``"reference"`` (numpy).
-    ``scale``: column -> factor from solver units to the units the plan is given in and the
-    rows are stored in (``kinprop study`` passes 180/pi for angle columns of a degree model, so
-    inputs and coordinates are in the model's units; default: solver units, radians).
+    ``units="model"`` (the default): the plan, ``factors`` and ``sets`` are in the model's units
+    and every stored input, coordinate and metric is too (:func:`model_unit_scale`);
+    ``units="solver"``: ``sets`` and the plan in solver units, rows as computed (radians, metric
+    angles in degrees). ``scale`` (column -> factor from solver units to the stored units)
+    overrides the default of ``units``.
     Raises :class:`AddressError` / :class:`ValueError` for invalid input.
     """
+    model_units = check_units(units)
+    if model_units:
+        sets = changes_to_internal(model, sets or {}, compile_engine(model.mechanism))
     if plan is None:
         factors = list(factors or [])
         values = sample_plan(factors, method, samples, seed)
@@ -360,6 +383,8 @@ def run_study(
         apply_changes(base, {a: values[0, k] for k, a in enumerate(addrs)})
     if outputs:  # unknown output names fail here, before any directory is created
         expand_outputs(base, list(outputs))
+    if scale is None and model_units:
+        scale = model_unit_scale(model, addrs, outputs)
     spec = StudySpec(
         addresses=addrs,
         free=list(free),

@@ -17,9 +17,9 @@ Each step gives one row: ``step``, the drive values, ``status`` (``converged`` /
 ``failed``), ``iterations``, ``residual_norm``, ``sv_ratio`` (unit-independent
 smallest/largest singular value of the free-variable Jacobian,
 :mod:`kinprop.propagation.conditioning`; ``near_singular`` when below ``SINGULAR_RTOL``),
-every joint coordinate (model units),
-the outputs (named points ``point:BODY.NAME[x]``, suspension metrics, or any name
-:func:`kinprop.analysis.outputs.evaluate_outputs` accepts) and ``message``. A failed step is
+every joint coordinate, the outputs (named points ``point:BODY.NAME[x]``, suspension metrics, or any name
+:func:`kinprop.analysis.outputs.evaluate_outputs` accepts) and ``message`` — every value in the
+model's declared units (metric angles in the angle unit, docs/units.md). A failed step is
 recorded with NaN values and its reason, and the sweep goes on from the last good state.
 
 Rows are handed to a sink as they are computed: CSV appended and flushed row by row, Parquet
@@ -36,6 +36,7 @@ import re
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from html import escape
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -43,6 +44,7 @@ import numpy as np
 
 from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import output_function
+from kinprop.analysis.units import derivative_scale, unit_of
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, SingularityWarning
@@ -53,12 +55,15 @@ from kinprop.propagation.propagate import (
     Propagation,
     propagate,
 )
+from kinprop.propagation.units import changes_to_internal, check_units, from_solver_units, to_solver_units
 from kinprop.spatial import Array
 
 _DRIVE = re.compile(r"^(?P<joint>[^\s=\[\].]+)(\.q)?(\[(?P<index>\d+)\])?=(?P<range>.+)$")
 
 #: the most steps one sweep may take (each is a Newton solve and a row of results)
 MAX_STEPS = 10_000_000
+#: rows a sweep result's notebook table shows
+SUMMARY_ROWS = 8
 #: columns before the coordinates and outputs
 META = ("step", "status", "iterations", "residual_norm", "sv_ratio", "near_singular")
 
@@ -212,15 +217,27 @@ class Sink(Protocol):
     def close(self) -> None: ...
 
 
-class CsvSink:
-    """Append rows to a CSV file, flushing after each row."""
+def header_labels(model: Model, columns: Sequence[str], engine: Engine | None = None) -> dict[str, str]:
+    """CSV header of each column: ``NAME [unit]`` for a quantity in the model's units
+    (``O2.q [deg]``, ``point:crank.tip[x] [m]``, ``metric:upright.camber [deg]``), the bare name
+    for the rest (``step``, ``status``, Euler parameters, ...); docs/units.md."""
+    out = {}
+    for c in columns:
+        u = "" if c in (*META, "message") else unit_of(model, c, engine)
+        out[c] = f"{c} [{u}]" if u else c
+    return out
 
-    def __init__(self, path: str | Path, columns: Sequence[str]):
+
+class CsvSink:
+    """Append rows to a CSV file, flushing after each row; ``labels`` maps a column to its
+    header text (default: the column name)."""
+
+    def __init__(self, path: str | Path, columns: Sequence[str], labels: Mapping[str, str] | None = None):
         self.path = Path(path)
         self.columns = list(columns)
         self._fh = self.path.open("w", newline="")
         self._w = csv.DictWriter(self._fh, fieldnames=self.columns, lineterminator="\n")
-        self._w.writeheader()
+        self._w.writerow({c: (labels or {}).get(c, c) for c in self.columns})
         self._fh.flush()
 
     def write(self, row: Mapping[str, Any]) -> None:
@@ -283,11 +300,17 @@ class ParquetSink:
                 os.replace(self.partial, self.path)
 
 
-def open_sink(path: str | Path, columns: Sequence[str], text_columns: Sequence[str] = ("status", "message")) -> Sink:
-    """A sink for ``path`` by its suffix: ``.csv`` or ``.parquet`` / ``.pq``."""
+def open_sink(
+    path: str | Path,
+    columns: Sequence[str],
+    text_columns: Sequence[str] = ("status", "message"),
+    labels: Mapping[str, str] | None = None,
+) -> Sink:
+    """A sink for ``path`` by its suffix: ``.csv`` (header ``labels``, e.g. with units) or
+    ``.parquet`` / ``.pq`` (the plain column names)."""
     suffix = Path(path).suffix.lower()
     if suffix == ".csv":
-        return CsvSink(path, columns)
+        return CsvSink(path, columns, labels)
     if suffix in (".parquet", ".pq"):
         return ParquetSink(path, columns, text_columns)
     raise ValueError(f"output {str(path)!r}: expected a .csv or .parquet file")
@@ -314,6 +337,22 @@ class SweepResult:
     def ok(self) -> bool:
         return self.n_failed == 0
 
+    def _summary(self) -> str:
+        units = self.frame.attrs.get("units", {})
+        drives = ", ".join(
+            f"{d.label} {d.values[0]:g}..{d.values[-1]:g} {units.get('angle' if d.angle else 'length', '')}".rstrip()
+            for d in self.drives
+        )
+        return f"{self.n_steps} steps ({self.n_failed} failed) driving {drives}; {len(self.frame.columns)} columns"
+
+    def __repr__(self) -> str:
+        """One line: steps, failures, drives and their range; the rows are ``frame``."""
+        return f"<SweepResult: {self._summary()}>"
+
+    def _repr_html_(self) -> str:
+        head = self.frame.head(SUMMARY_ROWS).to_html(max_cols=12, float_format=lambda x: f"{x:.6g}")
+        return f"<p><b>SweepResult</b>: {escape(self._summary())}</p>{head}"
+
 
 def sweep(
     model: Model,
@@ -327,8 +366,12 @@ def sweep(
     output: str | Path | Sink | None = None,
     on_step: Callable[[int, int, Mapping[str, Any]], None] | None = None,
     continuation: bool = False,
+    units: str = "model",
 ) -> SweepResult:
     """Drive coordinates over their ranges; one row per step (see the module docstring).
+
+    Drive values (strings and :class:`Drive` objects) and the rows are in the model's units;
+    ``units`` is the unit of ``changes``: ``"model"`` (default) or ``"solver"`` (radians).
 
     ``drives``: :class:`Drive` objects or ``JOINT=START:STOP:STEPS`` strings. ``outputs``:
     names for :func:`kinprop.analysis.outputs.evaluate_outputs` (default
@@ -355,23 +398,33 @@ def sweep(
         raise AddressError("--set: a driven coordinate cannot also be set")
     names = list(default_outputs(model) if outputs is None else outputs)
     engine = compile_engine(model.mechanism)
+    changes = changes_to_internal(model, changes or {}, engine) if check_units(units) else dict(changes or {})
     fout, expanded = output_function(model, names, engine=engine)
     coord_cols = coordinate_columns(model)
     drive_cols = [d.label for d in dr]
+    # unit factors, once (io.units' conversions are linear): model -> solver for the drives,
+    # solver -> model for the coordinate columns
+    to_solver = [float(to_solver_units(model, d.address, [1.0], engine)[0]) for d in dr]
+    to_model = {col: float(from_solver_units(model, col, [1.0], engine)[0]) for col, *_ in coord_cols}
     # an output naming a coordinate is already a column (in model units, not radians)
     taken = {c for c, *_ in coord_cols} | set(drive_cols)
     keep = [i for i, e in enumerate(expanded) if e not in taken]
     expanded = [expanded[i] for i in keep]
+    out_scale = np.array([derivative_scale(model, e, engine) for e in expanded])  # metric angles: the angle unit
     columns = list(dict.fromkeys(["step", *drive_cols, *META[1:], *(c for c, *_ in coord_cols), *expanded, "message"]))
     rows: list[dict[str, Any]] = []
     good = model
-    sink = open_sink(output, columns) if isinstance(output, (str, Path)) else output
+    sink = (
+        open_sink(output, columns, labels=header_labels(model, columns, engine))
+        if isinstance(output, (str, Path))
+        else output
+    )
     try:
         for k in range(n_steps):
             step_changes: dict[str, object] = dict(changes or {}) if k == 0 else {}
-            for d in dr:  # one component each: a joint's other coordinates may follow
+            for d, f in zip(dr, to_solver, strict=True):  # one component each: the other coordinates may follow
                 v = d.values[k]
-                step_changes[d.address] = math.radians(v) if d.angle else v
+                step_changes[d.address] = v * f if d.angle else v
             prop, note = _solve_step(engine, good, step_changes, free, tol, max_iter, continuation)
             r = prop.result
             row: dict[str, Any] = dict.fromkeys(columns, float("nan"))
@@ -393,10 +446,12 @@ def sweep(
                     if col in drive_cols:
                         continue  # the driven value exactly as given (not degrees -> radians -> degrees)
                     val = float(np.atleast_1d(good.coordinates[joint])[idx])
-                    row[col] = math.degrees(val) if deg else val
+                    row[col] = val * to_model[col] if deg else val
                 try:
                     values = fout(good)
-                    row.update(zip(expanded, (float(values[i]) for i in keep), strict=True))
+                    row.update(
+                        zip(expanded, (float(values[i]) * s for i, s in zip(keep, out_scale, strict=True)), strict=True)
+                    )
                 except Exception as exc:  # an output that cannot be evaluated here
                     row["message"] = f"{r.message}; outputs: {exc}"
             rows.append(row)
@@ -411,6 +466,10 @@ def sweep(
     frame.attrs["units"] = dict(model.units)
     frame.attrs["drives"] = drive_cols
     frame.attrs["angle_columns"] = [c for c, _, _, deg in coord_cols if deg]
+    #: the unit of every quantity column (docs/units.md), as the CSV header states it
+    frame.attrs["column_units"] = {
+        c: u for c in columns if c not in (*META, "message") and (u := unit_of(model, c, engine))
+    }
     return SweepResult(frame, dr, expanded, good)
 
 
@@ -428,11 +487,11 @@ def _solve_step(
     names the constraints in conflict. Returns the propagation and a note (or ``""``)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SingularityWarning)
-        prop = propagate(good, changes, free, tol=tol, max_iter=max_iter, engine=engine)
+        prop = propagate(good, changes, free, tol=tol, max_iter=max_iter, engine=engine, units="solver")
     if prop.converged or not diagnose:
         return prop, "; ".join(prop.notes)
     cont = propagate_continuation(
-        good, changes, free, tol=tol, max_iter=min(max_iter, 20), min_step=1e-4, engine=engine
+        good, changes, free, tol=tol, max_iter=min(max_iter, 20), min_step=1e-4, engine=engine, units="solver"
     )
     if cont.converged:
         return cont.propagation, f"continuation: {cont.message}"

@@ -37,6 +37,7 @@ import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
+from html import escape
 from typing import Any
 
 import numpy as np
@@ -53,6 +54,7 @@ from kinprop.propagation.point_jacobians import PointJacobians, PointSpec
 from kinprop.propagation.poses import joint_values
 from kinprop.propagation.propagate import Propagation, engine_for, propagation_of
 from kinprop.propagation.targets import Configuration, Row, TargetResult, output_jacobian, solve_targets
+from kinprop.propagation.units import changes_to_internal, check_units
 from kinprop.spatial import Array
 
 LENGTHS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "inch": 0.0254}
@@ -413,6 +415,26 @@ class TargetPropagation:
     def design_change(self) -> dict[str, Array]:
         return self.result.design_change
 
+    def __repr__(self) -> str:
+        """One line per target (wanted, achieved, unit), not the configurations' arrays."""
+        changed = ", ".join(self.design_change) or "nothing"
+        lines = [f"<TargetPropagation of {self.model.mechanism.name!r}: {self.status}; {len(self.specs)} targets, "
+                 f"{len(self.configuration_names)} configurations, changed {changed}>"]  # fmt: skip
+        for row in self.table()[:8]:
+            lines.append(f"  {row['target']}: wanted {row['value']:.6g}, achieved {row['achieved']:.6g} {row['unit']}")
+        return "\n".join(line.rstrip() for line in lines)
+
+    def _repr_html_(self) -> str:
+        head = "".join(f"<th>{h}</th>" for h in ("target", "unit", "wanted", "before", "achieved", "residual"))
+        body = "".join(
+            f"<tr><td>{escape(r['target'])}</td><td>{escape(r['unit'])}</td>"
+            + "".join(f"<td>{r[k]:.6g}</td>" for k in ("value", "before", "achieved", "residual"))
+            + "</tr>"
+            for r in self.table()
+        )
+        return (f"<p><b>TargetPropagation</b> of {escape(self.model.mechanism.name)}: {escape(self.status)}</p>"
+                f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")  # fmt: skip
+
     def joint_positions(self, k: int = 0) -> dict[str, tuple[Array, Array]]:
         """Global joint origins ``J.i``/``J.j`` -> (before, after) in configuration ``k``
         (both designs solved there: where the joints actually sit, model length unit)."""
@@ -449,18 +471,22 @@ def propagate_targets(
     target_tol: float = 1e-6,
     max_iter: int = 60,
     analytic: bool = True,
+    units: str = "model",
 ) -> TargetPropagation:
     """Find the minimum-(weighted-)norm change of the ``free`` design variables that meets the
     ``targets`` (specs, module docstring) with every configuration assembled.
 
-    ``changes`` (addresses, global hardpoints too) are applied first, at the model's assembly.
+    ``changes`` (addresses, global hardpoints too) are applied first, at the model's assembly;
+    they are in the model's units (``units="model"``, degrees in a degree model) or in solver
+    units (``units="solver"``: radians). Target values carry their own unit (module docstring).
     ``weights``: ``{address or group: w}``, a larger weight lets a variable move more.
     ``analytic``: analytic output Jacobians where available (False: central differences of the
     output map for every output; :mod:`kinprop.propagation.targets`).
     """
     eng = engine_for(model, engine)
     start = eng.state_of(model)
-    st, _, _ = eng.apply(start, resolve_changes(eng, start, changes or {}))
+    changes = changes_to_internal(model, changes or {}, eng) if check_units(units) else dict(changes or {})
+    st, _, _ = eng.apply(start, resolve_changes(eng, start, changes))
     specs = tuple(t if isinstance(t, TargetSpec) else parse_target(model, t) for t in targets)
     if not specs:
         raise AddressError("no targets given")

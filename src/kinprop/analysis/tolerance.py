@@ -12,28 +12,38 @@ Outputs are coordinates (``J32.q[1]``, ``rocker.q``: rows of ``S`` directly) or 
 are differentiated along the linearised solution ``x(p + h e_k) = x + h S e_k`` by central
 differences (O(h^2), h = 1e-4 sigma), which keeps them on the same first-order model.
 :func:`monte_carlo` samples the same tolerances (normal) through a design study.
+
+Units (docs/units.md): with ``units="model"`` (the default) sigmas are given and every result
+(nominal, std, covariance, gain, sigma) is returned in the model's declared units (a sigma of
+``LCA.q`` in degrees in a degree model; camber in the model's angle unit); ``units="solver"``:
+sigmas and coordinates in radians, metric angles in degrees, as computed.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
 from kinprop.analysis.sensitivity import design_sensitivity
 from kinprop.analysis.study import run_study
+from kinprop.analysis.units import derivative_scale, unit_of
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.kinematics.layout import column_labels
 from kinprop.model import Model
 from kinprop.model.design import parse_address
+from kinprop.propagation.units import check_units, to_solver_units
 from kinprop.spatial import Array
 
 
 @dataclass(frozen=True)
 class ToleranceResult:
+    """Linearised output statistics; values in ``units`` ("model" or "solver", module docstring),
+    ``output_units``/``input_units`` name each one's unit in the model's units."""
+
     outputs: list[str]
     nominal: Array  # (n_out,)
     std: Array  # (n_out,)
@@ -41,6 +51,38 @@ class ToleranceResult:
     gain: Array  # (n_out, n_in): d output / d input
     inputs: list[str]  # scalar input labels (layout column labels)
     sigma: Array  # (n_in,)
+    units: str = "solver"
+    output_units: tuple[str, ...] = ()
+    input_units: tuple[str, ...] = ()
+
+    def __repr__(self) -> str:
+        rows = [
+            f"  {o}: {n + 0.0:.6g} +- {s:.4g} {u}".rstrip()
+            for o, n, s, u in zip(self.outputs, self.nominal, self.std, self.output_units or [""] * len(self.outputs),
+                                  strict=True)
+        ][:8]  # fmt: skip
+        more = [f"  ... and {len(self.outputs) - 8} more outputs"] if len(self.outputs) > 8 else []
+        head = f"<ToleranceResult: {len(self.outputs)} outputs from {len(self.inputs)} tolerances; {self.units} units>"
+        return "\n".join([head, *rows, *more])
+
+
+def _in_model_units(model: Model, res: ToleranceResult) -> ToleranceResult:
+    eng = compile_engine(model.mechanism)
+    so = np.array([derivative_scale(model, n, eng) for n in res.outputs])
+    si = np.array([derivative_scale(model, n, eng) for n in res.inputs])
+    return replace(
+        res,
+        nominal=res.nominal * so,
+        std=res.std * so,
+        covariance=res.covariance * np.outer(so, so),
+        gain=res.gain * so[:, None] / si[None, :] if res.gain.size else res.gain,
+        sigma=res.sigma * si,
+        units="model",
+    )
+
+
+def _sigmas_to_solver(model: Model, tolerances: Mapping[str, float]) -> dict[str, float]:
+    return {a: float(np.asarray(to_solver_units(model, a, s)).reshape(-1)[0]) for a, s in tolerances.items()}
 
 
 def _inputs(model: Model, tolerances: Mapping[str, float]) -> tuple[list[int], Array]:
@@ -90,18 +132,24 @@ def tolerance_analysis(
     outputs: Sequence[str],
     free: Sequence[str] = ("q",),
     fixed: Sequence[str] = (),
+    *,
+    units: str = "model",
 ) -> ToleranceResult:
     """Linearised standard deviations and covariance of ``outputs`` at the model's (assembled) state.
 
     ``tolerances``: address -> standard deviation; ``free``: what absorbs the variations
-    (as in a propagation); ``fixed``: addresses that are never free (e.g. set drives).
+    (as in a propagation); ``fixed``: addresses that are never free (e.g. set drives);
+    ``units``: the units of sigmas and results (module docstring).
     """
+    model_units = check_units(units)
+    if model_units:
+        tolerances = _sigmas_to_solver(model, tolerances)
     asm = compile_engine(model.mechanism)
     layout = asm.layout
     labels = column_labels(layout)
     pcols, sigma = _inputs(model, tolerances)
     wrt = [labels[c] for c in pcols]
-    sens = design_sensitivity(model, wrt, free=[*free], engine=asm)
+    sens = design_sensitivity(model, wrt, free=[*free], engine=asm, units="solver")
     # design_sensitivity frees everything in `free` except the wrt keys; drop `fixed` addresses too
     fixed_cols = set(layout.columns(list(fixed)).tolist()) if fixed else set()
     if fixed_cols & set(sens.free_columns.tolist()):
@@ -138,7 +186,9 @@ def tolerance_analysis(
                 vals.append(_output_value(moved, name, labels))
             G[i, k] = (vals[0] - vals[1]) / (2 * h)
     cov = G @ np.diag(sigma**2) @ G.T
-    return ToleranceResult(names, nominal, np.sqrt(np.diag(cov)), cov, G, wrt, sigma)
+    out_units, in_units = tuple(unit_of(model, n, asm) for n in names), tuple(unit_of(model, n, asm) for n in wrt)
+    res = ToleranceResult(names, nominal, np.sqrt(np.diag(cov)), cov, G, wrt, sigma, "solver", out_units, in_units)
+    return _in_model_units(model, res) if model_units else res
 
 
 def monte_carlo(
@@ -149,10 +199,17 @@ def monte_carlo(
     seed: int = 0,
     free: Sequence[str] = ("q",),
     fixed: Sequence[str] = (),
+    *,
+    units: str = "model",
 ) -> Array:
     """Sample standard deviations of ``outputs`` over ``n`` normal draws of the tolerances
-    (a design study with an explicit plan; failed variants are dropped)."""
-    layout = compile_engine(model.mechanism).layout
+    (a design study with an explicit plan; failed variants are dropped); sigmas and results in
+    ``units`` as in :func:`tolerance_analysis`."""
+    model_units = check_units(units)
+    if model_units:
+        tolerances = _sigmas_to_solver(model, tolerances)
+    layout_engine = compile_engine(model.mechanism)
+    layout = layout_engine.layout
     labels = column_labels(layout)
     pcols, sigma = _inputs(model, tolerances)
     addrs = [labels[c] for c in pcols]
@@ -167,9 +224,10 @@ def monte_carlo(
         if addr.field == "q":
             q = np.asarray(model.coordinates[addr.joint], dtype=float)
             sets[a] = q if addr.index is None else q[addr.index]
-    df = run_study(model, plan=plan, addresses=addrs, free=free, outputs=extra or [], sets=sets or None)
+    df = run_study(model, plan=plan, addresses=addrs, free=free, outputs=extra or [], sets=sets or None, units="solver")
     ok = df[df["converged"]]
-    return np.array([ok[x].std(ddof=1) for x in names])
+    std = np.array([ok[x].std(ddof=1) for x in names])
+    return std * np.array([derivative_scale(model, x, layout_engine) for x in names]) if model_units else std
 
 
 __all__ = ["ToleranceResult", "expand_names", "monte_carlo", "tolerance_analysis"]

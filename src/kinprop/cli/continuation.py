@@ -96,12 +96,14 @@ def solve_propagation(
     """
     plain: Propagation | None = None
     if continuation is not True:
-        plain = propagate(model, changes, free, tol=tol, max_iter=max_iter, weights=weights)
+        plain = propagate(model, changes, free, tol=tol, max_iter=max_iter, weights=weights, units="solver")
         if plain.converged or continuation is False or not changes:
             return plain, None, True
         if on_fallback is not None:
             on_fallback(plain)
-    res = propagate_continuation(model, changes, free, tol=tol, max_iter=min(max_iter, 20), weights=weights)
+    res = propagate_continuation(
+        model, changes, free, tol=tol, max_iter=min(max_iter, 20), weights=weights, units="solver"
+    )
     if res.converged:
         return res.propagation, res, plain is not None
     return (plain if plain is not None else res.propagation), res, plain is not None

@@ -70,9 +70,9 @@ def _solver_matrix(
 ) -> tuple[np.ndarray, list[str], list[str]]:
     if of:
         with shown_warnings():
-            matrix, rows, columns, _ = output_sensitivity_matrix(assembled, of, wrt, free, weights)
+            matrix, rows, columns, _ = output_sensitivity_matrix(assembled, of, wrt, free, weights, units="solver")
         return np.asarray(matrix), list(rows), list(columns)
-    sens = design_sensitivity(assembled, wrt, free, weights)
+    sens = design_sensitivity(assembled, wrt, free, weights, units="solver")
     return np.asarray(sens.matrix), list(sens.rows), list(sens.columns)
 
 

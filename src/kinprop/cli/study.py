@@ -34,7 +34,6 @@ from kinprop.cli.checks import (
     parse_assignments,
 )
 from kinprop.errors import AddressError
-from kinprop.io.units import derivative_scale, to_solver_units, unit_of
 
 Free = Annotated[
     list[str] | None,
@@ -52,24 +51,6 @@ def _to_internal(model, changes: dict[str, np.ndarray]) -> dict[str, np.ndarray]
     except ImportError:  # pragma: no cover
         return changes
     return changes_to_internal(model, changes)
-
-
-def _model_unit_scale(model, factors) -> dict[str, float]:
-    """Column -> factor from radians to the model's angle unit, for the varied addresses and the
-    coordinate columns, so a study's inputs and outputs are in the model's units."""
-    from kinprop.engine import compile as compile_engine
-    from kinprop.kinematics.layout import column_labels
-
-    layout = compile_engine(model.mechanism).layout
-    labels = [f.address for f in factors] + [
-        lab for lab, col in zip(column_labels(layout), range(layout.n), strict=True) if _is_q(layout, col)
-    ]
-    scale = {lab: derivative_scale(model, lab) for lab in labels}
-    return {k: v for k, v in scale.items() if v != 1.0}
-
-
-def _is_q(layout, col: int) -> bool:
-    return any(v.group == "q" and v.start <= col < v.start + v.size for v in layout.variables)
 
 
 @app.command(name="study")
@@ -117,7 +98,7 @@ def study_cmd(
     require("pyarrow")
     if scheduler is not None:
         require("distributed")
-    from kinprop.analysis.study import parse_vary, run_study, sample_plan
+    from kinprop.analysis.study import model_unit_scale, parse_vary, run_study, sample_plan
     from kinprop.engine import compile as compile_engine
     from kinprop.propagation.hardpoints import global_plan, is_global, resolve_changes
 
@@ -146,7 +127,7 @@ def study_cmd(
             m, factors, method=method, samples=samples, seed=seed, free=tuple(free or ["q"]), sets=sets,
             outputs=out_names, tol=tol, max_iter=max_iter, chunk_size=chunk_size, output=output, resume=resume,
             scheduler=scheduler, progress=not as_json, plan=plan, addresses=addresses, engine=engine,
-            scale=_model_unit_scale(m, factors),
+            scale=model_unit_scale(m, [f.address for f in factors], out_names), units="solver",
         )  # fmt: skip
         if plan is not None:  # the global factor values beside the s' columns they set
             for k, f in enumerate(factors):
@@ -214,26 +195,22 @@ def tolerance_cmd(
         tols[addr] = float(vals[0])
     m = load_model_cli(model)
     sets = _to_internal(m, given)
-    tols = {a: float(to_solver_units(m, a, v)) for a, v in tols.items()}  # sigmas in the model's units
     freeset = tuple(free or ["q"])
     if sets:
-        prop = propagate(m, sets, freeset)
+        prop = propagate(m, sets, freeset, units="solver")
         if not prop.converged:
             err.print(f"the model does not assemble with --set: {prop.result.message}")
             raise typer.Exit(EXIT_NOT_CONVERGED)
         m = prop.after
+    # sigmas as given and everything reported in the model's units (docs/units.md)
     res = tolerance_analysis(m, tols, of, free=freeset, fixed=tuple(sets))
     mc_std = monte_carlo(m, tols, res.outputs, n=mc, seed=seed, free=freeset, fixed=tuple(sets)) if mc else None
-    # everything reported in the model's units (docs/units.md)
-    so = np.array([derivative_scale(m, name) for name in res.outputs])
-    si = np.array([derivative_scale(m, name) for name in res.inputs])
-    nominal, std, cov, sigma = res.nominal * so, res.std * so, res.covariance * np.outer(so, so), res.sigma * si
-    mc_std = None if mc_std is None else mc_std * so
-    units = [unit_of(m, name) for name in res.outputs]
+    nominal, std, cov, sigma = res.nominal, res.std, res.covariance, res.sigma
+    units = list(res.output_units)
     if as_json:
         obj = {"outputs": res.outputs, "nominal": nominal.tolist(), "std": std.tolist(),
                "covariance": cov.tolist(), "inputs": res.inputs, "sigma": sigma.tolist(),
-               "units": {"outputs": units, "inputs": [unit_of(m, name) for name in res.inputs],
+               "units": {"outputs": units, "inputs": list(res.input_units),
                          "length": m.units.get("length"), "angle": m.units.get("angle")}}  # fmt: skip
         if mc_std is not None:
             obj["mc_std"] = mc_std.tolist()

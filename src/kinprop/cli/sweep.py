@@ -274,6 +274,7 @@ def sweep_cmd(
                 output=output,
                 on_step=on_step,
                 continuation=continuation,
+                units="solver",  # changes converted above
             )
         except (KeyboardInterrupt, SystemError) as exc:
             if not is_interrupt(exc):

@@ -83,7 +83,7 @@ def run_targets(
     if not free or all(f == "q" for f in free):
         raise ValueError("--target needs --free design variables (e.g. --free hardpoint:UBJ --free TR.s_i)")
     tp = propagate_targets(model, targets, [f for f in free if f != "q"], changes=changes, weights=weights,
-                           max_iter=max_iter)  # fmt: skip
+                           max_iter=max_iter, units="solver")  # fmt: skip
     r = tp.result
     for dest, write in [(output, lambda p, where: dump_model(p.after, where)), *writers]:
         if dest is None:

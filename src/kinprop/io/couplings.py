@@ -17,7 +17,6 @@ angle in a degree model, else 1 (:func:`coef_factors`).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -25,26 +24,9 @@ import numpy as np
 
 from kinprop.constraints.coupling import N_COEF
 from kinprop.errors import Problem
-from kinprop.joints import joint_type
 from kinprop.model import Coupling, Joint, Model
+from kinprop.propagation.units import coef_factors
 from kinprop.spatial import Array
-
-
-def _angle_factor(joint: Joint | None, deg: bool) -> float:
-    """Radians per file unit of a single-coordinate joint's coordinate."""
-    if joint is None or not deg:
-        return 1.0
-    try:
-        return math.pi / 180.0 if joint_type(joint.type).angle_indices else 1.0
-    except KeyError:
-        return 1.0
-
-
-def coef_factors(joint_a: Joint | None, joint_b: Joint | None, deg: bool) -> tuple[Array, float, float]:
-    """``(F, f_a, f_b)``: solver value = file value times ``F[k]`` for ``c_k`` (``f_a / f_b^k``),
-    ``f_a`` for ``q_a0``, ``f_b`` for ``q_b0``."""
-    fa, fb = _angle_factor(joint_a, deg), _angle_factor(joint_b, deg)
-    return np.array([fa / fb**k for k in range(N_COEF)]), fa, fb
 
 
 def build_couplings(

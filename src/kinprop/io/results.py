@@ -7,10 +7,9 @@ from typing import Any
 import numpy as np
 
 from kinprop.analysis.points import joint_hardpoints, named_points
-from kinprop.engine import compile as compile_engine
 from kinprop.io.units import from_solver_units, unit_of
 from kinprop.propagation.propagate import Propagation
-from kinprop.spatial import log_so3
+from kinprop.propagation.summary import summary_html, summary_text, variable_rows
 
 
 def _num(v: np.ndarray) -> float | list[float]:
@@ -67,7 +66,7 @@ def propagation_json(prop: Propagation) -> dict[str, Any]:
         "fraction": r.fraction,
         "rank": r.rank,
         "free": list(prop.free),
-        "changes": {k: _num(from_solver_units(prop.before, k, v)) for k, v in prop.changes.items()},
+        "changes": {k: _num(v) for k, v in prop.changes.items()},
         "changed": prop.changed_variables(),
         "hardpoints": joint_hardpoints(prop.after),
         "points": named_points(prop.after),
@@ -83,42 +82,9 @@ def bodies_json(prop: Propagation) -> dict[str, dict[str, Any]]:
 
 
 def joint_values_json(prop: Propagation) -> dict[str, dict[str, Any]]:
-    """Every joint's relative value, cut joints included (radians, model length unit)."""
+    """Every joint's relative value, cut joints included, in the model's units (angles in the
+    angle unit; :attr:`Propagation.joint_values`)."""
     return {j: {k: _num(v) for k, v in vals.items()} for j, vals in prop.joint_values.items()}
-
-
-def variable_rows(prop: Propagation) -> list[dict[str, Any]]:
-    """One row per variable: before and after values, their unit, role, max change.
-
-    Values in the model's units (docs/units.md); ``C`` variables report the rotation angle of
-    after relative to before, in the model's angle unit.
-    """
-    asm = prop.engine or compile_engine(prop.before.mechanism)
-    layout = asm.layout
-    st_before, st_after = asm.state_of(prop.before), asm.state_of(prop.after)
-    changed = set(prop.changed_variables())
-    set_keys = {k.split("[")[0] for k in prop.changes}
-    model = prop.before
-    angle = model.units.get("angle", "rad")
-    rows: list[dict[str, Any]] = []
-    for v in layout.variables:
-        role = "set" if v.key in set_keys else ("moved" if v.key in changed else "")
-        if v.group == "C":
-            Cb, Ca = prop.before.design[v.key], prop.after.design[v.key]
-            ang = 0.0 if np.array_equal(Ca, Cb) else float(np.linalg.norm(log_so3(Ca @ Cb.T)))
-            ang = float(np.degrees(ang)) if angle == "deg" else ang
-            rows.append(
-                {"variable": v.key, "unit": angle, "before": [0.0], "after": [ang], "change": ang, "role": role}
-            )
-            continue
-        b = from_solver_units(model, v.key, asm.get(st_before, v.key))
-        a = from_solver_units(model, v.key, asm.get(st_after, v.key))
-        unit = unit_of(model, v.key)
-        change = float(np.max(np.abs(a - b))) if a.size else 0.0
-        rows.append(
-            {"variable": v.key, "unit": unit, "before": b.tolist(), "after": a.tolist(), "change": change, "role": role}
-        )
-    return rows
 
 
 def comparison_rows(prop: Propagation) -> list[dict[str, Any]]:
@@ -158,53 +124,16 @@ def point_rows(prop: Propagation) -> list[dict[str, Any]]:
     return out
 
 
-#: moved variables listed by a summary before it says "... and N more"
-SUMMARY_ROWS = 8
-
-
-def _short(values: list[float]) -> str:
-    text = ", ".join(f"{x:.6g}" for x in values)
-    return text if len(values) == 1 else f"[{text}]"
-
-
-def summary_text(prop: Propagation) -> str:
-    """A compact ``repr`` of a propagation for a notebook or a REPL (a few lines, not a dump):
-    status, iterations, ``||Phi||``, the changes and the variables that moved most."""
-    r = prop.result
-    name = prop.before.mechanism.name
-    rows = [row for row in variable_rows(prop) if row["role"]]
-    rows.sort(key=lambda row: (row["role"] != "set", -row["change"]))
-    lines = [
-        f"<Propagation of {name!r}: {r.status} in {r.iterations} iterations, ||Phi|| = {r.residual_norm:.3g};"
-        f" free: {' '.join(prop.free)}>"
-    ]
-    for row in rows[:SUMMARY_ROWS]:
-        unit = f" {row['unit']}" if row["unit"] else ""
-        lines.append(f"  {row['role']:>5} {row['variable']}: {_short(row['before'])} -> {_short(row['after'])}{unit}")
-    if len(rows) > SUMMARY_ROWS:
-        lines.append(f"  ... and {len(rows) - SUMMARY_ROWS} more moved variables (prop.changed_variables())")
-    return "\n".join(lines)
-
-
-def summary_html(prop: Propagation) -> str:
-    """``_repr_html_`` of a propagation: the status line and a before/after table of the set
-    and moved variables (every one; values escaped)."""
-    from html import escape
-
-    r = prop.result
-    head = (
-        f"<p><b>Propagation</b> of {escape(prop.before.mechanism.name)}: {escape(r.status)} in {r.iterations} "
-        f"iterations, ||Phi|| = {r.residual_norm:.3g}; free: {escape(' '.join(prop.free))}</p>"
-    )
-    cells = "".join(
-        "<tr>"
-        + "".join(
-            f"<td>{escape(str(x))}</td>"
-            for x in (row["role"], row["variable"], row["unit"], _short(row["before"]), _short(row["after"]))
-        )
-        + f"<td>{row['change']:.3g}</td></tr>"
-        for row in variable_rows(prop)
-        if row["role"]
-    )
-    header = "".join(f"<th>{h}</th>" for h in ("role", "variable", "unit", "before", "after", "max |change|"))
-    return f"{head}<table><thead><tr>{header}</tr></thead><tbody>{cells}</tbody></table>"
+__all__ = [
+    "bodies_json",
+    "comparison_rows",
+    "coordinates_json",
+    "design_json",
+    "joint_values_json",
+    "point_rows",
+    "propagation_json",
+    "summary_html",
+    "summary_text",
+    "units_json",
+    "variable_rows",
+]

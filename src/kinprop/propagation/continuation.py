@@ -40,6 +40,7 @@ from kinprop.model.model import Model
 from kinprop.propagation.conditioning import scaled_jacobian
 from kinprop.propagation.propagate import Propagation, apply_changes, engine_for, propagate
 from kinprop.propagation.sensitivity import design_sensitivity
+from kinprop.propagation.units import changes_to_internal, check_units
 from kinprop.solver.newton import RANK_RTOL
 from kinprop.spatial import Array, exp_so3, log_so3
 
@@ -98,6 +99,18 @@ class ContinuationResult:
     def conflict_joints(self) -> list[str]:
         """Joints owning the conflicting rows, most involved first."""
         return list(dict.fromkeys(r.split(":", 1)[0] for r, _ in self.conflict + self.residual_rows))
+
+    def __repr__(self) -> str:
+        """The outcome in one line, then the propagation's summary (model units)."""
+        n_ok = sum(s.accepted for s in self.steps)
+        head = (f"<ContinuationResult {self.status}: fraction {self.fraction:.6g}, {n_ok} accepted of "
+                f"{len(self.steps)} sub-steps>")  # fmt: skip
+        return f"{head}\n{self.propagation!r}"
+
+    def _repr_html_(self) -> str:
+        return f"<p><b>ContinuationResult</b> {self.status}: fraction {self.fraction:.6g}</p>" + (
+            self.propagation._repr_html_()
+        )
 
     def raise_for_status(self) -> ContinuationResult:
         if not self.converged:
@@ -164,7 +177,7 @@ def _distance(layout, free_keys: list[str], m1: Model, m2: Model) -> float:
 def _quiet_propagate(model: Model, changes, free, **kw) -> Propagation:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SingularityWarning)
-        return propagate(model, changes, free, **kw)
+        return propagate(model, changes, free, units="solver", **kw)
 
 
 def _conflict(
@@ -212,15 +225,18 @@ def propagate_continuation(
     easy_iterations: int = 3,
     top: int = 6,
     engine: Engine | None = None,
+    units: str = "model",
 ) -> ContinuationResult:
     """Apply a (large) design change by predictor-corrector continuation on one branch.
 
-    ``changes`` and ``free`` as in :func:`kinprop.propagation.propagate`; ``max_iter`` is
+    ``changes``, ``free`` and ``units`` as in :func:`kinprop.propagation.propagate`; ``max_iter`` is
     per corrector. The model is first assembled with ``free`` if it is not already
     (``||Phi|| >= tol``): the branch followed is the one of that assembly. Sub-steps are
     fractions of the change, between ``min_step`` and 1; ``max_steps`` bounds the attempts.
     """
     engine = engine_for(model, engine)
+    if check_units(units):
+        changes = changes_to_internal(model, changes, engine)
     path = _build_path(engine, model, changes)
     layout = engine.layout
     keys = list(path.start)
@@ -262,7 +278,7 @@ def propagate_continuation(
         for k in keys:
             v = layout[k]
             dx[v.columns] = _delta(v.group, p_old[k], p_new[k])
-        sens = design_sensitivity(current, keys, free, weights, engine=engine)
+        sens = design_sensitivity(current, keys, free, weights, engine=engine, units="solver")
         dx[sens.free_columns] = sens.matrix @ dx[sens.wrt_columns]
         pred_norm = float(np.linalg.norm(dx[sens.free_columns]))
         if np.all(np.isfinite(dx)):

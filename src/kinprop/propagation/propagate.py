@@ -3,6 +3,13 @@
 A propagation starts from the model's state exactly as it is; only the changed variables are
 overwritten, and they are never free (PAPER-NOTES 7). It runs on the compiled engine
 (:func:`kinprop.compile`); pass ``engine=`` to reuse one across calls.
+
+Units (docs/units.md): :func:`propagate` and :func:`assemble` take changes in the model's
+declared units (``units="model"``, the default: degrees in a degree model) or in solver units
+(``units="solver"``: the model's length unit and radians). A :class:`Propagation` reports
+``changes``, ``coordinates`` and ``joint_values`` in the model's units; the raw solver arrays are
+``solver_changes``, ``solver_joint_values`` and the models ``before``/``after`` themselves (a
+:class:`~kinprop.model.Model` stores solver units).
 """
 
 from __future__ import annotations
@@ -20,6 +27,14 @@ from kinprop.model.model import Model
 from kinprop.propagation.conditioning import SINGULAR_RTOL, conditioning
 from kinprop.propagation.hardpoints import free_addresses, free_weights, resolve_changes
 from kinprop.propagation.poses import body_poses, joint_values
+from kinprop.propagation.summary import summary_html, summary_text
+from kinprop.propagation.units import (
+    changes_to_internal,
+    changes_to_model_units,
+    check_units,
+    from_solver_units,
+    joint_values_to_model_units,
+)
 from kinprop.solver.newton import RANK_RTOL
 from kinprop.solver.result import SolveResult, rank_of
 from kinprop.spatial import Array
@@ -50,12 +65,17 @@ def engine_for(model: Model, engine: Engine | None = None) -> Engine:
 
 @dataclass(frozen=True)
 class Propagation:
-    """Before and after of one re-assembly, with the solver's result."""
+    """Before and after of one re-assembly, with the solver's result.
+
+    ``changes``, ``coordinates`` and ``joint_values`` are in the model's declared units
+    (``units``); ``solver_changes``, ``solver_joint_values`` and ``before``/``after`` (models
+    store solver units) are in solver units: the model's length unit and radians."""
 
     before: Model
     after: Model
     result: SolveResult
-    changes: Mapping[str, Array]
+    #: the values set, by address, in solver units (radians); ``changes``: the model's units
+    solver_changes: Mapping[str, Array]
     free: tuple[str, ...]
     #: unit-independent s_r / s_1 of the free-variable Jacobian at the solution (NaN if not converged)
     singularity_ratio: float = float("nan")
@@ -81,11 +101,37 @@ class Propagation:
         return body_poses(eng, eng.state_of(self.after))
 
     @cached_property
-    def joint_values(self) -> dict[str, dict[str, float | Array]]:
+    def _engine(self) -> Engine:
+        return engine_for(self.before, self.engine)
+
+    @property
+    def units(self) -> dict[str, str]:
+        """The model's declared units, the units of ``changes``, ``coordinates`` and ``joint_values``."""
+        return {"length": self.before.units.get("length", "m"), "angle": self.before.units.get("angle", "rad")}
+
+    @cached_property
+    def changes(self) -> dict[str, Array]:
+        """The values set, by address, in the model's units (degrees in a degree model)."""
+        return changes_to_model_units(self.before, self.solver_changes, self._engine)
+
+    @cached_property
+    def coordinates(self) -> dict[str, Array]:
+        """Every joint's coordinates after the propagation, in the model's units."""
+        eng = self._engine
+        return {j: from_solver_units(self.after, f"{j}.q", q, eng) for j, q in self.after.coordinates.items()}
+
+    @cached_property
+    def solver_joint_values(self) -> dict[str, dict[str, float | Array]]:
         """Every joint's relative value after the propagation, cut joints included
-        (:mod:`kinprop.propagation.poses`; radians, model length unit)."""
+        (:mod:`kinprop.propagation.poses`), in solver units: radians, the model's length unit."""
         eng = engine_for(self.after, self.engine)
         return joint_values(eng, eng.state_of(self.after))
+
+    @cached_property
+    def joint_values(self) -> dict[str, dict[str, float | Array]]:
+        """:attr:`solver_joint_values` in the model's units (angles, rotation vectors in
+        ``units["angle"]``; Euler parameters have no unit)."""
+        return joint_values_to_model_units(self.after, self.solver_joint_values)
 
     def changed_variables(self, atol: float = 0.0) -> list[str]:
         """Layout keys whose value differs between before and after."""
@@ -94,8 +140,11 @@ class Propagation:
         return [v.key for v in eng.layout.variables if np.max(np.abs(eng.get(a, v.key) - eng.get(b, v.key))) > atol]
 
     def __repr__(self) -> str:
-        return (f"<Propagation {self.result.status}: {self.result.iterations} iterations, "
-                f"||Phi|| = {self.result.residual_norm:.3g}, free {list(self.free)}>")  # fmt: skip
+        """A compact summary (status, the set and most-moved variables, model units)."""
+        return summary_text(self)
+
+    def _repr_html_(self) -> str:
+        return summary_html(self)
 
 
 def result_of(engine: Engine, sol: Solution) -> tuple[SolveResult, float]:
@@ -141,9 +190,10 @@ def propagate(
     weights: Mapping[str, float] | None = None,
     engine: Engine | None = None,
     branch: bool = True,
+    units: str = "model",
 ) -> Propagation:
-    """Apply ``changes`` (address -> value, solver units: radians) and re-assemble, moving only
-    ``free`` variables, on the start's assembly branch (``branch=False``: the paper's plain
+    """Apply ``changes`` (address -> value, in the model's units; ``units="solver"``: radians)
+    and re-assemble, moving only ``free`` variables, on the start's assembly branch (``branch=False``: the paper's plain
     Newton, which may land on another branch; docs/analysis/continuation.md).
 
     ``free`` holds groups (``q``, ``s``, ``C``, ``l``) and/or addresses (``J.s_i``, ``J.q``,
@@ -155,7 +205,8 @@ def propagate(
     """
     eng = engine_for(model, engine)
     start = eng.reference if eng.model is model else eng.state_of(model)
-    changes = resolve_changes(eng, start, changes or {})
+    changes = changes_to_internal(model, changes or {}, eng) if check_units(units) else dict(changes or {})
+    changes = resolve_changes(eng, start, changes)
     sol = eng.propagate(
         changes,
         free_addresses(eng, free),
@@ -178,8 +229,9 @@ def assemble(
     branch: bool = True,
 ) -> Propagation:
     """Solve for an assembled configuration from the model's estimates (no design change): a
-    Newton homotopy from the estimates, so the assembly found is the one they point at."""
-    return propagate(model, {}, free, tol=tol, max_iter=max_iter, engine=engine, branch=branch)
+    Newton homotopy from the estimates, so the assembly found is the one they point at. It takes
+    no values; the result reports model units like :func:`propagate`'s."""
+    return propagate(model, {}, free, tol=tol, max_iter=max_iter, engine=engine, branch=branch, units="solver")
 
 
 def roundoff_floor(model: Model, engine: Engine | None = None) -> float:

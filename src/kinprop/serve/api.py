@@ -263,7 +263,7 @@ def create_app(model: Model, label: str | None = None, *, assemble_first: bool =
         kw = {"free": tuple(req.free), "outputs": req.out, "tol": req.tol, "max_iter": req.max_iter}
         (res, base), _ = _caught(
             lambda: (
-                sweep(m, drives, changes=changes, continuation=req.continuation, **kw),
+                sweep(m, drives, changes=changes, continuation=req.continuation, units="solver", **kw),
                 sweep(m, drives, continuation=req.continuation, **kw) if req.baseline else None,
             )
         )

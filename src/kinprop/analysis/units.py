@@ -1,0 +1,54 @@
+"""Units of analysis outputs: suspension metrics beside addresses (docs/units.md).
+
+Addresses (coordinates, design variables, points) are converted by
+:mod:`kinprop.propagation.units`; this module adds the metric names (``metric:W.camber``,
+``camber``), which are computed in degrees and reported in the model's angle unit. The public
+door is :mod:`kinprop.io.units`.
+"""
+
+from __future__ import annotations
+
+import math
+
+from kinprop.analysis.metrics import METRIC_ALIASES, METRICS, metric_unit
+from kinprop.engine import Engine
+from kinprop.model import Model
+from kinprop.propagation.units import address_scale, address_unit
+
+
+def is_metric(name: str) -> bool:
+    """A metric name (``metric:W.camber``, ``camber``) rather than an address or a point."""
+    return name.startswith("metric:") or ("." not in name and not name.startswith(("point:", "hardpoint:")))
+
+
+def unit_of(model: Model, name: str, engine: Engine | None = None) -> str:
+    """The unit, in the model's units, of an address, a column label or an output name:
+    ``J01.q`` -> ``deg`` (a revolute in a degree model), ``J03.q`` -> ``m`` (a slide),
+    ``J12.s_j[0]``, ``J12.length``, ``point:...``, ``hardpoint:...`` -> the length unit,
+    ``J.C_i`` -> ``""`` (a rotation matrix), Euler parameters -> ``""``, ``metric:W.camber`` ->
+    the angle unit."""
+    if is_metric(name):
+        short = name.split(".")[-1]
+        if METRIC_ALIASES.get(short, short) not in METRICS:
+            return ""  # not a quantity (step, status, iterations, ...)
+        length, angle = model.units.get("length", "m"), model.units.get("angle", "rad")
+        return angle if metric_unit(short, length) == "deg" else length
+    return address_unit(model, name, engine)
+
+
+def derivative_scale(model: Model, name: str, engine: Engine | None = None) -> float:
+    """Factor taking a quantity named ``name`` from the units it is computed in to the model's
+    units: ``180/pi`` for a joint angle or a ``C`` column (per radian of body-frame rotation)
+    in a degree model, ``pi/180`` for an angle metric (computed in degrees) in a radian model,
+    else 1.
+
+    A derivative d(out)/d(in) computed in solver units becomes
+    ``d_model = d_solver * derivative_scale(out) / derivative_scale(in)``. ``engine``: one
+    compiled from the model's mechanism (else one is compiled per call)."""
+    if is_metric(name):
+        angle_metric = unit_of(model, name) == model.units.get("angle", "rad")
+        return math.pi / 180.0 if (angle_metric and model.units.get("angle") != "deg") else 1.0
+    return address_scale(model, name, engine)
+
+
+__all__ = ["derivative_scale", "is_metric", "unit_of"]

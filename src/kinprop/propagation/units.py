@@ -1,0 +1,251 @@
+"""Units at the user boundary (docs/units.md): joint coordinates and design variables.
+
+**One rule**: every number a user gives or reads is in the model's declared units — lengths in
+``units.length``, angles in ``units.angle`` (``deg`` or ``rad``). That covers ``--set``,
+``--drive``, ``--vary``, ``--tolerance`` sigmas, sensitivity rows and columns, targets, and
+every printed, CSV, JSON and Parquet value. Inside, the solver works in *solver units*: the
+model's length unit and radians. This module converts between the two; nothing else does.
+
+Which numbers are angles: the angle components of a tree joint's coordinates (a revolute's
+``q``, a cylindrical joint's ``q[0]``, both of a universal joint; ``JOINT.q`` addresses) and, for
+derivatives, the body-frame rotation of a ``C`` column. Euler parameters, slides, positions,
+lengths and rotation matrices have no angle unit. A coupling coefficient ``COUPLING.coef[k]``
+has the unit ``[q_a] / [q_b]^k`` of its two joints (:func:`coef_factors`). Suspension metrics (``metric:W.camber``) are
+computed in degrees; their units are added by :mod:`kinprop.analysis.units` (the layer that
+knows the metrics). The public door is :mod:`kinprop.io.units`, which re-exports both.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Container, Mapping
+
+import numpy as np
+
+from kinprop.constraints.coupling import N_COEF
+from kinprop.engine import Engine
+from kinprop.engine import compile as compile_engine
+from kinprop.joints import joint_type
+from kinprop.model import Joint, Model, parse_address
+from kinprop.spatial import Array
+
+
+def _tree_joints(model: Model, engine: Engine | None) -> Container[str]:
+    """The tree joints: from ``engine`` (compiled from the model's mechanism) when given, else
+    compiled here (a compile per call: hot paths pass their engine)."""
+    return (engine if engine is not None else compile_engine(model.mechanism)).topology.tree_joints
+
+
+def angle_indices(model: Model, joint: str, engine: Engine | None = None) -> list[int]:
+    """Indices of a joint's coordinates that are angles (tree joints only)."""
+    if joint not in _tree_joints(model, engine):
+        return []
+    return list(model.mechanism.joint(joint).jtype.angle_indices)
+
+
+def _degrees(model: Model) -> bool:
+    return model.units.get("angle") == "deg"
+
+
+def _angle_mask(model: Model, address: str, size: int, engine: Engine | None = None) -> np.ndarray:
+    """Which components of ``address``'s value (``size`` of them) are joint angles."""
+    mask = np.zeros(size, dtype=bool)
+    try:
+        addr = parse_address(address)
+    except Exception:  # not an address (an output name): no angle components
+        return mask
+    if addr.field != "q" or addr.joint not in model.mechanism.joint_names:
+        return mask
+    idx = angle_indices(model, addr.joint, engine)
+    if addr.index is None:
+        mask[[i for i in idx if i < size]] = True
+    elif addr.index in idx:
+        mask[:] = True
+    return mask
+
+
+def _angle_factor(joint: Joint | None, deg: bool) -> float:
+    """Radians per model unit of a single-coordinate joint's coordinate."""
+    if joint is None or not deg:
+        return 1.0
+    try:
+        return math.pi / 180.0 if joint_type(joint.type).angle_indices else 1.0
+    except KeyError:
+        return 1.0
+
+
+def coef_factors(joint_a: Joint | None, joint_b: Joint | None, deg: bool) -> tuple[Array, float, float]:
+    """``(F, f_a, f_b)`` of a coupling: solver value = model value times ``F[k]`` for ``c_k``
+    (``f_a / f_b^k``), ``f_a`` for ``q_a0``, ``f_b`` for ``q_b0`` (``f = pi/180`` for an angle in
+    a degree model, else 1)."""
+    fa, fb = _angle_factor(joint_a, deg), _angle_factor(joint_b, deg)
+    return np.array([fa / fb**k for k in range(N_COEF)]), fa, fb
+
+
+def _coef_scale(model: Model, address: str, size: int) -> np.ndarray | None:
+    """Solver value / model value of each component of a coupling-coefficient address
+    (``f_a / f_b^k``), or None when ``address`` is not one."""
+    try:
+        addr = parse_address(address)
+    except Exception:
+        return None
+    couplings = {c.name: c for c in model.mechanism.couplings}
+    if addr.field != "coef" or addr.joint not in couplings:
+        return None
+    c = couplings[addr.joint]
+    F = coef_factors(model.mechanism.joint(c.joint_a), model.mechanism.joint(c.joint_b), _degrees(model))[0]
+    return np.full(size, F[addr.index]) if addr.index is not None and addr.index < F.size else np.resize(F, size)
+
+
+def to_solver_units(model: Model, address: str, value: object, engine: Engine | None = None) -> np.ndarray:
+    """A value for ``address`` given in the model's units -> solver units (radians).
+
+    ``J01.q = [45]`` on a degree model -> ``[0.785...]``; lengths, positions and rotation
+    matrices are returned unchanged (as float arrays)."""
+    v = np.array(value, dtype=float)
+    if not _degrees(model):
+        return v
+    flat = v.reshape(-1)
+    coef = _coef_scale(model, address, flat.size)
+    if coef is not None:
+        return (flat * coef).reshape(v.shape)
+    mask = _angle_mask(model, address, flat.size, engine)
+    flat[mask] = np.radians(flat[mask])
+    return flat.reshape(v.shape)
+
+
+def from_solver_units(model: Model, address: str, value: object, engine: Engine | None = None) -> np.ndarray:
+    """The inverse of :func:`to_solver_units`: solver units (radians) -> the model's units."""
+    v = np.array(value, dtype=float)
+    if not _degrees(model):
+        return v
+    flat = v.reshape(-1)
+    coef = _coef_scale(model, address, flat.size)
+    if coef is not None:
+        return (flat / coef).reshape(v.shape)
+    mask = _angle_mask(model, address, flat.size, engine)
+    flat[mask] = np.degrees(flat[mask])
+    return flat.reshape(v.shape)
+
+
+def changes_to_internal(
+    model: Model, changes: Mapping[str, object], engine: Engine | None = None
+) -> dict[str, np.ndarray]:
+    """``{address: value}`` in the model's units -> solver units (see :func:`to_solver_units`;
+    ``engine``: one compiled from the model's mechanism, to skip compiling here)."""
+    return {a: to_solver_units(model, a, v, engine) for a, v in changes.items()}
+
+
+def changes_to_model_units(
+    model: Model, changes: Mapping[str, object], engine: Engine | None = None
+) -> dict[str, np.ndarray]:
+    """``{address: value}`` in solver units -> the model's units."""
+    return {a: from_solver_units(model, a, v, engine) for a, v in changes.items()}
+
+
+def address_unit(model: Model, name: str, engine: Engine | None = None) -> str:
+    """The unit, in the model's units, of an address or a layout column label: ``J01.q`` ->
+    ``deg`` (a revolute in a degree model), ``J03.q`` -> ``m`` (a slide), ``J12.s_j[0]``,
+    ``J12.length``, ``point:...``, ``hardpoint:...`` -> the length unit, ``J.C_i`` -> ``""`` (a
+    rotation matrix), Euler parameters -> ``""``; anything else ``""`` (metric names:
+    :func:`kinprop.analysis.units.unit_of`)."""
+    length, angle = model.units.get("length", "m"), model.units.get("angle", "rad")
+    if name.startswith(("point:", "hardpoint:")):
+        return length
+    try:
+        addr = parse_address(name)
+    except Exception:
+        return ""
+    if addr.field in ("s_i", "s_j", "length"):
+        return length
+    if addr.field in ("C_i", "C_j"):
+        return ""
+    if addr.field == "coef":
+        return _coef_unit(model, addr.joint, addr.index, engine)
+    if addr.field == "q" and addr.joint in model.mechanism.joint_names:
+        jt = model.mechanism.joint(addr.joint).jtype
+        tree = addr.joint in _tree_joints(model, engine)
+        angles = set(angle_indices(model, addr.joint, engine))
+        euler = set(range(jt.euler.start, jt.euler.stop)) if tree and jt.euler is not None else set()
+        k = addr.index
+        if k is None:
+            n = jt.n_coordinates if tree else jt.n_cut_coordinates
+            kinds = [angle if i in angles else ("" if i in euler else length) for i in range(n)]
+            return kinds[0] if len(set(kinds)) == 1 else ",".join(kinds)
+        return angle if k in angles else ("" if k in euler else length)
+    return ""
+
+
+def _coef_unit(model: Model, coupling: str, k: int | None, engine: Engine | None = None) -> str:
+    """``[q_a] / [q_b]^k`` of a coupling coefficient ``c_k`` (``""`` for ``c1`` between like
+    units; ``deg/deg^k`` for the whole ``coef`` without an index)."""
+    c = next((c for c in model.mechanism.couplings if c.name == coupling), None)
+    if c is None:
+        return ""
+    ua, ub = address_unit(model, f"{c.joint_a}.q", engine), address_unit(model, f"{c.joint_b}.q", engine)
+    if k is None:
+        return f"{ua}/{ub}^k"
+    if k == 0:
+        return ua
+    if k == 1:
+        return "" if ua == ub else f"{ua}/{ub}"
+    return f"{ua}/{ub}^{k}"
+
+
+def address_scale(model: Model, name: str, engine: Engine | None = None) -> float:
+    """Factor from solver units to the model's units of an address's value or of a derivative
+    by it: ``180/pi`` for a joint angle or a ``C`` column (per radian of body-frame rotation)
+    in a degree model, else 1."""
+    if not _degrees(model) or name.startswith(("point:", "hardpoint:")):
+        return 1.0
+    try:
+        addr = parse_address(name)
+    except Exception:
+        return 1.0
+    if addr.field in ("C_i", "C_j"):
+        return 180.0 / math.pi
+    if addr.field == "coef":  # model value = solver value / (f_a / f_b^k)
+        scale = _coef_scale(model, name, 1)
+        return 1.0 if scale is None or addr.index is None else float(1.0 / scale[0])
+    return 180.0 / math.pi if address_unit(model, name, engine) == "deg" else 1.0
+
+
+#: joint-value names (:mod:`kinprop.propagation.poses`) that are angles (``rotation_vector``: an
+#: angle times a unit axis)
+ANGLE_VALUES = ("angle", "angle_1", "angle_2", "rotation_vector")
+
+
+def joint_values_to_model_units(model: Model, values: Mapping[str, Mapping[str, object]]) -> dict[str, dict]:
+    """``{JOINT: {name: value}}`` joint values (radians) -> the model's angle unit; distances and
+    translations are in the length unit either way, Euler parameters have no unit."""
+    k = 180.0 / math.pi if _degrees(model) else 1.0
+    out: dict[str, dict] = {}
+    for j, vals in values.items():
+        out[j] = {
+            n: (float(v) * k if np.ndim(v) == 0 else np.asarray(v, dtype=float) * k) if n in ANGLE_VALUES else v
+            for n, v in vals.items()
+        }
+    return out
+
+
+def check_units(units: str) -> bool:
+    """``True`` for ``"model"`` (values in the model's declared units), ``False`` for
+    ``"solver"`` (the model's length unit and radians); anything else is a ValueError."""
+    if units not in ("model", "solver"):
+        raise ValueError(f"units={units!r}: expected 'model' (the model's declared units) or 'solver' (radians)")
+    return units == "model"
+
+
+__all__ = [
+    "ANGLE_VALUES",
+    "address_scale",
+    "address_unit",
+    "angle_indices",
+    "changes_to_internal",
+    "changes_to_model_units",
+    "check_units",
+    "coef_factors",
+    "from_solver_units",
+    "joint_values_to_model_units",
+    "to_solver_units",
+]
