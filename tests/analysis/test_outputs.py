@@ -12,9 +12,12 @@ from kinprop.analysis.outputs import evaluate_outputs, expand_outputs, output_na
 def test_coordinates_and_design_variables(slider_crank):
     m = slider_crank
     out = evaluate_outputs(m, ["J01.q", "J32.q", "J32.q[1]", "J12.s_j", "J12.s_j[0]"])
-    assert out["J01.q"] == m.coordinates["J01"][0]
-    assert [out["J32.q[0]"], out["J32.q[1]"]] == list(m.coordinates["J32"])
+    assert m.units["angle"] == "deg"  # outputs in the model's units; coordinates are stored in radians
+    assert out["J01.q"] == pytest.approx(np.degrees(m.coordinates["J01"][0]), rel=1e-15)
+    np.testing.assert_allclose([out["J32.q[0]"], out["J32.q[1]"]], np.degrees(m.coordinates["J32"]), rtol=1e-15)
     assert out["J12.s_j[0]"] == m.design["J12.s_j"][0] == -2.828
+    solver = evaluate_outputs(m, ["J01.q", "J12.s_j[0]"], units="solver")
+    assert solver["J01.q"] == m.coordinates["J01"][0] and solver["J12.s_j[0]"] == -2.828
     # vector names expand into components; a repeated name is one key
     assert set(out) == {"J01.q", "J32.q[0]", "J32.q[1]", "J12.s_j[0]", "J12.s_j[1]", "J12.s_j[2]"}
 

@@ -245,3 +245,19 @@ def test_result_reprs_are_compact(fourbar) -> None:
     tol = tolerance_analysis(kp.assemble(m).after, {"B.s_i[0]": 5e-4}, ["O4.q"], free=("A.q", "O4.q"))
     assert repr(tol).startswith("<ToleranceResult: 1 outputs from 1 tolerances; model units>\n  O4.q: ")
     assert repr(tol).endswith(" deg") and len(repr(tol)) < 200
+
+
+def test_evaluate_outputs_in_model_units(examples, dw_rad) -> None:
+    """``kp.evaluate_outputs``: joint angles and angle metrics in the model's angle unit (the
+    degree model's camber in degrees, the radian copy's in radians, at the same pose)."""
+    deg = kp.propagate(kp.load_model(examples / "double_wishbone.yaml"), {"LCA.q": [4.0]}).after
+    rad = kp.propagate(kp.load_model(dw_rad), {"LCA.q": [math.radians(4.0)]}).after
+    names = ["camber", "toe", "LCA.q", "UCA.q", "scrub_radius"]
+    d, r = kp.evaluate_outputs(deg, names), kp.evaluate_outputs(rad, names)
+    assert d["LCA.q"] == pytest.approx(4.0, rel=1e-12) and r["LCA.q"] == pytest.approx(math.radians(4.0), rel=1e-12)
+    assert abs(d["camber"]) > 0.05  # degrees of camber at 4 degrees of arm rotation
+    for name in ("camber", "toe", "UCA.q"):
+        assert r[name] == pytest.approx(math.radians(d[name]), rel=1e-7, abs=1e-12), name
+    assert r["scrub_radius"] == pytest.approx(d["scrub_radius"], rel=1e-9)
+    solver = kp.evaluate_outputs(deg, names, units="solver")
+    assert solver["LCA.q"] == pytest.approx(math.radians(4.0)) and solver["camber"] == pytest.approx(d["camber"])

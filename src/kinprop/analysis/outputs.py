@@ -27,11 +27,13 @@ import numpy as np
 
 from kinprop.analysis.context import HARD, POINT, OutputContext
 from kinprop.analysis.metrics import WheelSpec, metric_names, resolve_metric, wheel_metrics
+from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.design import Address, parse_address
+from kinprop.propagation.units import check_units
 from kinprop.spatial import Array
 
 AXES = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
@@ -156,18 +158,27 @@ def evaluate_outputs(
     *,
     reference: Model | None = None,
     wheels: Mapping[str, WheelSpec] | None = None,
+    units: str = "model",
+    engine: Engine | None = None,
 ) -> dict[str, float]:
     """Values of the named outputs at the model's current state, keyed by expanded name
-    (a scalar name is its own key).
+    (a scalar name is its own key), in the model's units (docs/units.md: joint angles and
+    angle metrics in the model's angle unit); ``units="solver"``: joint angles in radians and
+    metrics in the degrees they are computed in.
 
     ``reference`` (same mechanism) sets the reference configuration of the wheel-centre
     displacement metrics; without it the fixed-body point ``wheel_centre_ref`` is used.
     ``wheels`` gives per-wheel metric parameters (:class:`~kinprop.analysis.metrics.WheelSpec`).
     Raises :class:`AddressError` for unknown names.
     """
-    ctx = OutputContext.of(model, reference, wheels)
+    to_model = check_units(units)
+    eng = engine or compile_engine(model.mechanism)
+    ctx = OutputContext.of(model, reference, wheels, eng)
     cache: dict[str, dict[str, float]] = {}
-    return {n: _scalar(ctx, n, cache) for n in expand_outputs(model, names)}
+    values = {n: _scalar(ctx, n, cache) for n in expand_outputs(model, names)}
+    if to_model:
+        values = {n: v * derivative_scale(model, n, eng) for n, v in values.items()}
+    return values
 
 
 def output_function(

@@ -199,7 +199,7 @@ def _default_outputs(model: Model) -> list[str]:
 def _outputs_for(model: Model, names: list[str]) -> dict[str, float]:
     if not names:
         return {}
-    return evaluate_outputs(model, names)
+    return evaluate_outputs(model, names, units="solver")
 
 
 def _pandas():

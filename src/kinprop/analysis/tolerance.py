@@ -109,7 +109,7 @@ def _output_value(model: Model, name: str, labels: list[str]) -> float:
         for v in eng.layout.variables:
             if v.start <= col < v.start + v.size:
                 return float(eng.get(eng.state_of(model), v.key)[col - v.start])
-    return float(evaluate_outputs(model, [name])[name])
+    return float(evaluate_outputs(model, [name], units="solver")[name])
 
 
 def expand_names(model: Model, names: Sequence[str]) -> list[str]:
