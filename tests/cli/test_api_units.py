@@ -261,3 +261,19 @@ def test_evaluate_outputs_in_model_units(examples, dw_rad) -> None:
     assert r["scrub_radius"] == pytest.approx(d["scrub_radius"], rel=1e-9)
     solver = kp.evaluate_outputs(deg, names, units="solver")
     assert solver["LCA.q"] == pytest.approx(math.radians(4.0)) and solver["camber"] == pytest.approx(d["camber"])
+
+
+def test_radian_model_targets_without_a_unit_are_radians(examples, dw_rad) -> None:
+    """A metric target without a unit is in the model's angle unit: in the radian copy of the
+    double wishbone, ``camber@travel=50mm=-0.0261799`` is the degree model's ``-1.5``."""
+    target_rad = f"camber@travel=50mm={math.radians(-1.5)!r}"
+    rad = kp.propagate_targets(kp.load_model(dw_rad), [target_rad], ["hardpoint:UBJ"])
+    deg = kp.propagate_targets(kp.load_model(examples / "double_wishbone.yaml"), ["camber@travel=50mm=-1.5"],
+                               ["hardpoint:UBJ"])  # fmt: skip
+    explicit = kp.propagate_targets(kp.load_model(dw_rad), ["camber@travel=50mm=-1.5deg"], ["hardpoint:UBJ"])
+    assert rad.converged and deg.converged and explicit.converged
+    np.testing.assert_allclose(rad.after.design["UBJ.s_i"], deg.after.design["UBJ.s_i"], atol=1e-9)
+    np.testing.assert_allclose(explicit.after.design["UBJ.s_i"], deg.after.design["UBJ.s_i"], atol=1e-9)
+    row = rad.table()[0]
+    assert row["unit"] == "rad" and row["achieved"] == pytest.approx(math.radians(-1.5), abs=1e-9)
+    assert deg.table()[0]["unit"] == "deg" and deg.table()[0]["achieved"] == pytest.approx(-1.5, abs=1e-7)

@@ -17,8 +17,8 @@ A target spec (CLI ``--target``, Python ``propagate_targets(model, [...])``)::
 * ``slope:OUTPUT@COND=A..B=V``: the slope ``(OUTPUT(B) - OUTPUT(A)) / (B - A)`` over a single
   condition's range (e.g. bump steer ``slope:toe@travel=-50..50=0``), unit output per condition.
 * ``VALUE``: a number with an optional unit: ``deg``/``rad`` for angles, ``mm``/``cm``/``m``/``in``
-  for lengths, ``deg/m``-style for slopes. Without a unit: metric angles in degrees, coordinate
-  and joint angles in the model's angle unit, lengths in the model's length unit.
+  for lengths, ``deg/m``-style for slopes. Without a unit: the model's units (metric, coordinate
+  and joint angles in its angle unit, lengths in its length unit).
 * ``WEIGHT`` (default 1) multiplies the target's residual in the least-squares compromise when
   targets conflict (a miss of 1/WEIGHT units counts as one).
 
@@ -105,9 +105,9 @@ def _kind(model: Model, output: str) -> str:
 def _unit_factor(model: Model, kind: str, unit: str, where: str) -> float:
     """Factor from ``unit`` to the internal unit of ``kind`` (no unit: the display unit)."""
     length_unit = model.units.get("length", "m")
-    if kind == "deg":
+    if kind == "deg":  # internal: degrees (metrics are computed in degrees)
         if not unit:
-            return 1.0
+            return 1.0 if model.units.get("angle", "rad") == "deg" else 180 / math.pi
         if unit in ANGLES:
             return ANGLES[unit]
     elif kind == "rad":
@@ -390,7 +390,8 @@ class TargetPropagation:
     def unit(self, spec: TargetSpec) -> str:
         """The display unit of a target's values (a slope: per model length unit)."""
         length = self.model.units.get("length", "")
-        names = {"deg": "deg", "rad": self.model.units.get("angle", "rad"), "length": length, "none": ""}
+        angle = self.model.units.get("angle", "rad")
+        names = {"deg": angle, "rad": angle, "length": length, "none": ""}
         u = names[_kind(self.model, spec.output)]
         if spec.slope is not None:
             if u == "deg" and _kind(self.model, spec.output) == "rad":
@@ -399,14 +400,16 @@ class TargetPropagation:
         return u
 
     def table(self) -> list[dict[str, Any]]:
-        """One row per target: spec, output, wanted, before, achieved, residual (display units:
-        metric angles deg, coordinate/joint angles in the model's angle unit, lengths model unit)."""
+        """One row per target: spec, output, wanted, before, achieved, residual, in the model's
+        units (angles in its angle unit, lengths in its length unit; slopes per length unit)."""
         rows = []
         deg = self.model.units.get("angle") == "deg"
         for spec, t in zip(self.specs, self.result.targets, strict=True):
-            k = 1.0
-            if _kind(self.model, spec.output) == "rad" and deg and spec.slope is None:
+            k, kind = 1.0, _kind(self.model, spec.output)
+            if kind == "rad" and deg and spec.slope is None:
                 k = 180 / math.pi
+            elif kind == "deg" and not deg:  # a metric angle (degrees inside) in a radian model
+                k = math.pi / 180
             row = {"target": spec.text, "output": spec.output, "unit": self.unit(spec)}
             rows.append(row | {n: t[n] * k for n in ("value", "before", "achieved", "residual")})
         return rows
