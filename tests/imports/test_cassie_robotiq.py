@@ -40,15 +40,20 @@ def test_cassie_assembles_from_its_keyframe_and_reports_mobility() -> None:
     assert prop.converged and prop.result.residual_norm < 1e-12
 
 
-def test_cassie_mobility_is_mujocos() -> None:
+def _mujoco_equalities(path):
+    """MuJoCo's equality-constraint rows and their dense Jacobian at the file's reference."""
     mujoco = pytest.importorskip("mujoco")
     from imports_helpers import equality_rows
 
-    m = mujoco.MjModel.from_xml_path(str(CASSIE))
+    m = mujoco.MjModel.from_xml_path(str(path))
     d = mujoco.MjData(m)
     m.opt.jacobian = mujoco.mjtJacobian.mjJAC_DENSE
     mujoco.mj_forward(m, d)
-    _, J = equality_rows(mujoco, m, d)
+    return m, *equality_rows(mujoco, m, d)
+
+
+def test_cassie_mobility_is_mujocos() -> None:
+    m, _, J = _mujoco_equalities(CASSIE)
     r = runner.invoke(app, ["check", str(CASSIE), "--assemble", "--json"])
     assert r.exit_code == 0, r.output
     obj = json.loads(r.stdout)
@@ -125,14 +130,7 @@ def test_robotiq_imports_with_its_coupling(tmp_path) -> None:
 
 
 def test_robotiq_mobility_is_mujocos() -> None:
-    mujoco = pytest.importorskip("mujoco")
-    from imports_helpers import equality_rows
-
-    m = mujoco.MjModel.from_xml_path(str(ROBOTIQ))
-    d = mujoco.MjData(m)
-    m.opt.jacobian = mujoco.mjtJacobian.mjJAC_DENSE
-    mujoco.mj_forward(m, d)
-    r, J = equality_rows(mujoco, m, d)
+    m, r, J = _mujoco_equalities(ROBOTIQ)
     assert len(r) == 7  # two connects (3 rows each) and the joint coupling
     assert kp.mobility(kp.load_model(ROBOTIQ)).mobility == m.nv - np.linalg.matrix_rank(J, 1e-9) == 3
 

@@ -34,9 +34,10 @@ mujoco = pytest.importorskip("mujoco")
 runner = CliRunner()
 
 
-def test_cassie_round_trip_keeps_every_body_pose(tmp_path) -> None:
-    src = MJCF / "cassie_left_leg_kinematic.xml"
-    out = tmp_path / "cassie_out.xml"
+def _round_trip(tmp_path, name: str):
+    """``kinprop convert FILE --to mjcf``; both files loaded in MuJoCo at their reference:
+    ``(a, b, b's data, the worst body-pose difference)``."""
+    src, out = MJCF / name, tmp_path / f"out_{name}"
     r = runner.invoke(app, ["convert", str(src), "--to", "mjcf", "-o", str(out)])
     assert r.exit_code == 0, r.output
     a = mujoco.MjModel.from_xml_path(str(src))
@@ -48,6 +49,11 @@ def test_cassie_round_trip_keeps_every_body_pose(tmp_path) -> None:
     before, after = mujoco_poses(mujoco, a, da), mujoco_poses(mujoco, b, db)
     assert set(before) <= set(after)
     worst = max(max(np.abs(before[n][0] - after[n][0]).max(), np.abs(before[n][1] - after[n][1]).max()) for n in before)
+    return a, b, db, out, worst
+
+
+def test_cassie_round_trip_keeps_every_body_pose(tmp_path) -> None:
+    a, b, db, _, worst = _round_trip(tmp_path, "cassie_left_leg_kinematic.xml")
     assert worst < 1e-12, worst
     r_eq, _ = equality_rows(mujoco, b, db)
     assert b.neq == 2 and np.abs(r_eq).max() < 1e-15
@@ -55,18 +61,7 @@ def test_cassie_round_trip_keeps_every_body_pose(tmp_path) -> None:
 
 
 def test_robotiq_round_trip_keeps_the_coupling(tmp_path) -> None:
-    src = MJCF / "robotiq_2f85_kinematic.xml"
-    out = tmp_path / "robotiq_out.xml"
-    r = runner.invoke(app, ["convert", str(src), "--to", "mjcf", "-o", str(out)])
-    assert r.exit_code == 0, r.output
-    a = mujoco.MjModel.from_xml_path(str(src))
-    da = mujoco.MjData(a)
-    mujoco.mj_kinematics(a, da)
-    b = mujoco.MjModel.from_xml_path(str(out))
-    db = mujoco.MjData(b)
-    mujoco.mj_forward(b, db)
-    before, after = mujoco_poses(mujoco, a, da), mujoco_poses(mujoco, b, db)
-    worst = max(max(np.abs(before[n][0] - after[n][0]).max(), np.abs(before[n][1] - after[n][1]).max()) for n in before)
+    _, b, _, out, worst = _round_trip(tmp_path, "robotiq_2f85_kinematic.xml")
     assert worst < 1e-12, worst
     assert b.neq == 3 and list(b.eq_type).count(mujoco.mjtEq.mjEQ_JOINT) == 1
     k = list(b.eq_type).index(mujoco.mjtEq.mjEQ_JOINT)

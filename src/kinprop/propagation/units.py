@@ -97,35 +97,31 @@ def _coef_scale(model: Model, address: str, size: int) -> np.ndarray | None:
     return np.full(size, F[addr.index]) if addr.index is not None and addr.index < F.size else np.resize(F, size)
 
 
+def _convert(model: Model, address: str, value: object, engine: Engine | None, to_solver: bool) -> np.ndarray:
+    """Angles (and coupling coefficients) of ``address``: model units <-> solver units."""
+    v = np.array(value, dtype=float)
+    if not _degrees(model):
+        return v
+    flat = v.reshape(-1)
+    coef = _coef_scale(model, address, flat.size)
+    if coef is not None:
+        return (flat * coef if to_solver else flat / coef).reshape(v.shape)
+    mask = _angle_mask(model, address, flat.size, engine)
+    flat[mask] = np.radians(flat[mask]) if to_solver else np.degrees(flat[mask])
+    return flat.reshape(v.shape)
+
+
 def to_solver_units(model: Model, address: str, value: object, engine: Engine | None = None) -> np.ndarray:
     """A value for ``address`` given in the model's units -> solver units (radians).
 
     ``J01.q = [45]`` on a degree model -> ``[0.785...]``; lengths, positions and rotation
     matrices are returned unchanged (as float arrays)."""
-    v = np.array(value, dtype=float)
-    if not _degrees(model):
-        return v
-    flat = v.reshape(-1)
-    coef = _coef_scale(model, address, flat.size)
-    if coef is not None:
-        return (flat * coef).reshape(v.shape)
-    mask = _angle_mask(model, address, flat.size, engine)
-    flat[mask] = np.radians(flat[mask])
-    return flat.reshape(v.shape)
+    return _convert(model, address, value, engine, True)
 
 
 def from_solver_units(model: Model, address: str, value: object, engine: Engine | None = None) -> np.ndarray:
     """The inverse of :func:`to_solver_units`: solver units (radians) -> the model's units."""
-    v = np.array(value, dtype=float)
-    if not _degrees(model):
-        return v
-    flat = v.reshape(-1)
-    coef = _coef_scale(model, address, flat.size)
-    if coef is not None:
-        return (flat / coef).reshape(v.shape)
-    mask = _angle_mask(model, address, flat.size, engine)
-    flat[mask] = np.degrees(flat[mask])
-    return flat.reshape(v.shape)
+    return _convert(model, address, value, engine, False)
 
 
 def changes_to_internal(
