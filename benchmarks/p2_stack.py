@@ -103,10 +103,10 @@ def bench_k(K: int, variant: str, trials: int, rng: np.random.Generator) -> tupl
     build_now, build_peak = tracemalloc.get_traced_memory()
     tracemalloc.reset_peak()
 
-    def solve(dl):
+    def solve(dl):  # follow the change from the assembled stack to the new leg lengths
         st = st0.copy()
         st.L[lidx] = dl
-        sol = eng.solve(st, cols)
+        sol = eng.solve(st0, cols, target=st)
         assert sol.converged, sol
         return sol.state
 

@@ -242,6 +242,7 @@ class Engine:
         for v in self.layout.variables:
             self._variable_of[v.columns] = v.start
         self._plans: dict[tuple, Plan] = {}
+        self._reference_signs: dict[tuple, int] = {}  # det sign at the reference, per plan (solve)
         self._targets: dict[str, Target] = {}
         self._free_cache: dict[tuple, Array] = {}
         self.model = reference
@@ -290,9 +291,13 @@ class Engine:
         held = [t.start + t.index for t in targets if t.group == "q" and t.index is not None]
         return cols[~np.isin(cols, held)] if held else cols
 
+    @staticmethod
+    def _plan_key(free: Array, weights: Array | None) -> tuple[bytes, bytes | None]:
+        return free.tobytes(), None if weights is None else np.asarray(weights, float).tobytes()
+
     def plan(self, free: Array, weights: Array | None = None) -> Plan:
         """The linear-solve plan of a free column set (computed once per set)."""
-        key = (free.tobytes(), None if weights is None else np.asarray(weights, float).tobytes())
+        key = self._plan_key(free, weights)
         plan = self._plans.get(key)
         if plan is None:
             rows, cols = self.pattern
@@ -592,14 +597,24 @@ class Engine:
         start's branch (:func:`kinprop.solver.newton.follow`); ``branch=False`` is the paper's
         plain Newton. ``assembled``: whether ``start`` is an assembly (None: find out)."""
         cols = free if isinstance(free, np.ndarray) else self.columns(free, exclude)
-        plan = self.plan(cols, self.weights_for(cols, weights))
+        if assembled is None and start is self.reference:
+            assembled = self._reference_assembled
+        w = self.weights_for(cols, weights)
+        plan = self.plan(cols, w)
         cfg = self.settings(tol, max_iter, branch=branch, state=start)
         st = start.copy()
         goal = (target if target is not None else start).writable()
         hist = np.zeros(max_iter + 1)
-        code, it, frac, subs, norm, flags, hlen = newton.follow_one(
+        # the det sign of the free Jacobian at the compiled model's assembled state, per plan:
+        # computed by the first solve from it, then reused (one evaluation and factorisation less)
+        ref_key = self._plan_key(cols, w) if start is self.reference and assembled else None
+        sign0 = self._reference_signs.get(ref_key, newton.UNKNOWN_SIGN) if ref_key else newton.UNKNOWN_SIGN
+        code, it, frac, subs, norm, flags, hlen, sign_start, _ = newton.follow_one(
             self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, goal.Q, goal.S, goal.C, goal.L,
-            -1 if assembled is None else int(assembled), self.row_scale, self.col_scale, cfg, hist)  # fmt: skip
+            -1 if assembled is None else int(assembled), self.row_scale, self.col_scale, cfg, hist,
+            sign0)  # fmt: skip
+        if ref_key is not None and sign_start != newton.UNKNOWN_SIGN and not flags & newton.FROM_ESTIMATES:
+            self._reference_signs[ref_key] = int(sign_start)
         return Solution(self, start, st, STATUSES[code], int(it), float(norm), hist[: min(hlen, hist.size)], cols,
                         cfg.tol, dict(changes or {}), tol, float(frac), int(subs), int(flags))  # fmt: skip
 

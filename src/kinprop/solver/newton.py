@@ -282,10 +282,13 @@ def _residual(tb, plan, Q, S, C, L, row_scale, buf):
 def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
     """Newton on ``Phi(x) = 0`` from ``Q, S, C, L`` (updated in place), to ``tol``.
 
-    Returns ``(status, iterations, ||row_scale Phi||, |dx_1|, |x - x_1|, sign_0,
-    sign_1)``: the first step (the implicit-function predictor) and how far the later
-    corrections took the solution from it (column-scaled), and the sign of det of the free
-    Jacobian at the first and last step taken (0: not square or singular).
+    Returns ``(status, iterations, ||row_scale Phi||, |dx_1|, jumped, sign_0, sign_1)``: the
+    first step (the implicit-function predictor; column-scaled, the largest over the plan's
+    blocks), whether the later corrections took some block's solution further from its
+    predictor than ``kappa |dx_1| + jump_atol`` or its predictor was longer than ``trust`` (each
+    block, an independent sub-mechanism, judged on its own: a large mechanism is not
+    subdivided for being large), and the sign of det of the free Jacobian at the first and last
+    step taken (0: not square or singular).
     ``history[k]`` receives the residual after k updates (may be shorter than ``max_iter + 1``).
     """
     Phi, vals, dx, disp, dx1 = buf[B_PHI], buf[B_VALS], buf[B_DX], buf[B_DISP], buf[B_DX1]
@@ -296,7 +299,7 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
         history[0] = norm
     first = max(norm, 1e-300)
     it, status = 0, NOT_CONVERGED
-    step1, sign0, sign1 = 0.0, 0, 0
+    sign0, sign1 = 0, 0
     disp[:] = 0.0
     while norm >= tol and it < cfg.max_iter:
         if nf == 0:
@@ -307,7 +310,6 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
             sign0 = sign1
             for i in range(nf):
                 dx1[i] = dx[i]
-                step1 += (dx[i] * col_scale[free[i]]) ** 2
         for i in range(nf):
             disp[i] += dx[i]
         retract(tb, free, dx, Q, S, C, L, buf[B_WS])
@@ -332,11 +334,18 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
                 for i in range(nf):
                     dx[i] = -dx[i]
                 retract(tb, free, dx, Q, S, C, L, buf[B_WS])
-    corr = 0.0
-    if it > 0:  # how far the corrections took the solution from the predictor x_0 + dx_1
-        for i in range(nf):
-            corr += ((disp[i] - dx1[i]) * col_scale[free[i]]) ** 2
-    return status, it, norm, np.sqrt(step1), np.sqrt(corr), sign0, sign1
+    step1, jumped = 0.0, False
+    if it > 0:  # per block: the predictor x_0 + dx_1 and how far the corrections took it
+        for b in range(plan.col_ptr.shape[0] - 1):
+            p, c = 0.0, 0.0
+            for y in range(plan.col_ptr[b], plan.col_ptr[b + 1]):
+                f = plan.block_cols[y]
+                p += (dx1[f] * col_scale[free[f]]) ** 2
+                c += ((disp[f] - dx1[f]) * col_scale[free[f]]) ** 2
+            p, c = np.sqrt(p), np.sqrt(c)
+            step1 = max(step1, p)
+            jumped = jumped or c > cfg.kappa * p + cfg.jump_atol or p > cfg.trust
+    return status, it, norm, step1, jumped, sign0, sign1
 
 
 @kernel
@@ -416,7 +425,9 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
     (estimates; ``assembled`` 0, or -1: evaluate to know) is assembled at its own design first
     (flagged when det changed sign on the way), then the change is followed. Returns
     ``(status, iterations, fraction reached, sub-steps, ||scaled residual||, flags, entries of
-    history written)`` (the history holds the assembly's residuals, then the last sub-step's).
+    history written, det sign at the start, det sign at the last accepted step)`` (the history
+    holds the assembly's residuals, then the last sub-step's). ``start_sign``: the start's det
+    sign when the caller knows it (an assembled start it solved from before with this plan).
     """
     nj = S.shape[0]
     Q0, S0, C0, L0, Qs, Ss, Cs, Ls = fbuf[0], fbuf[1], fbuf[2], fbuf[3], fbuf[4], fbuf[5], fbuf[6], fbuf[7]
@@ -435,12 +446,12 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
     if cfg.branch and assembled == 0:
         # not assembled (estimates): assemble at the start's own design first (the assembly the
         # estimates point at; flagged when det changed sign on the way), then follow the change
-        st, it, nr, p1, corr, s0, s1 = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, history, buf)
+        st, it, nr, _, _, s0, s1 = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, history, buf)
         flags |= FROM_ESTIMATES
         if s0 != 0 and s1 != 0 and s0 != s1:
             flags |= SIGN_FLIP
         if st != CONVERGED and st != NO_FREE:
-            return st, it, 0.0, 1, nr, flags, it + 1
+            return st, it, 0.0, 1, nr, flags, it + 1, UNKNOWN_SIGN, UNKNOWN_SIGN
         its0 = it
         copy_state(Q, S, C, L, Q0, S0, C0, L0)
     # the change is what differs between start and target outside the free columns (the free
@@ -461,6 +472,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
     # det sign of the free Jacobian at the assembled start: the reference of the branch test
     # (given by a batch whose variants share an assembled start)
     sign_ref = start_sign if start_sign != UNKNOWN_SIGN and its0 == 0 else _sign_at(tb, plan, Q, S, C, L, buf)
+    sign_start = sign_ref
     T = ws[6][0]
     for j in range(nj):
         for side in range(2):
@@ -501,7 +513,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
                     exp_so3_into(w, E)
                     mm_into(E, C0[j, side], C[j, side])
         hist = history[min(its0, history.shape[0]) :]  # after the assembly's residuals
-        st, it, nr, p1, corr, s0, s1 = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, hist, buf)
+        st, it, nr, _, jump, s0, s1 = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, hist, buf)
         last = st
         its += it
         hlen = min(its0, history.shape[0]) + it + 1
@@ -510,7 +522,6 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         if st == NO_FREE:
             status = NO_FREE
             break
-        jump = corr > cfg.kappa * p1 + cfg.jump_atol or p1 > cfg.trust
         # the sign at the last step taken (next to the solution) against the accepted state's
         flip = sign_ref != 0 and s1 != 0 and sign_ref != s1
         if single:  # plain Newton: one solve, its outcome
@@ -536,7 +547,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
             break
     if status != CONVERGED and t == 0.0 and not flags & (JUMPED | SIGN_FLIP) and last != CONVERGED:
         status = last  # nothing of the change could be solved at all: say why (not a branch matter)
-    return status, its, t, subs, norm, flags, hlen
+    return status, its, t, subs, norm, flags, hlen, sign_start, sign_ref
 
 
 @kernel
@@ -545,11 +556,12 @@ def _store(out, k, r):
 
 
 @njit
-def follow_one(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, history):
+def follow_one(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, history,
+               start_sign):  # fmt: skip
     """:func:`follow` with its own buffers."""
     buf = buffers(tb, plan, nnz)
     return follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, buf,
-                  follow_buffers(Q, S, C, L), history)  # fmt: skip
+                  follow_buffers(Q, S, C, L), history, start_sign)  # fmt: skip
 
 
 @kernel
@@ -615,14 +627,16 @@ def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, row_scale, col_
     hist = np.zeros(0)
     Qg, Sg, Cg, Lg = Q.copy(), S.copy(), C.copy(), L.copy()
     Q1 = Q.copy()
+    sign = UNKNOWN_SIGN  # det sign at the last good step: the next step's reference
     for s in range(values.shape[0]):
         Q1[:] = Q
         for i in range(set_cols.shape[0]):
             Q1[set_cols[i]] = values[s, i]
         r = follow(tb, plan, Q, S, C, L, Q1, S, C, L, -1 if s == 0 else 1, row_scale, col_scale, cfg, buf, fbuf,
-                   hist)  # fmt: skip
+                   hist, sign)  # fmt: skip
         _store(out, s, r)
         if r[0] == CONVERGED:
+            sign = r[8]
             Qout[s] = Q
             copy_state(Q, S, C, L, Qg, Sg, Cg, Lg)
         else:
