@@ -225,3 +225,35 @@ def test_kernels_compile_without_reference_counting():
     for f in (kernels.evaluate, kernels.forward_kinematics, kernels.retract, newton.newton_step, newton.solve,
               newton.follow):  # fmt: skip
         assert f.targetoptions.get("_nrt") is False, f.__name__
+
+
+def test_independent_sub_mechanisms_are_followed_in_one_step_each_judged_on_its_own():
+    """K Stewart platforms on the ground (a block-triangular plan): a 2 mm change of every leg
+    is small for each platform, but the whole step grows with sqrt(K). The trust radius holds
+    per block, so the change is one sub-step (it was subdivided with JUMPED); a change that is
+    large for one platform alone is still subdivided."""
+    import dataclasses
+
+    from kinprop.builders import stewart_stack
+    from kinprop.engine import compile as compile_engine
+
+    K = 128
+    rel = stewart_stack(K)
+    joints = tuple(dataclasses.replace(j, body_i="base") if j.type == "free" else j for j in rel.mechanism.joints)
+    coords = dict(rel.coordinates)
+    h = coords["M1_F"][2]
+    for k in range(1, K + 1):
+        coords[f"M{k}_F"] = np.array([0.0, 0.0, k * h, 1.0, 0.0, 0.0, 0.0])
+    eng = compile_engine(Model(Mechanism(rel.mechanism.bodies, joints, name="ground stack"), rel.design, coords))
+    legs = [j.name for j in eng.mechanism.joints if j.type == "distance"]
+    rng = np.random.default_rng(0)
+    rng.choice([-2e-3, 2e-3], size=len(legs))
+    delta = rng.choice([-2e-3, 2e-3], size=len(legs))  # with one global trust radius: 3 sub-steps, JUMPED
+    lengths = {f"{n}.length": eng.get(eng.reference, f"{n}.length") for n in legs}
+    sol = eng.propagate({a: v + d for (a, v), d in zip(lengths.items(), delta, strict=True)})
+    assert sol.converged and sol.substeps == 1 and not sol.flags & newton.JUMPED, (sol.substeps, sol.flags)
+    assert np.linalg.norm(eng.residual(sol.state) * eng.row_scale) < 1e-10
+    # two legs of platform 1 80% longer: a large tilt of that platform alone is still followed
+    # in sub-steps (its own block's predictor and corrections fail the tests)
+    big = eng.propagate({f"{n}.length": eng.get(eng.reference, f"{n}.length") * 1.8 for n in legs[:2]})
+    assert big.substeps > 1 and big.flags & newton.SUBDIVIDED

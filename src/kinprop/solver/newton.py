@@ -283,12 +283,12 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
     """Newton on ``Phi(x) = 0`` from ``Q, S, C, L`` (updated in place), to ``tol``.
 
     Returns ``(status, iterations, ||row_scale Phi||, |dx_1|, jumped, sign_0, sign_1)``: the
-    first step (the implicit-function predictor; column-scaled, the largest over the plan's
-    blocks), whether the later corrections took some block's solution further from its
-    predictor than ``kappa |dx_1| + jump_atol`` or its predictor was longer than ``trust`` (each
-    block, an independent sub-mechanism, judged on its own: a large mechanism is not
-    subdivided for being large), and the sign of det of the free Jacobian at the first and last
-    step taken (0: not square or singular).
+    first step (the implicit-function predictor; column-scaled, the longest over the plan's
+    blocks), whether the later corrections took the solution further from the predictor than
+    ``kappa |dx_1| + jump_atol`` (a ratio: independent of the mechanism's size) or some block's
+    predictor was longer than ``trust`` (per block, an independent sub-mechanism: a large
+    mechanism is not subdivided for being large), and the sign of det of the free Jacobian at
+    the first and last step taken (0: not square or singular).
     ``history[k]`` receives the residual after k updates (may be shorter than ``max_iter + 1``).
     """
     Phi, vals, dx, disp, dx1 = buf[B_PHI], buf[B_VALS], buf[B_DX], buf[B_DISP], buf[B_DX1]
@@ -334,17 +334,17 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
                 for i in range(nf):
                     dx[i] = -dx[i]
                 retract(tb, free, dx, Q, S, C, L, buf[B_WS])
-    step1, jumped = 0.0, False
-    if it > 0:  # per block: the predictor x_0 + dx_1 and how far the corrections took it
+    step1, p2, c2 = 0.0, 0.0, 0.0
+    if it > 0:  # the predictor x_0 + dx_1 (per block) and how far the corrections took it
         for b in range(plan.col_ptr.shape[0] - 1):
-            p, c = 0.0, 0.0
+            p = 0.0
             for y in range(plan.col_ptr[b], plan.col_ptr[b + 1]):
                 f = plan.block_cols[y]
                 p += (dx1[f] * col_scale[free[f]]) ** 2
-                c += ((disp[f] - dx1[f]) * col_scale[free[f]]) ** 2
-            p, c = np.sqrt(p), np.sqrt(c)
-            step1 = max(step1, p)
-            jumped = jumped or c > cfg.kappa * p + cfg.jump_atol or p > cfg.trust
+                c2 += ((disp[f] - dx1[f]) * col_scale[free[f]]) ** 2
+            p2 += p
+            step1 = max(step1, np.sqrt(p))
+    jumped = np.sqrt(c2) > cfg.kappa * np.sqrt(p2) + cfg.jump_atol or step1 > cfg.trust
     return status, it, norm, step1, jumped, sign0, sign1
 
 
