@@ -86,8 +86,8 @@ def output_sensitivity_matrix(
         minus = engine.model_of(engine.retract(state, -h * direction), model)
         D[:, k] = (f(plus) - f(minus)) / (2.0 * h)
     if model_units and D.size:
-        so = np.array([derivative_scale(model, n) for n in names])
-        si = np.array([derivative_scale(model, c) for c in sens.columns])
+        so = np.array([derivative_scale(model, n, engine) for n in names])
+        si = np.array([derivative_scale(model, c, engine) for c in sens.columns])
         D = D * so[:, None] / si[None, :]
     return D, list(names), list(sens.columns), residual
 

@@ -48,11 +48,11 @@ def sensitivity_table(matrix: np.ndarray, rows: list[str], columns: list[str], t
     return t
 
 
-def _per(model, name: str) -> str:
+def _per(model, name: str, engine=None) -> str:
     """The unit of a design column: a C column is per angle of body-frame rotation."""
     if ".C_" in name:
         return model.units.get("angle", "rad")
-    return unit_of(model, name)
+    return unit_of(model, name, engine)
 
 
 class Sensitivities(NamedTuple):
@@ -99,11 +99,11 @@ def sensitivities(
         ]
         matrix, columns = np.column_stack(cols) if cols else np.zeros((len(rows), 0)), keep + extra
     # in the model's units: d(out)/d(in) * scale(out) / scale(in)
-    so = np.array([derivative_scale(assembled, str(name)) for name in rows])
-    si = np.array([derivative_scale(assembled, str(name)) for name in columns])
+    so = np.array([derivative_scale(assembled, str(name), engine) for name in rows])
+    si = np.array([derivative_scale(assembled, str(name), engine) for name in columns])
     matrix = matrix * so[:, None] / si[None, :]
-    units_of = [unit_of(assembled, str(name)) for name in rows]
-    units_wrt = [_per(assembled, str(name)) for name in columns]
+    units_of = [unit_of(assembled, str(name), engine) for name in rows]
+    units_wrt = [_per(assembled, str(name), engine) for name in columns]
     return Sensitivities(matrix, rows, columns, units_of, units_wrt)
 
 
