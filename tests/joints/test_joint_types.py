@@ -21,7 +21,7 @@ import pytest
 
 from kinprop.constraints import Spherical as SphericalConstraint
 from kinprop.joints import REGISTRY, joint_type
-from kinprop.spatial import EZ, euler_E, is_rotation
+from kinprop.spatial import EZ, euler_E, is_rotation, tilde
 from random_mechanisms import CUT_TYPES, TREE_TYPES, assembled_cut_placement, random_coordinates, random_rotation
 
 EPS = 1e-6
@@ -108,6 +108,29 @@ def test_euler_map_ignores_the_radial_direction(name):
     radial[jt.euler] = q[jt.euler]
     np.testing.assert_allclose(H @ radial, 0, atol=1e-15)
     np.testing.assert_allclose(dd @ radial, 0, atol=1e-15)
+
+
+def test_free_joint_motion_is_exact_off_the_unit_sphere():
+    """The free joint (not one of the paper's) turns its body by the normalised ``p``: its
+    placement is a rotation at every iterate and ``H = 2E(p)/(p.p)`` is the derivative in every
+    direction, along ``p`` too (the Stewart solve converges quadratically, no polishing step).
+    The paper's spherical and S-T joints keep ``E(p) G(p)^T`` (PAPER-NOTES: the tables need it)."""
+    jt = joint_type("free")
+    rng = np.random.default_rng(7)
+    q = random_coordinates("free", rng)
+    q[jt.euler] *= 1.05  # off the unit sphere, as after a Newton step
+    A, _ = jt.placement(q)
+    assert is_rotation(A, tol=1e-12)
+    dd, H = jt.motion(q)
+    for k in range(jt.n_coordinates):
+        e = np.zeros(jt.n_coordinates)
+        e[k] = 1.0
+        (Ap, dp), (Am, dm) = jt.placement(q + EPS * e), jt.placement(q - EPS * e)
+        np.testing.assert_allclose(dd @ e, (dp - dm) / (2 * EPS), atol=1e-8, err_msg=f"dd''/dq[{k}]")
+        dA = (Ap - Am) / (2 * EPS)
+        np.testing.assert_allclose(dA @ A.T, tilde(H @ e), atol=1e-8, err_msg=f"H'' q[{k}]")
+    sph, p = joint_type("spherical"), q[jt.euler]
+    assert not is_rotation(sph.placement(p)[0], tol=1e-3)  # the paper's E G^T scales by p.p
 
 
 def test_default_coordinates_are_the_identity_placement():

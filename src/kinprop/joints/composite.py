@@ -90,16 +90,24 @@ class TranslationalDistance(JointType):
 
 @kernel
 def free_placement(q, A, d):
+    """``A = E(p) G(p)^T / (p.p)``: the rotation of the normalised ``p`` (a rotation at every
+    iterate, unlike the paper's ``E G^T`` of its own joints)."""
     euler_A_into(q[3:7], A)
+    inv = 1.0 / (q[3] * q[3] + q[4] * q[4] + q[5] * q[5] + q[6] * q[6])
+    for x in range(3):
+        for y in range(3):
+            A[x, y] *= inv
     d[0], d[1], d[2] = q[0], q[1], q[2]
 
 
 @kernel
 def free_motion(q, A, d, dd, H):
+    """``H'' = 2E(p) / (p.p)``: the exact derivative of :func:`free_placement` (``E(p) p = 0``:
+    a radial ``dp`` does not turn the body), so Newton converges quadratically."""
     dd[:, :] = 0.0
     H[:, :] = 0.0
     dd[0, 0], dd[1, 1], dd[2, 2] = 1.0, 1.0, 1.0
-    euler_E_into(q[3:7], 2.0, H, 3)
+    euler_E_into(q[3:7], 2.0 / (q[3] * q[3] + q[4] * q[4] + q[5] * q[5] + q[6] * q[6]), H, 3)
 
 
 @dataclass(frozen=True)
