@@ -680,11 +680,15 @@ class Engine:
         cfg = self.settings(tol, max_iter, branch=branch, state=base)
         targets = targets.writable()
         N = targets.Q.shape[0]
-        st = State(*(np.array(np.broadcast_to(getattr(base, a), getattr(targets, a).shape)) for a in "QSCL"))
+        shared = base.Q.ndim == 1  # one start for every variant: copied into each by the kernel
+        starts = State(*(getattr(base, a)[None] for a in "QSCL")) if shared else base
+        starts = starts.writable()
+        st = State(*(np.empty_like(getattr(targets, a)) for a in "QSCL"))
         out = np.zeros((N, 6))
-        assembled = int(np.linalg.norm(self.residual(base) * self.row_scale) < cfg.tol)
-        args = (self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, targets.Q, targets.S, targets.C, targets.L,
-                assembled, self.row_scale, self.col_scale, cfg, out)  # fmt: skip
+        # whether the start is assembled: known here for one start, else each variant's own test
+        assembled = int(np.linalg.norm(self.residual(base) * self.row_scale) < cfg.tol) if shared else -1
+        args = (self.tables, plan, self.nnz, starts.Q, starts.S, starts.C, starts.L, targets.Q, targets.S, targets.C,
+                targets.L, st.Q, st.S, st.C, st.L, assembled, self.row_scale, self.col_scale, cfg, out)  # fmt: skip
         if (N >= 256 if threads is None else threads) and N:
             newton.follow_batch_threaded(*args, max(1, min(get_num_threads(), N)))
         else:

@@ -564,55 +564,45 @@ def follow_one(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, 
                   follow_buffers(Q, S, C, L), history, start_sign)  # fmt: skip
 
 
-@kernel
-def _same_start(Q, S, C, L, v, u):
-    """Whether variants ``v`` and ``u`` of a batch start from the same state."""
-    for a in range(Q.shape[1]):
-        if Q[v, a] != Q[u, a]:
-            return False
-    for j in range(S.shape[1]):
-        if L[v, j] != L[u, j]:
-            return False
-        for side in range(2):
-            for a in range(3):
-                if S[v, j, side, a] != S[u, j, side, a]:
-                    return False
-                for b in range(3):
-                    if C[v, j, side, a, b] != C[u, j, side, a, b]:
-                        return False
-    return True
-
-
 @njit
-def _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, out, v0, v1):
-    """:func:`follow` for variants ``v0 .. v1 - 1`` with one set of buffers; the start's det
-    sign is computed once for consecutive variants that share an assembled start."""
+def _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, assembled, row_scale, col_scale, cfg,
+                  out, v0, v1):  # fmt: skip
+    """:func:`follow` for variants ``v0 .. v1 - 1`` with one set of buffers: variant ``v``
+    starts from ``Q[v], S[v], ...`` (``[0]`` for all when the start has a leading axis of 1),
+    aims at the design of ``Q1[v], ...`` and ends in ``Qo[v], ...``. A shared assembled start's
+    det sign is computed once (else each variant's, by :func:`follow`)."""
     buf = buffers(tb, plan, nnz)
     fbuf = follow_buffers(Q[0], S[0], C[0], L[0])
     hist = np.zeros(0)
+    shared = Q.shape[0] == 1
     sign = UNKNOWN_SIGN
+    if shared and assembled == 1 and cfg.branch:
+        sign = _sign_at(tb, plan, Q[0], S[0], C[0], L[0], buf)
     for v in range(v0, v1):
-        if assembled == 1 and cfg.branch and (v == v0 or not _same_start(Q, S, C, L, v, v - 1)):
-            sign = _sign_at(tb, plan, Q[v], S[v], C[v], L[v], buf)
-        r = follow(tb, plan, Q[v], S[v], C[v], L[v], Q1[v], S1[v], C1[v], L1[v], assembled, row_scale, col_scale,
+        u = 0 if shared else v
+        copy_state(Q[u], S[u], C[u], L[u], Qo[v], So[v], Co[v], Lo[v])
+        r = follow(tb, plan, Qo[v], So[v], Co[v], Lo[v], Q1[v], S1[v], C1[v], L1[v], assembled, row_scale, col_scale,
                    cfg, buf, fbuf, hist, sign)  # fmt: skip
         _store(out, v, r)
 
 
 @njit
-def follow_batch(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, out):
-    """:func:`follow` for every variant of a leading batch axis; ``out[v]`` = (status,
-    iterations, fraction, sub-steps, residual, flags)."""
-    _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, out, 0, Q.shape[0])
+def follow_batch(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, assembled, row_scale, col_scale, cfg,
+                 out):  # fmt: skip
+    """:func:`follow` for every variant of a leading batch axis (see :func:`_follow_range`);
+    ``out[v]`` = (status, iterations, fraction, sub-steps, residual, flags)."""
+    _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, assembled, row_scale, col_scale, cfg,
+                  out, 0, Q1.shape[0])  # fmt: skip
 
 
 @njit(parallel=True)
-def follow_batch_threaded(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, out, nth):
+def follow_batch_threaded(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, assembled, row_scale,
+                          col_scale, cfg, out, nth):  # fmt: skip
     """:func:`follow_batch` split into ``nth`` contiguous chunks, one per thread."""
-    N = Q.shape[0]
+    N = Q1.shape[0]
     for c in prange(nth):
-        _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, out,
-                      c * N // nth, (c + 1) * N // nth)  # fmt: skip
+        _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, assembled, row_scale, col_scale,
+                      cfg, out, c * N // nth, (c + 1) * N // nth)  # fmt: skip
 
 
 @njit
