@@ -129,42 +129,60 @@ def is_rotation(C: ArrayLike, tol: float = 1e-6) -> bool:
 
 
 @kernel
+def _entries(A: Array) -> tuple:
+    """The nine entries of a 3x3, row by row. The helpers below read every input into
+    registers before writing: the compiler must assume ``out`` may alias an input, and a
+    store between loads would force it to reload them one by one."""
+    return (A[0, 0], A[0, 1], A[0, 2], A[1, 0], A[1, 1], A[1, 2], A[2, 0], A[2, 1], A[2, 2])
+
+
+@kernel
+def _entries_T(A: Array) -> tuple:
+    """The nine entries of a 3x3's transpose, row by row."""
+    return (A[0, 0], A[1, 0], A[2, 0], A[0, 1], A[1, 1], A[2, 1], A[0, 2], A[1, 2], A[2, 2])
+
+
+@kernel
+def _product_into(a: tuple, b: tuple, out: Array) -> None:
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j]
+
+
+@kernel
 def mm_into(A: Array, B: Array, out: Array) -> None:
     """``out = A @ B`` (3 x 3)."""
-    for a in range(3):
-        for b in range(3):
-            out[a, b] = A[a, 0] * B[0, b] + A[a, 1] * B[1, b] + A[a, 2] * B[2, b]
+    _product_into(_entries(A), _entries(B), out)
 
 
 @kernel
 def mmT_into(A: Array, B: Array, out: Array) -> None:
     """``out = A @ B.T`` (3 x 3)."""
-    for a in range(3):
-        for b in range(3):
-            out[a, b] = A[a, 0] * B[b, 0] + A[a, 1] * B[b, 1] + A[a, 2] * B[b, 2]
+    _product_into(_entries(A), _entries_T(B), out)
 
 
 @kernel
 def mTm_into(A: Array, B: Array, out: Array) -> None:
     """``out = A.T @ B`` (3 x 3)."""
-    for a in range(3):
-        for b in range(3):
-            out[a, b] = A[0, a] * B[0, b] + A[1, a] * B[1, b] + A[2, a] * B[2, b]
+    _product_into(_entries_T(A), _entries(B), out)
 
 
 @kernel
 def mv_into(A: Array, v: Array, out: Array) -> None:
     """``out = A @ v``."""
-    for a in range(3):
-        out[a] = A[a, 0] * v[0] + A[a, 1] * v[1] + A[a, 2] * v[2]
+    a, x, y, z = _entries(A), v[0], v[1], v[2]
+    out[0] = a[0] * x + a[1] * y + a[2] * z
+    out[1] = a[3] * x + a[4] * y + a[5] * z
+    out[2] = a[6] * x + a[7] * y + a[8] * z
 
 
 @kernel
 def cross_into(a: Array, b: Array, out: Array) -> None:
     """``out = a x b = tilde(a) b`` (eq. 3)."""
-    out[0] = a[1] * b[2] - a[2] * b[1]
-    out[1] = a[2] * b[0] - a[0] * b[2]
-    out[2] = a[0] * b[1] - a[1] * b[0]
+    a0, a1, a2, b0, b1, b2 = a[0], a[1], a[2], b[0], b[1], b[2]
+    out[0] = a1 * b2 - a2 * b1
+    out[1] = a2 * b0 - a0 * b2
+    out[2] = a0 * b1 - a1 * b0
 
 
 @kernel
