@@ -21,7 +21,7 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 
-from kinprop.jit import kernel
+from kinprop.jit import inlined, kernel
 from kinprop.spatial import EZ, Array
 
 DOT1, DOT2, SPHERICAL, DISTANCE = 0, 1, 2, 3
@@ -42,7 +42,7 @@ def _cross_row(a0, a1, a2, b0, b1, b2, out, r):
     out[r, 0], out[r, 1], out[r, 2] = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
-@kernel
+@inlined
 def basic_rows(kind, on_j, axes, d, R_i, R_j, l, r, Phi, Phi_d, Phi_wi, Phi_wj, Phi_l):
     """Rows ``r, r+1, ...`` of one basic constraint into ``Phi[r]`` and the partial rows
     (which the caller has zeroed); returns the number of rows written.

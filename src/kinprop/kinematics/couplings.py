@@ -9,14 +9,14 @@ the coefficients live in the state's ``L`` after the joints' lengths (``CP_L0``)
 from __future__ import annotations
 
 from kinprop.constraints.coupling import N_COEF, coupling_value
-from kinprop.jit import kernel
+from kinprop.jit import inlined
 from kinprop.kinematics.tables import CP_COL, CP_L0, CP_QA, CP_QB, CP_ROW
 
 #: Jacobian entries per coupling row: q_a, q_b, c0..c4
 ENTRIES = 2 + N_COEF
 
 
-@kernel
+@inlined
 def coupling_rows(tb, Q, L, Phi, vals, need, rows, cols, record, k):
     """Write every coupling's row of ``Phi`` and its entries from entry ``k`` on (same ``need``
     and ``record`` rules as ``evaluate``); returns the next entry index."""

@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from kinprop.constraints.basic import basic_rows
-from kinprop.jit import kernel, njit
+from kinprop.jit import inlined, kernel, njit
 from kinprop.joints import motion, placement
 from kinprop.joints.composite import TD_CODE
 from kinprop.kinematics.couplings import ENTRIES as COUPLING_ENTRIES
@@ -46,7 +46,6 @@ from kinprop.kinematics.tables import (
     J_BODY_I,
     J_BODY_J,
     J_CODE,
-    J_COL_C_I,
     J_COL_L,
     J_COL_S_I,
     J_NQ,
@@ -92,7 +91,7 @@ def workspace(tb):
             np.zeros((2, MAX_CUT_ROWS, 6)))  # fmt: skip
 
 
-@kernel
+@inlined
 def forward_kinematics(tb, Q, S, C, ws):
     """Body poses ``r``, ``A`` and global joint frames ``P``, ``R`` of every joint (eq. 28), into ``ws``."""
     r, A, P, R = ws[0], ws[1], ws[2], ws[3]
@@ -144,9 +143,11 @@ def forward_kinematics(tb, Q, S, C, ws):
             mm_into(A[body], C[j, side], R[j, side])
 
 
-@kernel
-def tree_twists(tb, Q, ws):
-    """B (q columns) and M, N (s', C columns) of every tree joint as global twists (eqs. 34-35), into ``ws``."""
+@inlined
+def tree_twists(tb, Q, ws, need):
+    """B (q columns) and M, N (s', C columns) of every tree joint as global twists (eqs. 34-35),
+    into ``ws``; those of variables whose first column ``need`` (see :func:`evaluate`) is 0 are
+    skipped."""
     A, P, R, Tq, Td = ws[1], ws[2], ws[3], ws[4], ws[5]
     App, dd, H = ws[6][0], ws[8][0], ws[8][1]
     dpp, v, w, x3 = ws[7][0], ws[7][1], ws[7][2], ws[7][3]
@@ -154,7 +155,7 @@ def tree_twists(tb, Q, ws):
         j, par, chi = tb.tree[t, T_JOINT], tb.tree[t, T_PARENT], tb.tree[t, T_CHILD]
         q0, nq = tb.joint[j, J_QCOL], tb.joint[j, J_NQ]
         sign = -1.0 if tb.tree[t, T_REVERSED] else 1.0
-        if nq > 0:
+        if nq > 0 and need[q0]:
             q = Q[q0 : q0 + nq]
             code = tb.joint[j, J_CODE]
             placement(code, q, App, dpp)
@@ -166,8 +167,11 @@ def tree_twists(tb, Q, ws):
                 for x in range(3):
                     Tq[t, x, y] = sign * (v[x] + x3[x])
                     Tq[t, 3 + x, y] = sign * w[x]
-        if tb.joint[j, J_COL_S_I] < 0 and tb.joint[j, J_COL_S_I + 1] < 0 and tb.joint[j, J_COL_C_I] < 0 \
-                and tb.joint[j, J_COL_C_I + 1] < 0:  # fmt: skip
+        needed = False
+        for f in range(4):
+            col = tb.joint[j, J_COL_S_I + f]
+            needed = needed or (col >= 0 and need[col] != 0)
+        if not needed:
             continue
         a, b = (0, 1) if tb.tree[t, T_REVERSED] == 0 else (1, 0)
         for x in range(3):
@@ -193,8 +197,7 @@ def _emit(k, value, r, c, vals, rows, cols, record):
     return k + 1
 
 
-@kernel
-def evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols):
+def _evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols):
     """Phi and the Jacobian entries at one state; returns the number of entries.
 
     ``need`` (per layout column, int8): entries of a variable whose first column is 0 there
@@ -205,7 +208,7 @@ def evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols):
     record = rows.shape[0] > 0
     A, P, R, Tq, Td = ws[1], ws[2], ws[3], ws[4], ws[5]
     forward_kinematics(tb, Q, S, C, ws)
-    tree_twists(tb, Q, ws)
+    tree_twists(tb, Q, ws, need)
     Pd, Wi, Wj, Pl = ws[9][0], ws[9][1], ws[9][2], ws[10]
     Zi, Zj = ws[11][0], ws[11][1]
     d, Ru, g, x3, Pi = ws[7][0], ws[7][1], ws[7][2], ws[7][3], ws[7][4]
@@ -302,8 +305,17 @@ def evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols):
             else:
                 k += 1
         Phi[row] = s - 1.0
-    k = coupling_rows(tb, Q, L, Phi, vals, need, rows, cols, record, k)  # kinematics/couplings.py
+    if tb.coupling.shape[0] > 0:
+        k = coupling_rows(tb, Q, L, Phi, vals, need, rows, cols, record, k)  # kinematics/couplings.py
     return k
+
+
+evaluate = kernel(_evaluate)
+#: the same function compiled into its caller, for the Newton loop's one evaluation site
+#: (``kinprop.solver.newton.solve``): a call hands over the tables and the workspace, some 300
+#: scalar arguments (0.12 us; 4 calls per Stewart solve). It costs compile time: +13 s on an
+#: empty cache with ``KINPROP_JIT=on`` (docs/architecture.md).
+evaluate_inlined = inlined(_evaluate)
 
 
 def count_entries(tb) -> int:

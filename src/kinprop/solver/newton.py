@@ -16,8 +16,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from kinprop.jit import GELSD, JIT, LAPACK_INT, kernel, njit, prange
-from kinprop.kinematics.kernels import evaluate, retract, workspace
+from kinprop.jit import GELSD, JIT, LAPACK_INT, inlined, kernel, njit, prange
+from kinprop.kinematics.kernels import evaluate, evaluate_inlined, retract, workspace
 from kinprop.kinematics.tables import V_COMPONENT, V_JOINT, V_KIND, V_SIDE, VAR_C, VAR_Q, VAR_S
 from kinprop.spatial import exp_so3_into, mm_into, mmT_into
 
@@ -176,7 +176,7 @@ def buffers(tb, plan, nnz):
         np.zeros(0, np.int64), np.zeros(big), np.zeros(1, LAPACK_INT)  # fmt: skip
 
 
-@kernel
+@inlined
 def _scatter(plan, vals, store):
     """The free Jacobian's blocks from the entry values (``plan.entry_slot``)."""
     store[:] = 0.0
@@ -186,7 +186,7 @@ def _scatter(plan, vals, store):
             store[slot[k]] += vals[k]
 
 
-@kernel
+@inlined
 def _block_system(plan, Phi, vals, buf, b, colmajor):
     """Block ``b``'s weighted matrix ``J W^(1/2)`` into ``buf[B_LU]`` (row- or column-major) and
     its right side (Phi of its rows plus the coupling to the blocks already solved) into
@@ -206,7 +206,7 @@ def _block_system(plan, Phi, vals, buf, b, colmajor):
     return mb, nb
 
 
-@kernel
+@inlined
 def _block_out(plan, buf, b, sign):
     """``dx`` of block ``b``'s columns from its solution in ``buf[B_OUT]`` (``-`` it when the
     solution is of ``J x = rhs``: ``sign`` -1)."""
@@ -217,7 +217,7 @@ def _block_out(plan, buf, b, sign):
         dx[f] = sign * out[y] * plan.sqrt_weights[f]
 
 
-@kernel
+@inlined
 def _lu_blocks(plan, Phi, vals, buf, b0):
     """Blocks ``b0, b0+1, ...`` solved by LU while square and regular; returns ``(the first
     block that needs the SVD or -1, sign of det over the blocks solved)``."""
@@ -265,12 +265,12 @@ def newton_step(plan, Phi, vals, buf):
     return sign
 
 
-@kernel
+@inlined
 def _residual(tb, plan, Q, S, C, L, row_scale, buf):
     """Evaluate Phi (kept in ``buf``) and the Jacobian entries the plan needs; return the
     scaled norm of Phi."""
     Phi, vals, ws, none = buf[B_PHI], buf[B_VALS], buf[B_WS], buf[B_NONE]
-    evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, none, none)
+    evaluate_inlined(tb, Q, S, C, L, ws, Phi, vals, plan.need, none, none)
     s = 0.0
     for i in range(Phi.shape[0]):
         r = Phi[i] * row_scale[i]
@@ -294,46 +294,52 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
     Phi, vals, dx, disp, dx1 = buf[B_PHI], buf[B_VALS], buf[B_DX], buf[B_DISP], buf[B_DX1]
     free = plan.free
     nf = free.shape[0]
-    norm = _residual(tb, plan, Q, S, C, L, row_scale, buf)
-    if history.shape[0] > 0:
-        history[0] = norm
-    first = max(norm, 1e-300)
+    norm, first = 0.0, 1e-300
     it, status = 0, NOT_CONVERGED
     sign0, sign1 = 0, 0
     disp[:] = 0.0
-    while norm >= tol and it < cfg.max_iter:
-        if nf == 0:
-            status = NO_FREE
-            break
-        sign1 = newton_step(plan, Phi, vals, buf)
-        if it == 0:
-            sign0 = sign1
-            for i in range(nf):
-                dx1[i] = dx[i]
-        for i in range(nf):
-            disp[i] += dx[i]
-        retract(tb, free, dx, Q, S, C, L, buf[B_WS])
-        it += 1
-        norm = _residual(tb, plan, Q, S, C, L, row_scale, buf)
-        if it < history.shape[0]:
-            history[it] = norm
-        if not np.isfinite(norm) or norm > cfg.divergence * first:
-            status = DIVERGED
-            break
-    if norm < tol:
-        status = CONVERGED
-        if cfg.polish and nf > 0 and norm > POLISHED:  # one more step to round-off, kept if better
-            newton_step(plan, Phi, vals, buf)
-            retract(tb, free, dx, Q, S, C, L, buf[B_WS])
-            polished = _residual(tb, plan, Q, S, C, L, row_scale, buf)
-            if polished < norm:
-                norm = polished
+    polishing = False
+    while True:  # one evaluation and one step per pass (one call site each: compiled inline)
+        r = _residual(tb, plan, Q, S, C, L, row_scale, buf)
+        if polishing:  # after the polishing step: kept if it lowered the residual, else undone
+            if r < norm:
+                norm = r
                 for i in range(nf):
                     disp[i] += dx[i]
             else:
                 for i in range(nf):
                     dx[i] = -dx[i]
                 retract(tb, free, dx, Q, S, C, L, buf[B_WS])
+            break
+        norm = r
+        if it < history.shape[0]:
+            history[it] = norm
+        if it == 0:
+            first = max(norm, 1e-300)
+        elif not np.isfinite(norm) or norm > cfg.divergence * first:
+            status = DIVERGED
+            break
+        if norm < tol:
+            status = CONVERGED
+            if not (cfg.polish and nf > 0 and norm > POLISHED):
+                break
+            polishing = True  # one more step to round-off, kept if better
+        elif it >= cfg.max_iter:
+            break
+        elif nf == 0:
+            status = NO_FREE
+            break
+        sign = newton_step(plan, Phi, vals, buf)
+        if not polishing:
+            sign1 = sign
+            if it == 0:
+                sign0 = sign
+                for i in range(nf):
+                    dx1[i] = dx[i]
+            for i in range(nf):
+                disp[i] += dx[i]
+            it += 1
+        retract(tb, free, dx, Q, S, C, L, buf[B_WS])
     step1, p2, c2 = 0.0, 0.0, 0.0
     if it > 0:  # the predictor x_0 + dx_1 (per block) and how far the corrections took it
         for b in range(plan.col_ptr.shape[0] - 1):
@@ -495,7 +501,8 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
             status = STEP_LIMIT
             break
         tn = 1.0 if t + h >= 1.0 - 1e-12 else t + h
-        copy_state(Q, S, C, L, Qs, Ss, Cs, Ls)
+        if t > 0.0:  # keep the last accepted state (at t = 0 that is the start, Q0 S0 C0 L0)
+            copy_state(Q, S, C, L, Qs, Ss, Cs, Ls)
         for k in range(Q.shape[0]):
             if Q1[k] != Q0[k] and not fq[k]:
                 Q[k] = Q0[k] + tn * (Q1[k] - Q0[k])
@@ -540,7 +547,10 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         if flip:
             flags |= SIGN_FLIP
         flags |= SUBDIVIDED
-        copy_state(Qs, Ss, Cs, Ls, Q, S, C, L)
+        if t > 0.0:
+            copy_state(Qs, Ss, Cs, Ls, Q, S, C, L)
+        else:
+            copy_state(Q0, S0, C0, L0, Q, S, C, L)
         h *= 0.5
         if h < cfg.min_step:
             status = INFEASIBLE
