@@ -92,6 +92,7 @@ inlined = partial(kernel, inline="always")
 GELSD = _LAPACK().numba_ez_gelsd(numba.types.float64)
 LAPACK_INT = F_INT_nptype
 prange = numba.prange
+set_parallel_chunksize = numba.set_parallel_chunksize
 #: False when numba's compiler is switched off (``NUMBA_DISABLE_JIT=1``): the kernels run as Python
 JIT = not numba.config.DISABLE_JIT
 get_num_threads = numba.get_num_threads
@@ -108,5 +109,6 @@ __all__ = [
     "kernel",
     "njit",
     "prange",
+    "set_parallel_chunksize",
     "warm_marker",
 ]

@@ -23,7 +23,7 @@ import numpy as np
 
 from kinprop.constraints.coupling import N_COEF
 from kinprop.errors import AddressError
-from kinprop.jit import get_num_threads
+from kinprop.jit import get_num_threads, set_parallel_chunksize
 from kinprop.kinematics import kernels
 from kinprop.kinematics.layout import VariableLayout, build_layout, column_labels
 from kinprop.kinematics.tables import RowBlock, Tables, build_tables, row_blocks
@@ -690,7 +690,12 @@ class Engine:
         args = (self.tables, plan, self.nnz, starts.Q, starts.S, starts.C, starts.L, targets.Q, targets.S, targets.C,
                 targets.L, st.Q, st.S, st.C, st.L, assembled, self.row_scale, self.col_scale, cfg, out)  # fmt: skip
         if (N >= 256 if threads is None else threads) and N:
-            newton.follow_batch_threaded(*args, max(1, min(get_num_threads(), N)))
+            nth = get_num_threads()  # one chunk per thread at least; up to 16, of 64 variants or more
+            before = set_parallel_chunksize(1)  # chunks handed out one at a time (follow_batch_threaded)
+            try:
+                newton.follow_batch_threaded(*args, max(min(nth, N), min(16 * nth, N // 64)))
+            finally:
+                set_parallel_chunksize(before)
         else:
             newton.follow_batch(*args)
         return BatchSolution(st, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4], out[:, 2],

@@ -607,12 +607,16 @@ def follow_batch(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, asse
 
 @njit(parallel=True)
 def follow_batch_threaded(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, assembled, row_scale,
-                          col_scale, cfg, out, nth):  # fmt: skip
-    """:func:`follow_batch` split into ``nth`` contiguous chunks, one per thread."""
+                          col_scale, cfg, out, chunks):  # fmt: skip
+    """:func:`follow_batch` split into ``chunks`` contiguous chunks over numba's threads. Call it
+    under ``set_parallel_chunksize(1)`` (as ``Engine.solve_batch`` does; set inside, it would
+    make the function uncacheable) so that the chunks are handed out one at a time: a thread
+    that finishes early takes the next, and a core slowed by other work does not hold up the
+    batch as an equal split per thread would."""
     N = Q1.shape[0]
-    for c in prange(nth):
+    for c in prange(chunks):
         _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, assembled, row_scale, col_scale,
-                      cfg, out, c * N // nth, (c + 1) * N // nth)  # fmt: skip
+                      cfg, out, c * N // chunks, (c + 1) * N // chunks)  # fmt: skip
 
 
 @njit
