@@ -17,6 +17,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
+from numbers import Real
 from typing import Any
 
 import numpy as np
@@ -120,6 +121,24 @@ class Target:
     start: int  # first layout column
     size: int
     index: int | None
+
+
+#: check rules of one-number changes (:meth:`Engine.apply`)
+_BOUNDED, _POSITIVE, _ANY = 0, 1, 2
+
+
+def _scalar_slot(t: Target) -> tuple[int, int, int] | None:
+    """``(array, flat index, rule)`` of a one-number address in a single state (array 0: ``Q``,
+    1: ``S``, 3: ``L``), or None (a vector, or an orientation: those go through ``set``)."""
+    if t.group == "q" and (t.index is not None or t.size == 1):
+        return 0, t.start + (t.index or 0), _BOUNDED
+    if t.group == "s" and t.index is not None:
+        return 1, (2 * t.joint + t.side) * 3 + t.index, _BOUNDED
+    if t.group == "coef" and t.index is not None:
+        return 3, t.joint + t.index, _ANY
+    if t.group == "l":
+        return 3, t.joint, _POSITIVE
+    return None
 
 
 @dataclass(frozen=True, eq=False)
@@ -620,15 +639,45 @@ class Engine:
 
     def apply(self, start: State, changes: Mapping[str, Any]) -> tuple[State, dict[str, Array], set[str]]:
         """A copy of ``start`` with ``changes`` (address -> value) written; returns it, the
-        changes as arrays, and the changed variable keys (never free)."""
+        changes as arrays, and the changed variable keys (never free). Single numbers for
+        one-number addresses (``L3.length``, ``J.s_i[2]``, ``O2.q``) are checked and written
+        together (as :meth:`set` checks them: finite, within the length bound, lengths
+        positive); everything else goes through :meth:`set`."""
         st = start.copy()
         done: dict[str, Array] = {}
         keys: set[str] = set()
-        for address, value in changes.items():
-            self.set(st, address, value)
-            done[address] = np.asarray(value, dtype=float)
-            keys.add(self.target(address).key)
+        scalars: list[tuple[str, float, tuple[int, int, int]]] = []
+        for address, value in [*changes.items(), (None, None)]:
+            t = self.target(address) if address is not None else None
+            slot = _scalar_slot(t) if t is not None and isinstance(value, Real) else None
+            if slot is not None:
+                scalars.append((address, float(value), slot))
+                keys.add(t.key)
+                continue
+            if scalars:  # written before what follows them: the changes apply in their order
+                self._set_scalars(st, scalars)
+                done.update((a, np.asarray(v)) for a, v, _ in scalars)
+                scalars = []
+            if t is not None:
+                self.set(st, address, value)
+                done[address] = np.asarray(value, dtype=float)
+                keys.add(t.key)
         return st, done, keys
+
+    def _set_scalars(self, state: State, scalars: list[tuple[str, float, tuple[int, int, int]]]) -> None:
+        """Write one-number changes (``(address, value, slot)``) after checking them all at once;
+        a bad one is reported by :meth:`set` with its own message."""
+        vals = np.array([v for _, v, _ in scalars])
+        where, flat, rule = (np.array(x, dtype=np.int64) for x in zip(*(s for _, _, s in scalars), strict=True))
+        bound = ABSURD * max(1.0, self.length_scale or 1.0)
+        ok = np.isfinite(vals) & ((rule == _ANY) | (np.abs(vals) <= bound)) & ((rule != _POSITIVE) | (vals > 0))
+        if not ok.all():
+            address, value, _ = scalars[int(np.argmin(ok))]
+            self.set(state, address, value)  # raises, naming the address and the rule
+        for w, arr in ((0, state.Q), (1, state.S), (3, state.L)):
+            sel = where == w
+            if sel.any():
+                arr.reshape(-1)[flat[sel]] = vals[sel]
 
     def propagate(
         self,
