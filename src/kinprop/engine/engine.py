@@ -127,17 +127,17 @@ class Target:
 _BOUNDED, _POSITIVE, _ANY = 0, 1, 2
 
 
-def _scalar_slot(t: Target) -> tuple[int, int, int] | None:
-    """``(array, flat index, rule)`` of a one-number address in a single state (array 0: ``Q``,
-    1: ``S``, 3: ``L``), or None (a vector, or an orientation: those go through ``set``)."""
+def _scalar_slot(t: Target) -> tuple[str, int, int] | None:
+    """``(state array, flat index, rule)`` of a one-number address in a single state, or None
+    (a vector, or an orientation: those go through ``Engine.set``)."""
     if t.group == "q" and (t.index is not None or t.size == 1):
-        return 0, t.start + (t.index or 0), _BOUNDED
+        return "Q", t.start + (t.index or 0), _BOUNDED
     if t.group == "s" and t.index is not None:
-        return 1, (2 * t.joint + t.side) * 3 + t.index, _BOUNDED
+        return "S", (2 * t.joint + t.side) * 3 + t.index, _BOUNDED
     if t.group == "coef" and t.index is not None:
-        return 3, t.joint + t.index, _ANY
+        return "L", t.joint + t.index, _ANY
     if t.group == "l":
-        return 3, t.joint, _POSITIVE
+        return "L", t.joint, _POSITIVE
     return None
 
 
@@ -646,43 +646,43 @@ class Engine:
         st = start.copy()
         done: dict[str, Array] = {}
         keys: set[str] = set()
-        scalars: list[tuple[str, float, tuple[int, int, int]]] = []
-        for address, value in [*changes.items(), (None, None)]:
-            t = self.target(address) if address is not None else None
-            slot = _scalar_slot(t) if t is not None and isinstance(value, Real) else None
+        pending: list[tuple[str, float, tuple[str, int, int]]] = []
+        for address, value in changes.items():
+            t = self.target(address)
+            keys.add(t.key)
+            slot = _scalar_slot(t) if isinstance(value, Real) else None
             if slot is not None:
-                scalars.append((address, float(value), slot))
-                keys.add(t.key)
+                pending.append((address, float(value), slot))
                 continue
-            if scalars:  # written before what follows them: the changes apply in their order
-                self._set_scalars(st, scalars)
-                done.update((a, np.asarray(v)) for a, v, _ in scalars)
-                scalars = []
-            if t is not None:
-                self.set(st, address, value)
-                done[address] = np.asarray(value, dtype=float)
-                keys.add(t.key)
+            self._set_scalars(st, pending, done)  # before this change: changes apply in their order
+            pending = []
+            self.set(st, address, value)
+            done[address] = np.asarray(value, dtype=float)
+        self._set_scalars(st, pending, done)
         return st, done, keys
 
-    def _set_scalars(self, state: State, scalars: list[tuple[str, float, tuple[int, int, int]]]) -> None:
-        """Write one-number changes (``(address, value, slot)``) after checking them all at once;
-        a bad one is reported by :meth:`set` with its own message. Below three, :meth:`set` each
-        (the arrays cost ~8 us: more than two calls of ``set``)."""
+    def _set_scalars(self, state: State, scalars: list[tuple[str, float, tuple[str, int, int]]],
+                     done: dict[str, Array]) -> None:  # fmt: skip
+        """Write one-number changes ``(address, value, slot)`` after checking them all at once
+        (into ``done`` too); a bad one is reported by :meth:`set` with its own message. Below
+        three, :meth:`set` each (the arrays cost ~8 us: more than two calls of ``set``)."""
         if len(scalars) < 3:
             for address, value, _ in scalars:
                 self.set(state, address, value)
-            return
-        vals = np.array([v for _, v, _ in scalars])
-        where, flat, rule = (np.array(x, dtype=np.int64) for x in zip(*(s for _, _, s in scalars), strict=True))
-        bound = ABSURD * max(1.0, self.length_scale or 1.0)
-        ok = np.isfinite(vals) & ((rule == _ANY) | (np.abs(vals) <= bound)) & ((rule != _POSITIVE) | (vals > 0))
-        if not ok.all():
-            address, value, _ = scalars[int(np.argmin(ok))]
-            self.set(state, address, value)  # raises, naming the address and the rule
-        for w, arr in ((0, state.Q), (1, state.S), (3, state.L)):
-            sel = where == w
-            if sel.any():
-                arr.reshape(-1)[flat[sel]] = vals[sel]
+        else:
+            vals = np.array([v for _, v, _ in scalars])
+            flat, rule = (np.array(x, dtype=np.int64) for x in zip(*(s[1:] for _, _, s in scalars), strict=True))
+            where = np.array([s[0] for _, _, s in scalars])
+            bound = ABSURD * max(1.0, self.length_scale or 1.0)
+            ok = np.isfinite(vals) & ((rule == _ANY) | (np.abs(vals) <= bound)) & ((rule != _POSITIVE) | (vals > 0))
+            if not ok.all():
+                address, value, _ = scalars[int(np.argmin(ok))]
+                self.set(state, address, value)  # raises, naming the address and the rule
+            for name in "QSL":
+                sel = where == name
+                if sel.any():
+                    getattr(state, name).reshape(-1)[flat[sel]] = vals[sel]
+        done.update((a, np.asarray(v)) for a, v, _ in scalars)
 
     def propagate(
         self,

@@ -299,7 +299,7 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
     sign0, sign1 = 0, 0
     disp[:] = 0.0
     polishing = False
-    while True:  # one evaluation and one step per pass (one call site each: compiled inline)
+    while True:  # one evaluation per pass: one call site, where evaluate is compiled inline
         r = _residual(tb, plan, Q, S, C, L, row_scale, buf)
         if polishing:  # after the polishing step: kept if it lowered the residual, else undone
             if r < norm:
