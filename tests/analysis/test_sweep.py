@@ -153,33 +153,3 @@ def test_cli_baseline_plot_and_json(tmp_path) -> None:
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     bad = CliRunner().invoke(app, ["sweep", str(EXAMPLES / "fourbar.yaml"), "--drive", "O2=0:90:6", "--baseline"])
     assert bad.exit_code == 2 and "--set" in bad.output
-
-
-def test_an_interrupt_right_after_a_row_group_is_written_does_not_write_it_twice(tmp_path):
-    """Ctrl-C (or SIGTERM routed to it) landing between writing a row group and marking it
-    written: the group is in the file once (seen under load: 32 rows twice after SIGTERM)."""
-    import signal
-
-    import pandas as pd
-
-    from kinprop.analysis.sweep import ParquetSink
-
-    sink = ParquetSink(tmp_path / "rows.parquet", ["step", "x"], [], row_group_size=4)
-    real = sink._writer
-
-    class InterruptAfterWrite:
-        def write_table(self, table):
-            real.write_table(table)
-            signal.raise_signal(signal.SIGINT)  # the handler runs at the next bytecode
-
-        def close(self):
-            real.close()
-
-    sink._writer = InterruptAfterWrite()
-    with pytest.raises(KeyboardInterrupt):
-        try:
-            for k in range(10):
-                sink.write({"step": k, "x": 0.5 * k})
-        finally:
-            sink.close()
-    assert list(pd.read_parquet(tmp_path / "rows.parquet")["step"]) == [0, 1, 2, 3]

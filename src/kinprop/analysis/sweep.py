@@ -33,11 +33,8 @@ import csv
 import math
 import os
 import re
-import signal
-import threading
 import warnings
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from html import escape
 from pathlib import Path
@@ -252,29 +249,6 @@ class CsvSink:
             self._fh.close()
 
 
-@contextmanager
-def _interrupts_held() -> Iterator[None]:
-    """Hold SIGINT and SIGTERM (main thread), then deliver them to their handlers: for steps
-    that must not be split by an interrupt."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    held: list[int] = []
-    previous: dict[int, Any] = {}
-    try:
-        for s in (signal.SIGINT, signal.SIGTERM):
-            previous[s] = signal.signal(s, lambda signum, frame: held.append(signum))
-        yield
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
-        for s in held:
-            if callable(previous[s]):
-                previous[s](s, None)
-            elif previous[s] == signal.SIG_DFL:
-                signal.raise_signal(s)
-
-
 class ParquetSink:
     """Write rows to a Parquet file in row groups of ``row_group_size`` (pyarrow ParquetWriter)."""
 
@@ -313,9 +287,8 @@ class ParquetSink:
     def flush(self) -> None:
         if self._rows:
             table = self._pa.Table.from_pylist(self._rows, schema=self.schema)
-            with _interrupts_held():  # an interrupt between the two would write the group twice
-                self._writer.write_table(table)
-                self._rows = []
+            self._writer.write_table(table)
+            self._rows = []
 
     def close(self) -> None:
         if self._writer is not None:
