@@ -21,10 +21,10 @@ import typer
 from rich.text import Text
 
 from kinprop.cli.app import EXIT_NOT_CONVERGED, err, out, print_json
+from kinprop.engine import compile as compile_engine
 from kinprop.errors import SingularityWarning
 from kinprop.io.results import coordinates_json, design_json, propagation_json
 from kinprop.model import Model
-from kinprop.engine import compile as compile_engine
 from kinprop.propagation import Propagation
 from kinprop.propagation.continuation import ContinuationResult, continuation_of
 from kinprop.propagation.propagate import propagation_of, solve_changes

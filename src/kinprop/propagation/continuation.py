@@ -151,7 +151,8 @@ def failure_message(sol: Solution, d: Diagnosis) -> str:
     :class:`kinprop.Status` plus the diagnosis)."""
     if sol.status is Status.NO_FREE:
         return sol.message
-    if sol.fraction == 0.0 and sol.flags & newton.FROM_ESTIMATES and sol.status in (Status.NOT_CONVERGED, Status.DIVERGED):
+    unassembled = sol.fraction == 0.0 and sol.flags & newton.FROM_ESTIMATES
+    if unassembled and sol.status in (Status.NOT_CONVERGED, Status.DIVERGED):
         return f"the model does not assemble before the change ({sol.message}); nothing of the change can be applied"
     names = ", ".join(dict.fromkeys([r for r, _ in d.conflict] + [r for r, _ in d.residual_rows])) or "none identified"
     return (
@@ -209,4 +210,11 @@ def propagate_continuation(
     return continuation_of(model, sol, free, top)
 
 
-__all__ = ["ContinuationResult", "Diagnosis", "continuation_of", "diagnose", "failure_message", "propagate_continuation"]
+__all__ = [
+    "ContinuationResult",
+    "Diagnosis",
+    "continuation_of",
+    "diagnose",
+    "failure_message",
+    "propagate_continuation",
+]
