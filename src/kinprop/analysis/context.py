@@ -30,6 +30,8 @@ class OutputContext:
     kin: Kinematics
     reference: Model | None = None
     wheels: Mapping[str, WheelSpec] | None = None
+    #: the engine the kinematics came from (reused for the reference configuration)
+    engine: Engine | None = None
 
     @classmethod
     def of(
@@ -39,9 +41,10 @@ class OutputContext:
         wheels: Mapping[str, WheelSpec] | None = None,
         engine: Engine | None = None,
     ) -> OutputContext:
-        """Forward kinematics of ``model`` at its current state."""
-        eng = engine or compile_engine(model.mechanism)
-        return cls(model, eng.kinematics(model.design, model.coordinates), reference, wheels)
+        """Forward kinematics of ``model`` at its current state (``engine``: compiled from its
+        mechanism; None only at a public boundary, which then compiles once)."""
+        eng = engine if engine is not None else compile_engine(model.mechanism)
+        return cls(model, eng.kinematics(model.design, model.coordinates), reference, wheels, eng)
 
     def body_point(self, body: str, point: str) -> Array:
         """Global position of the named point ``point`` of ``body``."""

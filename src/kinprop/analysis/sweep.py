@@ -90,9 +90,8 @@ class Drive:
         return f"{self.joint}.q[{self.index}]"
 
 
-def _coordinate_info(model: Model, joint: str) -> tuple[int, tuple[int, ...]]:
+def _coordinate_info(asm: Engine, model: Model, joint: str) -> tuple[int, tuple[int, ...]]:
     """(number of coordinates, indices that are angles in model units) of a joint."""
-    asm = compile_engine(model.mechanism)
     if joint not in model.mechanism.joint_names:
         raise AddressError(f"--drive: unknown joint {joint!r}; joints are {', '.join(model.mechanism.joint_names)}")
     key = f"{joint}.q"
@@ -164,7 +163,7 @@ def _is_number(text: str) -> bool:
     return True
 
 
-def parse_drive(model: Model, text: str) -> Drive:
+def parse_drive(model: Model, text: str, engine: Engine | None = None) -> Drive:
     """``JOINT=VALUES`` (also ``JOINT[k]=...``, ``JOINT.q[k]=...``) -> :class:`Drive`; VALUES
     is ``START:STOP:STEPS``, a list ``v1,v2,...`` or a CSV column ``@FILE.csv[:COLUMN]``, in
     the model's units. Angles in a list or a CSV column are unwrapped along the sequence (a
@@ -173,7 +172,7 @@ def parse_drive(model: Model, text: str) -> Drive:
     if not m:
         raise AddressError(f"--drive {text!r}: expected JOINT=START:STOP:STEPS (e.g. O2=0:360:360)")
     joint = m.group("joint")
-    size, angles = _coordinate_info(model, joint)
+    size, angles = _coordinate_info(engine if engine is not None else compile_engine(model.mechanism), model, joint)
     index = int(m.group("index") or 0)
     if m.group("index") is None and size != 1:
         raise AddressError(f"--drive {text!r}: joint {joint!r} has {size} coordinates; say which, e.g. {joint}[0]=...")
@@ -194,12 +193,12 @@ def _angle_indices(model: Model, joint: str) -> tuple[int, ...]:
     return tuple(model.mechanism.joint(joint).jtype.angle_indices)
 
 
-def coordinate_columns(model: Model) -> list[tuple[str, str, int, bool]]:
+def coordinate_columns(model: Model, engine: Engine | None = None) -> list[tuple[str, str, int, bool]]:
     """``(column, joint, index, is_angle_in_degrees)`` for every coordinate of the layout."""
-    asm = compile_engine(model.mechanism)
+    asm = engine if engine is not None else compile_engine(model.mechanism)
     out = []
     for v in asm.layout.group("q"):
-        _, angles = _coordinate_info(model, v.joint)
+        _, angles = _coordinate_info(asm, model, v.joint)
         for k in range(v.size):
             out.append((v.key if v.size == 1 else f"{v.key}[{k}]", v.joint, k, k in angles))
     return out
@@ -387,7 +386,8 @@ def sweep(
     """
     import pandas as pd
 
-    dr = tuple(parse_drive(model, d) if isinstance(d, str) else d for d in drives)
+    engine = compile_engine(model)
+    dr = tuple(parse_drive(model, d, engine) if isinstance(d, str) else d for d in drives)
     if not dr:
         raise AddressError("a sweep needs at least one --drive")
     n = {d.values.size for d in dr}
@@ -400,10 +400,9 @@ def sweep(
     if any(c.startswith(tuple(f"{d.joint}.q" for d in dr)) for c in (changes or {})):
         raise AddressError("--set: a driven coordinate cannot also be set")
     names = list(default_outputs(model) if outputs is None else outputs)
-    engine = compile_engine(model)
     changes = changes_to_internal(model, changes or {}, engine) if check_units(units) else dict(changes or {})
     fout, expanded = output_function(model, names, engine=engine)
-    coord_cols = coordinate_columns(model)
+    coord_cols = coordinate_columns(model, engine)
     drive_cols = [d.label for d in dr]
     # unit factors, once (io.units' conversions are linear): model -> solver for the drives,
     # solver -> model for the coordinate columns

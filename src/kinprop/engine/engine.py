@@ -298,6 +298,23 @@ class Engine:
         #: characteristic length L of the compiled model (largest body position, s' or length, >= 1)
         self.length_scale = self._length_scale(self.reference) if reference else None
 
+    def rebased(self, reference: Model) -> Engine:
+        """This engine with another reference model of the same mechanism (a design study's base
+        with its common changes): the compiled structure, tables and plans are shared, not
+        rebuilt; only the reference state and what depends on it (length scale, branch data)
+        are new."""
+        if reference.mechanism is not self.mechanism and reference.mechanism != self.mechanism:
+            raise ValueError("the reference model has another mechanism than the engine")
+        new = object.__new__(Engine)
+        new.__dict__.update(self.__dict__)
+        for key in ("col_scale", "row_scale", "_reference_assembled"):
+            new.__dict__.pop(key, None)
+        new._reference_signs = {}
+        new.model = reference
+        new.reference = new.pack(reference.design, reference.coordinates).frozen()
+        new.length_scale = new._length_scale(new.reference)
+        return new
+
     def __repr__(self) -> str:
         return (f"<Engine {self.mechanism.name!r}: {len(self.mechanism.bodies)} bodies, {len(self.mechanism.joints)} "
                 f"joints, {self.n_rows} equations, {self.n_columns} variables>")  # fmt: skip
