@@ -260,27 +260,6 @@ def load_model_cli(path: Path) -> Model:
     return model
 
 
-def parse_assignment(text: str, option: str = "--set") -> tuple[str, np.ndarray]:
-    """``ADDRESS=v1,v2,...`` -> (address, values)."""
-    if "=" not in text:
-        raise AddressError(f"{option} {text!r}: expected ADDRESS=VALUE (e.g. J12.s_j=-2.8,0.2,0.1)")
-    addr, _, value = text.partition("=")
-    try:
-        nums = np.array([float(x) for x in value.replace(";", ",").split(",") if x.strip()], dtype=float)
-    except ValueError:
-        raise AddressError(f"{option} {text!r}: values must be comma-separated numbers") from None
-    if nums.size == 0:
-        raise AddressError(f"{option} {text!r}: no value given")
-    return addr.strip(), nums
-
-
-def parse_weight(text: str) -> tuple[str, float]:
-    addr, nums = parse_assignment(text)
-    if nums.size != 1:
-        raise AddressError(f"--weight {text!r}: expected one number")
-    return addr, float(nums[0])
-
-
 def json_safe(obj: Any) -> Any:
     """``obj`` with every non-finite float (NaN, +-Infinity) replaced by None: strict JSON."""
     if isinstance(obj, float):
