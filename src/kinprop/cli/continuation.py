@@ -12,22 +12,19 @@ is written for it.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
 
 import typer
 from rich.text import Text
 
 from kinprop.cli.app import EXIT_NOT_CONVERGED, err, out, print_json
-from kinprop.engine import compile as compile_engine
 from kinprop.errors import SingularityWarning
-from kinprop.io.results import coordinates_json, design_json, propagation_json
+from kinprop.io.commands import propagate_json, solve_propagation
 from kinprop.model import Model
 from kinprop.propagation import Propagation
-from kinprop.propagation.continuation import ContinuationResult, continuation_of
-from kinprop.propagation.propagate import propagation_of, solve_changes
+from kinprop.propagation.continuation import ContinuationResult
 
 
 @contextmanager
@@ -53,19 +50,6 @@ def shown_warnings() -> Iterator[None]:
         err.print(Text.assemble(("warning:", "yellow"), f" {kind}{key[1]}"), soft_wrap=True)
 
 
-def continuation_json(res: ContinuationResult) -> dict[str, Any]:
-    return {
-        "status": res.status.value,
-        "fraction": res.fraction,
-        "message": res.message,
-        "conflict": [{"row": r, "weight": w} for r, w in res.conflict],
-        "residual_rows": [{"row": r, "value": v} for r, v in res.residual_rows],
-        "singularity_ratio": res.singularity_ratio,
-        "sub_steps": res.substeps,
-        "last_feasible": {"coordinates": coordinates_json(res.after), "design": design_json(res.after)},
-    }
-
-
 def print_continuation(res: ContinuationResult) -> None:
     """One summary line, and on failure the diagnosis: fraction and conflicting rows."""
     if res.converged:
@@ -77,47 +61,6 @@ def print_continuation(res: ContinuationResult) -> None:
     for r, v in res.residual_rows:
         out.print(f"  residual of the full change at the last feasible state: {r} = {v:.3g}")
     out.print(f"  smallest/largest singular value at the last feasible state: {res.singularity_ratio:.3g}")
-
-
-def solve_propagation(
-    model: Model,
-    changes: Mapping[str, object],
-    free: Sequence[str],
-    *,
-    tol: float,
-    max_iter: int,
-    weights: Mapping[str, float] | None,
-    continuation: bool | None,
-    on_fallback: Callable[[Propagation], None] | None = None,
-) -> tuple[Propagation, ContinuationResult | None, bool]:
-    """One engine solve of the change, on the start's branch; its diagnosis when it failed
-    (``continuation`` None or True) or always (True). No second solve: the diagnosis is a
-    function of the solution (:func:`kinprop.propagation.continuation.diagnose`).
-
-    Returns ``(prop, res, newton_ran)``: the propagation to report (a failed one is the
-    solver's record), the continuation view when asked for (else None) and True.
-    ``on_fallback(prop)`` is called when the solve failed and the diagnosis follows.
-    """
-    engine = compile_engine(model)
-    sol = solve_changes(engine, model, changes, free, tol=tol, max_iter=max_iter, weights=weights, units="solver")
-    prop = propagation_of(engine, model, sol, free)
-    if continuation is False or (continuation is None and (sol.converged or not changes)):
-        return prop, None, True
-    if not sol.converged and on_fallback is not None:
-        on_fallback(prop)
-    res = continuation_of(model, sol, free)
-    return (res.propagation if res.converged else prop), res, True
-
-
-def propagate_json(prop: Propagation, res: ContinuationResult | None = None, newton_ran: bool = True) -> dict[str, Any]:
-    """What ``kinprop propagate --json`` prints for :func:`solve_propagation`'s result: the
-    propagation's JSON (its ``status`` the solution's, :class:`kinprop.Status`), and when the
-    change failed, a ``continuation`` object with the diagnosis."""
-    obj = propagation_json(prop)
-    if res is None or res.converged:
-        return obj
-    obj["continuation"] = continuation_json(res)
-    return obj
 
 
 def run_propagation(
@@ -169,10 +112,7 @@ def run_propagation(
 
 
 __all__ = [
-    "continuation_json",
     "print_continuation",
-    "propagate_json",
     "run_propagation",
     "shown_warnings",
-    "solve_propagation",
 ]
