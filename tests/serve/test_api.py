@@ -34,7 +34,7 @@ def test_propagate_is_the_cli_json(make_client, examples: Path, tmp_path: Path) 
     assert r.status_code == 200 and code == 0
     assert r.text == out.rstrip("\n")
     obj = r.json()
-    assert obj["status"] == "converged" and obj["residual_norm"] < 1e-10
+    assert obj["status"] == "converged" and obj["residual"] < 1e-10
     assert obj["design"]["ST.s_i"] == [0.5, 1.0, 0.0]
     assert "RS.length" in obj["changed"]
     assert r.headers["x-kinprop-applied"] == "true"

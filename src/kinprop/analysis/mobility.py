@@ -10,7 +10,7 @@ Rank tolerance: a singular value counts when ``s_k > rtol * s_max`` (default
 values of redundant rows are at rounding level (~1e-16 s_max in the examples) while the
 independent ones are O(link length), so the gap is wide; at a configuration solved only to a
 loose tolerance (the paper's 1e-3) or not assembled at all the dependent rows are not exactly
-dependent, so evaluate mobility at an assembled state (``residual_norm`` is reported).
+dependent, so evaluate mobility at an assembled state (``residual`` is reported).
 
 Redundant rows are those left out of a rank-revealing (column-pivoted) QR of ``Phi_q^T``:
 removing them leaves the rank unchanged. They are one removable set; any row with a
@@ -52,7 +52,7 @@ class MobilityReport:
     singular_values: list[float] = field(repr=False)
     rtol: float = RANK_RTOL
     #: ``||Phi||`` at the evaluated configuration (should be ~0: assembled)
-    residual_norm: float = 0.0
+    residual: float = 0.0
     #: rows with a component in the left null space (any of them can be the redundant one)
     dependent: list[str] = field(default_factory=list)
     free: tuple[str, ...] = ("q",)
@@ -80,10 +80,10 @@ def joint_freedom(jtype, is_tree: bool) -> int:
     return 6 - jtype.n_constraints + jtype.n_cut_coordinates
 
 
-def gruebler(model: Model) -> int:
+def gruebler(model: Model, engine: Engine | None = None) -> int:
     """Spatial Gruebler-Kutzbach count ``6 (n_moving) - sum (6 - f_joint) - n_couplings``."""
     mech = model.mechanism
-    asm = compile_engine(mech)
+    asm = engine if engine is not None else compile_engine(mech)
     tree = set(asm.topology.tree_joints)
     moving = sum(1 for b in mech.bodies if not b.fixed)
     joints = sum(6 - joint_freedom(j.jtype, j.name in tree) for j in mech.joints)
@@ -101,7 +101,7 @@ def mobility(model: Model, rtol: float = RANK_RTOL, free: Sequence[str] = ("q", 
     ``free`` selects the Jacobian columns that may move (groups or addresses, as in
     :func:`kinprop.propagation.propagate`); the default is every joint coordinate.
     """
-    asm = compile_engine(model.mechanism)
+    asm = compile_engine(model)
     Phi, J = asm.evaluate(model.design, model.coordinates)
     cols = asm.layout.columns(list(free))
     Jq = J[:, cols]
@@ -127,14 +127,14 @@ def mobility(model: Model, rtol: float = RANK_RTOL, free: Sequence[str] = ("q", 
         dependent = [labels[i] for i in range(m) if weight[i] > DEPENDENT_TOL]
     return MobilityReport(
         n - rank,
-        gruebler(model),
+        gruebler(model, asm),
         n,
         m,
         rank,
         redundant,
         sv.tolist(),
         rtol,
-        float(np.linalg.norm(Phi)),
+        float(np.linalg.norm(Phi * asm.row_scale)),  # the one residual figure (SI rows, docs/units.md)
         dependent,
         tuple(free),
     )

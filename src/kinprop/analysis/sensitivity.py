@@ -70,7 +70,7 @@ def output_sensitivity_matrix(
     model_units = check_units(units)
     engine = engine_for(model, engine)
     state = engine.state_of(model)
-    residual = float(np.linalg.norm(engine.residual(state)))
+    residual = float(np.linalg.norm(engine.residual(state) * engine.row_scale))  # SI rows (docs/units.md)
     if residual > RESIDUAL_WARN:
         warnings.warn(
             f"sensitivities at a configuration that is not assembled: ||Phi|| = {residual:.3g}",
@@ -124,7 +124,7 @@ def output_sensitivity(
     """``d(output)/d(p)``: rows the (expanded) outputs ``of``, columns the design columns ``wrt``.
 
     The model must be assembled (``Phi = 0``); a warning is issued when ``||Phi||`` exceeds
-    :data:`RESIDUAL_WARN`. ``attrs`` of the frame carry ``residual_norm``, ``free`` and
+    :data:`RESIDUAL_WARN`. ``attrs`` of the frame carry ``residual``, ``free`` and
     ``weights`` and ``units``. Units: output unit per design-variable unit, in the model's
     declared units (``units="model"``: deg per mm, mm per deg, metric angles in the angle unit, C
     columns per angle unit of body-frame rotation; docs/units.md); ``units="solver"``: as
@@ -136,7 +136,7 @@ def output_sensitivity(
     import pandas as pd
 
     frame = pd.DataFrame(D, index=names, columns=columns)
-    frame.attrs.update(residual_norm=residual, free=list(free), weights=dict(weights or {}), units=units)
+    frame.attrs.update(residual=residual, free=list(free), weights=dict(weights or {}), units=units)
     return frame
 
 

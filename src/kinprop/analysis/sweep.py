@@ -17,7 +17,7 @@ Step 0 is one engine solve (:meth:`kinprop.Engine.propagate`); the later steps r
 engine's compiled sequence (:meth:`kinprop.Engine.solve_sequence`), in chunks of
 :data:`SEQUENCE_CHUNK` steps. Each step gives one row: ``step``, the drive values, ``status``
 (:class:`kinprop.Status`: ``converged``, ``infeasible``, ``not_converged``, ...),
-``iterations``, ``residual_norm`` (the scaled ``||Phi||``, docs/units.md), ``sv_ratio`` (unit-independent
+``iterations``, ``residual`` (the scaled ``||Phi||``, docs/units.md), ``sv_ratio`` (unit-independent
 smallest/largest singular value of the free-variable Jacobian,
 :mod:`kinprop.propagation.conditioning`; ``near_singular`` when below ``SINGULAR_RTOL``),
 every joint coordinate, the outputs (named points ``point:BODY.NAME[x]``, suspension metrics, or any name
@@ -67,7 +67,7 @@ SUMMARY_ROWS = 8
 #: steps per call of the engine's compiled sequence (rows reach the sink after each)
 SEQUENCE_CHUNK = 64
 #: columns before the coordinates and outputs
-META = ("step", "status", "iterations", "residual_norm", "sv_ratio", "near_singular")
+META = ("step", "status", "iterations", "residual", "sv_ratio", "near_singular")
 
 
 @dataclass(frozen=True)
@@ -437,7 +437,7 @@ def sweep(
             {
                 "status": status.value,
                 "iterations": int(iterations),
-                "residual_norm": float(residual),
+                "residual": float(residual),
                 "sv_ratio": ratio,
                 "near_singular": bool(converged and ratio < SINGULAR_RTOL),
                 "message": message,

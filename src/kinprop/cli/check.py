@@ -88,7 +88,7 @@ def print_report(obj: dict[str, Any], path: Path) -> None:
             )
     else:
         out.print("redundant constraint rows: none")
-    res = obj["residual_norm"]
+    res = obj["residual"]
     out.print(f"evaluated at {obj['evaluated_at']}: ||Phi|| = {res:.3g}")
     if not obj["assembled"]:
         out.print(
@@ -116,7 +116,7 @@ def check_cmd(
     rank of the Jacobian, the mobility and the redundant rows are computed at the model's
     coordinates as given (or after --assemble); ||Phi|| there is reported. JSON keys: mobility,
     gruebler, n_coordinates, n_constraints, rank, tree_joints, cut_joints, loops, redundant,
-    residual_norm, assembled, bodies, joints, couplings (one constraint row each).
+    residual, assembled, bodies, joints, couplings (one constraint row each).
     """
     m = load_model_cli(model)
     evaluated_at = "the model's coordinates as given"

@@ -29,7 +29,8 @@ def parse_view(text: str) -> tuple[float, float]:
 
 def note_if_unassembled(model: Model, path: Path | str) -> None:
     """A stderr note when a model is drawn away from an assembled configuration."""
-    res = float(np.linalg.norm(compile_engine(model.mechanism).residual(model.design, model.coordinates)))
+    eng = compile_engine(model)
+    res = float(np.linalg.norm(eng.residual(model.design, model.coordinates) * eng.row_scale))  # SI rows
     if res > DRAW_NOTE_TOL:
         err.print(
             f"note: {path} is drawn at its coordinates as given, not assembled (||Phi|| = {res:.3g}); "

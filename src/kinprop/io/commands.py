@@ -104,8 +104,8 @@ def check_json(model: Model, rep: MobilityReport, evaluated_at: str) -> dict[str
         "dependent": rep.dependent,
         "singular_values": rep.singular_values,
         "rtol": rep.rtol,
-        "residual_norm": rep.residual_norm,
-        "assembled": rep.residual_norm < ASSEMBLED_TOL,
+        "residual": rep.residual,
+        "assembled": rep.residual < ASSEMBLED_TOL,
         "evaluated_at": evaluated_at,
     }
 
@@ -249,7 +249,7 @@ def sensitivity_json(
         "weights": dict(weights) if weights else {},
         "assembly": {
             "initial_residual": r.residual_history[0],
-            "residual": r.residual_norm,
+            "residual": r.residual,
             "iterations": r.iterations,
         },
     }
@@ -258,7 +258,7 @@ def sensitivity_json(
 # --- kinprop sweep ---------------------------------------------------------------------------
 
 #: sweep columns that are counts, flags or text
-_NO_UNIT = {"step", "status", "iterations", "residual_norm", "sv_ratio", "near_singular", "message"}
+_NO_UNIT = {"step", "status", "iterations", "residual", "sv_ratio", "near_singular", "message"}
 
 
 def _records(frame) -> list[dict]:

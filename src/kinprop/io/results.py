@@ -57,7 +57,7 @@ def propagation_json(prop: Propagation) -> dict[str, Any]:
     return {
         "status": r.status,
         "iterations": r.iterations,
-        "residual_norm": r.residual_norm,
+        "residual": r.residual,
         "residual_history": list(r.residual_history),
         "coordinates": coordinates_json(prop.after),
         "design": design_json(prop.after),

@@ -83,7 +83,7 @@ def summary_text(prop: Propagation) -> str:
     rows = [row for row in variable_rows(prop) if row["role"]]
     rows.sort(key=lambda row: (row["role"] != "set", -row["change"]))
     lines = [
-        f"<Propagation of {name!r}: {r.status} in {r.iterations} iterations, ||Phi|| = {r.residual_norm:.3g};"
+        f"<Propagation of {name!r}: {r.status} in {r.iterations} iterations, ||Phi|| = {r.residual:.3g};"
         f" free: {' '.join(prop.free)}>"
     ]
     for row in rows[:SUMMARY_ROWS]:
@@ -100,7 +100,7 @@ def summary_html(prop: Propagation) -> str:
     r = prop.result
     head = (
         f"<p><b>Propagation</b> of {escape(prop.before.mechanism.name)}: {escape(r.status)} in {r.iterations} "
-        f"iterations, ||Phi|| = {r.residual_norm:.3g}; free: {escape(' '.join(prop.free))}</p>"
+        f"iterations, ||Phi|| = {r.residual:.3g}; free: {escape(' '.join(prop.free))}</p>"
     )
     cells = "".join(
         "<tr>"

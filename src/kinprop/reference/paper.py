@@ -258,7 +258,7 @@ def output_value(prop: Propagation, output: str) -> tuple[np.ndarray, float]:
     """Our value of a printed quantity and its conversion factor to solver units."""
     m = prop.after
     if output == "residual":
-        return np.array([prop.result.residual_norm]), 1.0
+        return np.array([prop.result.residual]), 1.0
     if output == "iterations":
         return np.array([prop.result.iterations]), 1.0
     if output.startswith("P:"):

@@ -197,6 +197,6 @@ def state_json(session: Session, label: str) -> dict[str, Any]:
         "history": {"undo": len(session.undo_stack), "redo": len(session.redo_stack)},
         "result": None
         if res is None
-        else {k: res.get(k) for k in ("status", "iterations", "residual_norm", "message", "changed", "free")},
+        else {k: res.get(k) for k in ("status", "iterations", "residual", "message", "changed", "free")},
         "warnings": list(session.warnings),
     }

@@ -15,7 +15,7 @@ from kinprop.spatial import Array
 class SolveResult:
     converged: bool
     iterations: int
-    residual_norm: float
+    residual: float
     residual_history: list[float]
     rank: int
     n_free: int

@@ -91,7 +91,7 @@ function showStatus(res, prefix = "") {
   const parts = [
     prefix + res.status,
     `${res.iterations} iterations`,
-    `||Phi|| = ${res.residual_norm === null ? "nan" : res.residual_norm.toExponential(3)}`,
+    `||Phi|| = ${res.residual === null ? "nan" : res.residual.toExponential(3)}`,
   ];
   if (res.changed && res.changed.length) parts.push("moved: " + res.changed.join(" "));
   s.replaceChildren(el("span", { id: "status-text", text: parts.join("  ·  ") }), el("span", { class: "muted", text: "  " + (res.message || "") }));
