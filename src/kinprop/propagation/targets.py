@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from kinprop.engine import Engine, State
+from kinprop.engine import Engine, State, Status
 from kinprop.errors import AddressError
 from kinprop.spatial import Array, log_so3
 
@@ -91,8 +91,9 @@ class TargetResult:
     """Outcome of :func:`solve_targets`.
 
     ``status``: ``met`` (every target within ``target_tol``), ``compromise`` (converged to the
-    least-squares compromise; see ``conflicts``), ``not converged`` or ``not assembled`` (a
-    configuration could not be reached with the starting design).
+    least-squares compromise; see ``conflicts``), or a failure in the one vocabulary of
+    :class:`kinprop.Status`: ``not_converged`` (the message says when a configuration could not
+    be reached with the starting design).
     """
 
     status: str
@@ -323,9 +324,9 @@ def solve_targets(
     outs0 = [np.asarray(c.outputs(s), float) for c, s in zip(configurations, before, strict=True)]
     vb = _row_values(rows, outs0)
     if not ok0:
-        return TargetResult("not assembled", "a configuration could not be reached with the starting design (its "
-                            "conditions or Phi did not converge)", it0, tuple(rows), tuple(configurations),
-                            tuple(before), tuple(before), vb, vb, float("nan"), {})  # fmt: skip
+        return TargetResult(Status.NOT_CONVERGED.value, "not assembled: a configuration could not be reached with "
+                            "the starting design (its conditions or Phi did not converge)", it0, tuple(rows),
+                            tuple(configurations), tuple(before), tuple(before), vb, vb, float("nan"), {})  # fmt: skip
     # 2. the design change
     after, it, ok, hist = newton(list(before), with_design=True)
     outs = [np.asarray(c.outputs(s), float) for c, s in zip(configurations, after, strict=True)]
@@ -346,7 +347,7 @@ def solve_targets(
                 conflicts.append(grp)
     worst = float(np.max(np.abs(t), initial=0.0))
     if not ok:
-        status = "not converged"
+        status = Status.NOT_CONVERGED.value
         msg = (
             f"not converged after {it} iterations: ||Phi, conditions|| = {hard_res:.3g}, worst target miss {worst:.3g}"
         )
