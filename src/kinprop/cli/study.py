@@ -127,7 +127,8 @@ def study_cmd(
             m, factors, method=method, samples=samples, seed=seed, free=tuple(free or ["q"]), sets=sets,
             outputs=out_names, tol=tol, max_iter=max_iter, chunk_size=chunk_size, output=output, resume=resume,
             scheduler=scheduler, progress=not as_json, plan=plan, addresses=addresses, engine=engine,
-            scale=model_unit_scale(m, [f.address for f in factors], out_names), units="solver",
+            scale=model_unit_scale(m, [f.address for f in factors], out_names, compiled), units="solver",
+            compiled=compiled,
         )  # fmt: skip
         if plan is not None:  # the global factor values beside the s' columns they set
             for k, f in enumerate(factors):
