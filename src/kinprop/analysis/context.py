@@ -48,10 +48,14 @@ class OutputContext:
         mech = self.model.mechanism
         if body not in mech.body_names:
             raise AddressError(f"unknown body {body!r}; bodies are {', '.join(mech.body_names)}")
-        pts = dict(mech.body(body).points)
+        b = mech.body(body)
+        pts = dict(b.points)
         if point not in pts:
             known = ", ".join(pts) or "none"
             raise AddressError(f"body {body!r} has no named point {point!r}; its points: {known}")
+        ref = b.joint_point(point)
+        if ref is not None:  # a joint's point: it follows the joint (kinprop.model.joint_points)
+            return self.hardpoint(*ref)
         return self.kin.r[body] + self.kin.A[body] @ np.asarray(pts[point], dtype=float)
 
     def hardpoint(self, joint: str, side: str) -> Array:

@@ -48,6 +48,7 @@ import numpy as np
 from kinprop.analysis.context import OutputContext
 from kinprop.errors import AddressError
 from kinprop.model import Model
+from kinprop.model.joint_points import steering_joints
 from kinprop.spatial import EZ, Array
 
 ANGLE_METRICS = ("camber", "toe", "caster", "kpi")
@@ -130,8 +131,10 @@ def available_metrics(
 ) -> list[str]:
     """Metrics a wheel body supports with the points the model declares."""
     out = ["camber", "toe"]
-    steer = (spec is not None and spec.steering_axis is not None) or all(
-        _find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")
+    steer = (
+        (spec is not None and spec.steering_axis is not None)
+        or all(_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
+        or steering_joints(model.mechanism, wheel) is not None
     )
     if steer:
         out += ["caster", "kpi"]
@@ -171,6 +174,51 @@ def resolve_metric(model: Model, name: str) -> tuple[str, str]:
     return wheel, metric
 
 
+def steering_points(ctx: OutputContext, wheel: str) -> tuple[Array | None, Array | None]:
+    """Global upper and lower points of the wheel's steering axis at the context's state: the
+    declared ``kingpin_upper``/``kingpin_lower`` points (coordinates, or references to joints
+    that follow them), else the default joints of :func:`kinprop.model.joint_points.steering_joints`
+    (two ball joints, or a strut top mount and the lower ball joint), the higher one upper."""
+    model = ctx.model
+    found_upper, found_lower = (_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
+    if found_upper is not None and found_lower is not None:
+        return ctx.body_point(*found_upper), ctx.body_point(*found_lower)
+    pair = steering_joints(model.mechanism, wheel)
+    if pair is None:
+        return None, None
+    a, b = (ctx.hardpoint(*p) for p in pair)
+    return (a, b) if a[2] >= b[2] else (b, a)
+
+
+def steering_axis_mismatch(model: Model) -> list[str]:
+    """Declared steering-axis points (``kingpin_upper``/``kingpin_lower`` given by coordinates)
+    that do not coincide with the joint the default steering axis takes, at the model's
+    coordinates: one message each, with the distance. Such points are used as declared."""
+    out = []
+    ctx = OutputContext.of(model)
+    for wheel in wheel_bodies(model):
+        pair = steering_joints(model.mechanism, wheel)
+        found = [_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
+        if pair is None or None in found:
+            continue
+        a, b = (ctx.hardpoint(*p) for p in pair)
+        ordered = (pair[0], a), (pair[1], b)
+        if a[2] < b[2]:
+            ordered = ordered[::-1]
+        names = ("kingpin_upper", "kingpin_lower")
+        for name, (body, key), ((joint, side), p) in zip(names, found, ordered, strict=True):
+            if model.mechanism.body(body).joint_point(key) is not None:
+                continue
+            d = float(np.linalg.norm(ctx.body_point(body, key) - p))
+            if d > 1e-6 * max(1.0, float(np.max(np.abs(p)))):
+                out.append(
+                    f"bodies.{body}.points.{key}: the declared {name} is {d:.6g} from joint {joint} ({joint}.{side} "
+                    f"at {np.round(p, 6).tolist()}), which the steering axis would otherwise follow; it is used as "
+                    f"declared. Write '{key}: {joint}' (or delete it) to follow the joint."
+                )
+    return out
+
+
 def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:
     """Every metric the wheel supports at the context's state (angles deg, lengths model unit)."""
     model = ctx.model
@@ -185,17 +233,13 @@ def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None)
     if spec is not None and spec.steering_axis is not None:
         upper, lower = (ctx.point(s) for s in spec.steering_axis)
     else:
-        found_upper, found_lower = (_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
-        if found_upper is not None and found_lower is not None:
-            upper, lower = ctx.body_point(*found_upper), ctx.body_point(*found_lower)
+        upper, lower = steering_points(ctx, wheel)
     if upper is not None and lower is not None:
         out["caster"], out["kpi"] = steering_angles(upper, lower, side)
         pts = dict(model.mechanism.body(wheel).points)
         if "contact_patch" in pts:
-            v = np.asarray(pts["contact_patch"], dtype=float) - np.asarray(pts["wheel_centre"], dtype=float)
-            a_B = np.asarray(pts["spin_axis"], dtype=float) - np.asarray(pts["wheel_centre"], dtype=float)
-            a_B /= np.linalg.norm(a_B)
-            radius = float(np.linalg.norm(v - (v @ a_B) * a_B))
+            v = ctx.body_point(wheel, "contact_patch") - centre
+            radius = float(np.linalg.norm(v - (v @ axis) * axis))
             contact = contact_point(centre, axis, radius)
             out["scrub_radius"], out["trail"] = ground_offsets(upper, lower, contact, axis)
     ref = None

@@ -258,7 +258,12 @@ def _point_spec(model: Model, engine: Engine, spec: str) -> PointSpec:
     """A ``point:BODY.NAME`` / ``hardpoint:JOINT.i|j`` spec (no component) as a :class:`PointSpec`."""
     m = POINT.match(spec)
     if m:
-        return PointSpec(m["body"], tuple(float(x) for x in dict(model.mechanism.body(m["body"]).points)[m["name"]]))
+        body = model.mechanism.body(m["body"])
+        ref = body.joint_point(m["name"])
+        if ref is not None:  # a joint's point: as the hardpoint (it follows the joint's s')
+            spec = f"hardpoint:{ref[0]}.{ref[1]}"
+        else:
+            return PointSpec(m["body"], tuple(float(x) for x in dict(body.points)[m["name"]]))
     m = HARD.match(spec)
     j = model.mechanism.joint(m["joint"])  # type: ignore[index]
     side = 0 if m["side"] == "i" else 1  # type: ignore[index]
@@ -294,9 +299,8 @@ def _analytic_rows(model: Model, engine: Engine, names: list[str]) -> tuple[list
             rows[name] = dist
         elif name.startswith("metric:"):
             wheel, metric = resolve_metric(model, name)
-            pts = dict(model.mechanism.body(wheel).points)
-            centre = idx(PointSpec(wheel, tuple(float(x) for x in pts["wheel_centre"])))
-            spin = idx(PointSpec(wheel, tuple(float(x) for x in pts["spin_axis"])))
+            centre = idx(_point_spec(model, engine, f"point:{wheel}.wheel_centre"))
+            spin = idx(_point_spec(model, engine, f"point:{wheel}.spin_axis"))
             if metric == "camber":
 
                 def camber(P, G, cols, c=centre, s=spin):

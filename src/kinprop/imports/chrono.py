@@ -23,8 +23,9 @@ Common to all: the chassis is fixed; the steering rack is held (the tie rod's in
 chassis point), so the mobility is 1 (wheel travel). The spindle's revolute joint is left out
 (wheel spin moves no hardpoint); the wheel is declared on the upright by named points
 (``wheel_centre`` = the spindle location, ``spin_axis`` from the file's camber and toe angles,
-``kingpin_upper``/``kingpin_lower`` where the template has a steering axis through two ball
-joints, ``contact_patch`` when a tyre radius is given) and the chassis point
+``kingpin: [UPPER, LOWER]`` by reference to the joints where the template has a steering axis
+(the two ball joints; McPherson: the strut top mount and the lower ball joint), so it follows
+every edit of them, ``contact_patch`` when a tyre radius is given) and the chassis point
 ``wheel_centre_ref``, so camber, toe, caster, KPI, scrub radius, trail and wheel-centre travel
 work at once. Spring and shock end points are named points: their length is the output
 ``distance:chassis.spring_chassis,BODY.spring_BODY`` (not a constraint). Masses, inertias,
@@ -151,7 +152,7 @@ def _double_wishbone(r: _Reader, tire_radius: float | None) -> tuple[dict[str, A
                 "shock_lca": _l(shock_a),
             }
         },
-        "upright": {"points": {**wheel, "kingpin_upper": _l(uca_u), "kingpin_lower": _l(lca_u)}},
+        "upright": {"points": wheel, "kingpin": ["UCA_U", "LCA_U"]},
     }
     joints = {
         "LCA": _revolute("lca", lca_f, lca_b),
@@ -188,7 +189,6 @@ def _macpherson(r: _Reader, tire_radius: float | None) -> tuple[dict[str, Any], 
             "fixed": True,
             "points": {
                 "wheel_centre_ref": wheel["wheel_centre"],
-                "kingpin_upper": _l(spring_c),
                 "spring_chassis": _l(spring_c),
                 "shock_chassis": _l(shock_c),
             },
@@ -196,12 +196,8 @@ def _macpherson(r: _Reader, tire_radius: float | None) -> tuple[dict[str, Any], 
         "lca": {"points": {"front_pivot": _l(lca_f), "rear_pivot": _l(lca_b)}},
         "strut": {},
         "upright": {
-            "points": {
-                **wheel,
-                "kingpin_lower": _l(lca_u),
-                "spring_upright": _l(spring_u),
-                "shock_upright": _l(shock_u),
-            }
+            "points": {**wheel, "spring_upright": _l(spring_u), "shock_upright": _l(shock_u)},
+            "kingpin": ["STRUT_TOP", "LCA_U"],
         },
     }
     joints = {

@@ -40,6 +40,7 @@ from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.couplings import build_couplings, couplings_to_data
 from kinprop.io.loader import build_or_report
+from kinprop.io.points import attach_references, point_order, point_references, written_points
 from kinprop.io.schema import HardpointFile, HardpointJointSpec
 from kinprop.joints import joint_type
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates, parse_address
@@ -314,9 +315,16 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
         raise ModelError(problems)
 
     final = []
+    refs = {}
     for b in bodies:
         r, a = pose[b.name]
-        pts = tuple((k, tuple((a.T @ (np.array(v) - r)).tolist())) for k, v in spec.bodies[b.name].points.items())
+        refs[b.name], found = point_references(b.name, spec.bodies[b.name], file)
+        problems += found
+        pts = tuple(
+            (k, tuple((a.T @ (np.array(v) - r)).tolist()))
+            for k, v in spec.bodies[b.name].points.items()
+            if not isinstance(v, str)
+        )
         if not all(np.all(np.isfinite(v)) for _, v in pts):
             problems.append(Problem(f"bodies.{b.name}.points", "overflow: the coordinates are too large", file))
         final.append(Body(b.name, b.fixed, b.position, b.orientation, pts))
@@ -325,7 +333,8 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
     mech = Mechanism(tuple(final), tuple(joints), spec.name, tuple(spec.inputs), couplings)
     values.update(coefs)
     units = {"length": spec.units.length, "angle": spec.units.angle, "axes": spec.units.axes}
-    return Model(mech, Design(values), as_coordinates(coords), units, file)
+    model = Model(mech, Design(values), as_coordinates(coords), units, file)
+    return attach_references(model, refs, file, point_order(spec.bodies))
 
 
 # --- frames -> hardpoints ----------------------------------------------------------------------
@@ -379,7 +388,6 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
     """
     mech = model.mechanism
     frames = joint_frames(model)
-    kin = compile_engine(mech).kinematics(model.design, model.coordinates)
     bodies: dict[str, Any] = {}
     for b in mech.bodies:
         spec: dict[str, Any] = {}
@@ -390,8 +398,9 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
             if not np.array_equal(b.A, np.eye(3)):
                 spec["orientation"] = [_clean(row) for row in b.A]
         if b.points:
-            r, a = kin.r[b.name], kin.A[b.name]
-            spec["points"] = {k: _clean(r + a @ np.array(v)) for k, v in b.points}
+            spec["points"] = {
+                k: v if isinstance(v, str) else _clean(v) for k, v in written_points(model, b, True).items()
+            }
         bodies[b.name] = spec
     joints: dict[str, Any] = {}
     for j in mech.joints:

@@ -22,6 +22,11 @@ Vec3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
 Vec4 = Annotated[list[Finite], Field(min_length=4, max_length=4)]
 Mat3 = Annotated[list[Vec3], Field(min_length=3, max_length=3)]
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+#: a named point: coordinates, or a reference to a joint's point (``UBJ``, ``TR.j``;
+#: :mod:`kinprop.model.joint_points`)
+PointValue = Annotated[Vec3 | str, Field(union_mode="left_to_right")]
+#: a wheel body's steering axis by its joints, upper first (``[UBJ, LBJ]``)
+Kingpin = Annotated[list[str], Field(min_length=2, max_length=2)]
 
 #: axis conventions a file may declare (all right-handed; kept as declared, never converted)
 AXES = {
@@ -51,7 +56,9 @@ class BodySpec(Strict):
     position: Vec3 | None = None
     orientation: Mat3 | None = None
     euler_parameters: Vec4 | None = None
-    points: dict[str, Vec3] = Field(default_factory=dict)
+    points: dict[str, PointValue] = Field(default_factory=dict)
+    #: the steering axis by its joints (points ``kingpin_upper``, ``kingpin_lower``)
+    kingpin: Kingpin | None = None
 
 
 class JointSpec(Strict):
@@ -103,7 +110,9 @@ class HardpointBodySpec(Strict):
     fixed: bool = False
     position: Vec3 | None = None
     orientation: Mat3 | None = None
-    points: dict[str, Vec3] = Field(default_factory=dict)
+    points: dict[str, PointValue] = Field(default_factory=dict)
+    #: the steering axis by its joints (points ``kingpin_upper``, ``kingpin_lower``)
+    kingpin: Kingpin | None = None
 
 
 class HardpointJointSpec(Strict):

@@ -26,6 +26,19 @@ class Body:
     orientation: tuple[tuple[float, ...], ...] = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
     #: named points in the body frame (e.g. wheel centre), for outputs
     points: tuple[tuple[str, tuple[float, float, float]], ...] = ()
+    #: named points that are a joint's point: ``(name, joint, side, declared)`` with ``side``
+    #: ``"i"`` or ``"j"``; such a point is evaluated as that joint's frame origin on that side
+    #: (``P = r + A s'``), so it follows every edit of the joint. ``declared``: written in the
+    #: file as a reference (``UBJ``, ``TR.j``, ``kingpin: [...]``) rather than found to coincide
+    #: at load time. Its entry in ``points`` holds its body-frame position at load.
+    joint_points: tuple[tuple[str, str, str, bool], ...] = ()
+
+    def joint_point(self, name: str) -> tuple[str, str] | None:
+        """``(joint, side)`` a named point refers to, or None for a plain body-fixed point."""
+        for n, joint, side, _ in self.joint_points:
+            if n == name:
+                return joint, side
+        return None
 
     @property
     def r(self) -> Array:
