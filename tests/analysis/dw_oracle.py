@@ -38,8 +38,10 @@ def rotate(p, origin, axis, angle):
     return origin + Rotation.from_rotvec(angle * axis / np.linalg.norm(axis)).apply(p - origin)
 
 
-def solve(hp: dict[str, np.ndarray], theta_deg: float) -> dict[str, float]:
-    """Metrics of the double wishbone ``hp`` with the lower arm turned by ``theta_deg``."""
+def solve(hp: dict[str, np.ndarray], theta_deg: float, tie_rod: float | None = None) -> dict[str, float]:
+    """Metrics of the double wishbone ``hp`` with the lower arm turned by ``theta_deg``; the
+    tie rod's length from its two points, or ``tie_rod`` (then ``hp`` need not be assembled:
+    the upright first turns about its ball-joint line to meet it)."""
     theta = math.radians(theta_deg)
     lbj = rotate(hp["LBJ"], hp["LCA_B"], hp["LCA_F"] - hp["LCA_B"], theta)
     r_kp = np.linalg.norm(hp["UBJ"] - hp["LBJ"])
@@ -48,7 +50,7 @@ def solve(hp: dict[str, np.ndarray], theta_deg: float) -> dict[str, float]:
     ubj = rotate(hp["UBJ"], hp["UCA_B"], axis, phi)
     k0, k1 = hp["UBJ"] - hp["LBJ"], ubj - lbj
     R0 = Rotation.align_vectors([k1], [k0])[0]
-    l_tr = np.linalg.norm(hp["TR_O"] - hp["TR_I"])
+    l_tr = np.linalg.norm(hp["TR_O"] - hp["TR_I"]) if tie_rod is None else tie_rod
 
     def pose(psi):
         return Rotation.from_rotvec(psi * k1 / np.linalg.norm(k1)) * R0

@@ -335,7 +335,7 @@ def build_model(spec: ModelFile, file: str) -> Model:
     problems += [Problem(p.location, p.message, file) for p in validate_couplings(tuple(joints), couplings)]
     if problems:
         raise ModelError(problems)
-    mech = Mechanism(tuple(bodies), tuple(joints), spec.name, tuple(spec.inputs), couplings)
+    mech = Mechanism(tuple(bodies), tuple(joints), spec.name, tuple(spec.inputs), couplings, spec.edits)
     try:
         topo = build_topology(mech)
     except ModelError as exc:

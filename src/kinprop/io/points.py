@@ -85,7 +85,7 @@ def attach_references(
         links = b.joint_points + tuple((n, *new[n], True) for n in names if n in new)
         bodies.append(Body(b.name, b.fixed, b.position, b.orientation, points, links))
     if resolved:
-        mech = Mechanism(tuple(bodies), mech.joints, mech.name, mech.inputs, mech.couplings)
+        mech = Mechanism(tuple(bodies), mech.joints, mech.name, mech.inputs, mech.couplings, mech.edits)
     bound = bind_coincident(mech, model.design)
     if bound is not model.mechanism:
         model = Model(bound, model.design, model.coordinates, model.units, model.source)

@@ -101,6 +101,8 @@ class ModelFile(Strict):
     inputs: list[str] = Field(default_factory=list)
     #: couplings between joint coordinates (one constraint row each)
     couplings: dict[str, CouplingSpec] = Field(default_factory=dict)
+    #: how an edit of a global hardpoint is read (hardpoint files: ``design``)
+    edits: Literal["design", "mechanism"] = "mechanism"
 
 
 class HardpointBodySpec(Strict):
@@ -128,6 +130,9 @@ class HardpointJointSpec(Strict):
     point_i: Vec3 | None = None
     point_j: Vec3 | None = None
     length: Positive | None = None
+    #: a revolute to a fixed body by its two pivots (instead of point and axis):
+    #: ``{front: [x, y, z], rear: [x, y, z]}``; the axis runs rear -> front (second -> first)
+    pivots: Annotated[dict[str, Vec3], Field(min_length=2, max_length=2)] | None = None
 
 
 class HardpointFile(Strict):
@@ -139,6 +144,10 @@ class HardpointFile(Strict):
     #: body-frame rule: ``global`` (axes parallel to the global axes at the reference) or
     #: ``joint`` (axes of the body's tree-joint frame, the paper's convention)
     body_frames: Literal["global", "joint"] = "global"
+    #: what an edit of a hardpoint keeps: ``design`` (the design position: the other hardpoints
+    #: stay, link lengths are re-derived; hardpoint tools') or ``mechanism`` (the paper's: the
+    #: lengths stay and the mechanism moves); :mod:`kinprop.propagation.hardpoints`
+    edits: Literal["design", "mechanism"] = "design"
     bodies: dict[str, HardpointBodySpec]
     joints: dict[str, HardpointJointSpec]
     #: driven joints (``JOINT`` or ``JOINT.q[k]``): held unless named in a free set

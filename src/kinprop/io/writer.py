@@ -85,6 +85,7 @@ def model_to_data(model: Model) -> dict[str, Any]:
         "joints": joints,
         **({"inputs": list(mech.inputs)} if mech.inputs else {}),
         **({"couplings": couplings_to_data(model)} if mech.couplings else {}),
+        **({"edits": mech.edits} if mech.edits != "mechanism" else {}),
     }
 
 

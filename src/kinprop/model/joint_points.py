@@ -121,7 +121,7 @@ def bind_coincident(mech: Mechanism, design: Mapping[str, object]) -> Mechanism:
         bodies.append(b)
     if not changed:
         return mech
-    return Mechanism(tuple(bodies), mech.joints, mech.name, mech.inputs, mech.couplings)
+    return Mechanism(tuple(bodies), mech.joints, mech.name, mech.inputs, mech.couplings, mech.edits)
 
 
 def _balls(mech: Mechanism, wheel: str) -> list[tuple[str, str]]:
