@@ -17,6 +17,7 @@ from kinprop.analysis.outputs import evaluate_outputs
 from kinprop.cli.sensitivity import sensitivities
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, ModelError
+from kinprop.imports.chrono import read_chrono
 from kinprop.io import model_from_data
 from kinprop.io.hardpoints import model_to_hardpoints
 from kinprop.propagation.hardpoints import free_addresses, global_plan, resolve_changes
@@ -175,3 +176,20 @@ def test_pivots_are_written_back_and_bad_pivots_reported():
     assert "joints.UBJ.pivots: only revolute and cylindrical joints take pivots, found type 'spherical'" in text
     assert "joints.UCA.pivots: give either pivots or point and axis, not both" in text
     assert "joints.LCA.pivots: the two pivots coincide: they define no axis" in text
+
+
+def test_pivots_are_outputs_and_the_chrono_importer_writes_them():
+    model = _run(load_model(FILE), {"hardpoint:UCA.front": HMMWV["UCA_F"] + [0.0, 0.0, 10.0]})
+    v = evaluate_outputs(model, ["hardpoint:UCA.front", "hardpoint:LCA.rear[y]"])
+    np.testing.assert_allclose([v[f"hardpoint:UCA.front[{c}]"] for c in "xyz"], HMMWV["UCA_F"] + [0, 0, 10])
+    assert v["hardpoint:LCA.rear[y]"] == pytest.approx(HMMWV["LCA_B"][1])
+    with pytest.raises(AddressError, match=r"bad output.*none is named .middle."):
+        evaluate_outputs(model, ["hardpoint:UCA.middle"])
+    chrono, _ = read_chrono(EXAMPLES / "chrono" / "HMMWV_DoubleWishboneFront.json")
+    hp = model_to_hardpoints(chrono)
+    assert set(hp["joints"]["UCA"]["pivots"]) == {"front", "rear"} and "axis" not in hp["joints"]["UCA"]
+    eng = compile_engine(chrono)
+    raised = resolve_changes(
+        eng, eng.reference, {"hardpoint:LCA.front": np.add(hp["joints"]["LCA"]["pivots"]["front"], [0, 0, 0.01])}
+    )
+    assert set(raised) == {"LCA.s_i", "LCA.C_i", "LCA.s_j", "LCA.C_j"}

@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from kinprop.analysis.metrics import WheelSpec
 
 POINT = re.compile(r"^point:(?P<body>[^.\s\[\]]+)\.(?P<name>[^\s\[\]]+?)(\[(?P<c>[xyz012])\])?$")
-HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[ij])(\[(?P<c>[xyz012])\])?$")
+HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[^\s.\[\]]+)(\[(?P<c>[xyz012])\])?$")
 
 
 @dataclass
@@ -63,6 +63,8 @@ class OutputContext:
         mech = self.model.mechanism
         if joint not in mech.joint_names:
             raise AddressError(f"unknown joint {joint!r}; joints are {', '.join(mech.joint_names)}")
+        if side not in ("i", "j"):  # a pivot: the fixed body's point JOINT.NAME
+            return self.body_point(*pivot_point(self.model, joint, side))
         f = self.kin.frames[joint]
         return f.P_i if side == "i" else f.P_j
 
@@ -75,3 +77,15 @@ class OutputContext:
         if m and m.group("c") is None:
             return self.hardpoint(m.group("joint"), m.group("side"))
         raise AddressError(f"{spec!r} is not a point: expected point:BODY.NAME or hardpoint:JOINT.i|j")
+
+
+def pivot_point(model: Model, joint: str, name: str) -> tuple[str, str]:
+    """``(fixed body, point name)`` of the pivot ``name`` of ``joint`` (``hardpoint:UCA.front``)."""
+    j = model.mechanism.joint(joint)
+    for body in (j.body_i, j.body_j):
+        b = model.mechanism.body(body)
+        if b.fixed and f"{joint}.{name}" in dict(b.points):
+            return body, f"{joint}.{name}"
+    raise AddressError(
+        f"hardpoint:{joint}.{name}: expected {joint}.i, {joint}.j or a pivot of {joint} (none is named {name!r})"
+    )

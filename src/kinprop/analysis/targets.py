@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from kinprop.analysis.context import HARD, POINT
+from kinprop.analysis.context import HARD, POINT, pivot_point
 from kinprop.analysis.metrics import ANGLE_METRICS, METRIC_ALIASES, resolve_metric, wheel_bodies
 from kinprop.analysis.outputs import _distance_ends, expand_outputs, output_function
 from kinprop.engine import Engine, State
@@ -265,6 +265,9 @@ def _point_spec(model: Model, engine: Engine, spec: str) -> PointSpec:
         else:
             return PointSpec(m["body"], tuple(float(x) for x in dict(body.points)[m["name"]]))
     m = HARD.match(spec)
+    if m is not None and m["side"] not in ("i", "j"):  # a pivot: a fixed body's point
+        body, name = pivot_point(model, m["joint"], m["side"])
+        return PointSpec(body, tuple(float(x) for x in dict(model.mechanism.body(body).points)[name]))
     j = model.mechanism.joint(m["joint"])  # type: ignore[index]
     side = 0 if m["side"] == "i" else 1  # type: ignore[index]
     return PointSpec(j.body_i if side == 0 else j.body_j, joint=j.name, side=side)

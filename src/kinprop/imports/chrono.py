@@ -6,7 +6,8 @@ the left side and builds, per template (topology as in Chrono::Vehicle's ``ChDou
 ``ChMacPhersonStrut`` and ``ChMultiLink``):
 
 * ``DoubleWishbone``: control arms ``uca``/``lca`` revolute to the chassis about the line
-  through their two chassis points (point: the midpoint), ball joints ``UCA_U``/``LCA_U`` to
+  through their two chassis points, written as ``pivots: {front, rear}`` (addresses
+  ``hardpoint:UCA.front``, :mod:`kinprop.propagation.hardpoints`), ball joints ``UCA_U``/``LCA_U`` to
   the upright, tie rod ``TIEROD`` a distance joint from the rack point (on the chassis) to the
   upright; spring and shock between the chassis and the lower arm.
 * ``MacPhersonStrut``: lower arm ``lca`` revolute to the chassis and ball-jointed to the
@@ -100,8 +101,8 @@ def _l(v: Array) -> list[float]:
 
 
 def _revolute(body: str, front: Array, back: Array) -> dict[str, Any]:
-    """A control arm's chassis revolute: the line through its two chassis points."""
-    return {"type": "revolute", "bodies": ["chassis", body], "point": _l((front + back) / 2), "axis": _l(front - back)}
+    """A control arm's chassis revolute by its two chassis pivots (the axis runs back -> front)."""
+    return {"type": "revolute", "bodies": ["chassis", body], "pivots": {"front": _l(front), "rear": _l(back)}}
 
 
 def _ball(body_i: str, body_j: str, p: Array, cut: bool = False) -> dict[str, Any]:
@@ -143,15 +144,8 @@ def _double_wishbone(r: _Reader, tire_radius: float | None) -> tuple[dict[str, A
                 "shock_chassis": _l(shock_c),
             },
         },
-        "uca": {"points": {"front_pivot": _l(uca_f), "rear_pivot": _l(uca_b)}},
-        "lca": {
-            "points": {
-                "front_pivot": _l(lca_f),
-                "rear_pivot": _l(lca_b),
-                "spring_lca": _l(spring_a),
-                "shock_lca": _l(shock_a),
-            }
-        },
+        "uca": {},
+        "lca": {"points": {"spring_lca": _l(spring_a), "shock_lca": _l(shock_a)}},
         "upright": {"points": wheel, "kingpin": ["UCA_U", "LCA_U"]},
     }
     joints = {
@@ -193,7 +187,7 @@ def _macpherson(r: _Reader, tire_radius: float | None) -> tuple[dict[str, Any], 
                 "shock_chassis": _l(shock_c),
             },
         },
-        "lca": {"points": {"front_pivot": _l(lca_f), "rear_pivot": _l(lca_b)}},
+        "lca": {},
         "strut": {},
         "upright": {
             "points": {**wheel, "spring_upright": _l(spring_u), "shock_upright": _l(shock_u)},
@@ -241,7 +235,7 @@ def _multilink(r: _Reader, tire_radius: float | None) -> tuple[dict[str, Any], d
                 "shock_chassis": _l(shock_c),
             },
         },
-        "upper_arm": {"points": {"front_pivot": _l(ua_f), "rear_pivot": _l(ua_b)}},
+        "upper_arm": {},
         "lateral": {},
         "trailing_link": {"points": {"spring_trailing_link": _l(spring_l), "shock_trailing_link": _l(shock_l)}},
         "upright": {"points": wheel},
