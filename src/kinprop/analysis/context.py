@@ -30,6 +30,8 @@ class OutputContext:
     kin: Kinematics
     reference: Model | None = None
     wheels: Mapping[str, WheelSpec] | None = None
+    #: the engine the kinematics came from (velocity analysis of first-order metrics)
+    engine: Engine | None = None
 
     @classmethod
     def of(
@@ -41,7 +43,7 @@ class OutputContext:
     ) -> OutputContext:
         """Forward kinematics of ``model`` at its current state."""
         eng = engine or compile_engine(model.mechanism)
-        return cls(model, eng.kinematics(model.design, model.coordinates), reference, wheels)
+        return cls(model, eng.kinematics(model.design, model.coordinates), reference, wheels, eng)
 
     def body_point(self, body: str, point: str) -> Array:
         """Global position of the named point ``point`` of ``body``."""

@@ -329,6 +329,8 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
     mech = Mechanism(tuple(final), tuple(joints), spec.name, tuple(spec.inputs), couplings)
     values.update(coefs)
     units = {"length": spec.units.length, "angle": spec.units.angle, "axes": spec.units.axes}
+    if spec.units.force is not None:
+        units["force"] = spec.units.force
     return Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle))
 
 
@@ -410,6 +412,8 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
         joints[j.name] = spec
     units = {"length": model.units.get("length", "m"), "angle": model.units.get("angle", "rad")}
     units["axes"] = model.units.get("axes") or "right-handed"
+    if model.units.get("force"):
+        units["force"] = model.units["force"]
     return {
         "kinprop": 1,
         "name": mech.name,

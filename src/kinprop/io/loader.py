@@ -379,6 +379,8 @@ def build_model(spec: ModelFile, file: str) -> Model:
     units = {"length": spec.units.length, "angle": spec.units.angle}
     if spec.units.axes is not None:
         units["axes"] = spec.units.axes
+    if spec.units.force is not None:
+        units["force"] = spec.units.force
     return Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle))
 
 

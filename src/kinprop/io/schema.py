@@ -40,6 +40,8 @@ class Units(Strict):
     length: Literal["m", "mm"]
     angle: Literal["deg", "rad"]
     axes: AxesName | None = None
+    #: the force unit of element stiffness / damping and the wheel rate (a label, e.g. N, kN, lbf)
+    force: Annotated[str, Field(min_length=1, max_length=16)] | None = None
 
 
 class HardpointUnits(Units):
