@@ -68,7 +68,11 @@ def travel_motion(engine: Engine, model: Model, travel_input: str | None = None)
     elif inputs:
         drive, held = inputs[0], inputs[1:]
     else:  # the mechanism's only degree of freedom: drive its largest coordinate
-        fr_J = engine.evaluate(st)[1][:, : engine.n_coordinates] * engine.row_scale[:, None] / engine.col_scale[None, : engine.n_coordinates]
+        fr_J = (
+            engine.evaluate(st)[1][:, : engine.n_coordinates]
+            * engine.row_scale[:, None]
+            / engine.col_scale[None, : engine.n_coordinates]
+        )
         _, s, Vt = np.linalg.svd(fr_J)
         null = Vt[int(np.sum(s > 1e-10 * s[0])) :]
         if null.shape[0] != 1:

@@ -164,7 +164,9 @@ def _driven_rows(engine: Engine, driven: Mapping[str, Any]) -> tuple[list[int], 
     return cols, vals
 
 
-def _solve(engine: Engine, Phi_q: Array, cols: list[int], rhs_rows: Array, rhs_driven: list[float]) -> tuple[Array, float, str]:
+def _solve(
+    engine: Engine, Phi_q: Array, cols: list[int], rhs_rows: Array, rhs_driven: list[float]
+) -> tuple[Array, float, str]:
     """Least-squares solve of the stacked system with a rank and consistency check."""
     n = Phi_q.shape[1]
     E = np.zeros((len(cols), n))

@@ -28,7 +28,9 @@ def build_elements(
 ) -> tuple[tuple[Element, ...], list[Problem]]:
     """Elements of a file (``style`` ``frames`` or ``hardpoints``; ``pose`` needed for hardpoints)."""
     out, problems = [], []
-    own, other = (("s_i", "s_j"), ("point_i", "point_j")) if style == "frames" else (("point_i", "point_j"), ("s_i", "s_j"))
+    own, other = (
+        (("s_i", "s_j"), ("point_i", "point_j")) if style == "frames" else (("point_i", "point_j"), ("s_i", "s_j"))
+    )
     for name, e in specs.items():
         loc = f"elements.{name}"
         numbers = {k: getattr(e, k) for k in ("stiffness", "damping", "free_length", "preload")}

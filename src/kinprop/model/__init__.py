@@ -15,11 +15,11 @@ __all__ = [
     "Coordinates",
     "Coupling",
     "Design",
+    "Element",
     "Joint",
     "Mechanism",
     "Model",
     "Vehicle",
-    "Element",
     "as_coordinates",
     "parse_address",
 ]
