@@ -97,7 +97,7 @@ def test_offset_slider_crank_matches_closed_form(crank_deg: float) -> None:
     assert mo.screw_axis("slider").is_translation
 
 
-class _NoTruth(Exception):
+class _NoTruthError(Exception):
     """The position solves cannot follow the drive (no central-difference truth there)."""
 
 
@@ -118,7 +118,7 @@ def _central_once(engine: kp.Engine, st: kp.State, cols: list[int], rates: np.nd
         changes = {labels[c]: float(st.Q[c] + rates[k] * t + 0.5 * acc[k] * t * t) for k, c in enumerate(cols)}
         sol = engine.propagate(changes, free=["q"], start=st, tol=1e-15)
         if not sol.converged:
-            raise _NoTruth(sol.message)
+            raise _NoTruthError(sol.message)
         Qs.append(sol.state.Q)
     return (Qs[2] - Qs[0]) / (2 * h), (Qs[2] - 2 * Qs[1] + Qs[0]) / h**2
 
@@ -151,7 +151,7 @@ RANDOM = [
         [(CUT_TYPES[(3 * seed + m) % len(CUT_TYPES)], LOOP_KINDS[(seed + m) % 3]) for m in range(2)],
         assembled=True,
         couplings=seed % 3,
-    )  # fmt: skip
+    )
     for seed in range(40)
 ]
 
@@ -166,12 +166,13 @@ def test_random_mechanisms_match_central_differences(rm) -> None:
     rng = np.random.default_rng(rm.seed)
     rates, acc = rng.uniform(-1, 1, len(cols)), rng.uniform(-1, 1, len(cols))
     labels = engine.column_labels
-    ms = engine.motion(st, {labels[c]: rates[k] for k, c in enumerate(cols)},
-                       {labels[c]: acc[k] for k, c in enumerate(cols)})  # fmt: skip
+    ms = engine.motion(
+        st, {labels[c]: rates[k] for k, c in enumerate(cols)}, {labels[c]: acc[k] for k, c in enumerate(cols)}
+    )
     assert ms.ok, ms.message
     try:
         qd, qdd = _central(engine, st, cols, rates, acc, 1e-4)
-    except _NoTruth as exc:
+    except _NoTruthError as exc:
         pytest.skip(f"the position solves do not follow this drive ({exc}); no truth to compare with")
     scale = max(1.0, float(np.max(np.abs(qd))))
     assert np.max(np.abs(ms.qdot - qd)) < 1e-8 * scale
@@ -188,7 +189,7 @@ def test_random_suite_covers_every_type() -> None:
         cols = _drivable(engine, st)
         try:
             _central_once(engine, st, cols, np.ones(len(cols)), np.zeros(len(cols)), 1e-4)
-        except _NoTruth:
+        except _NoTruthError:
             continue
         if cols:
             for j in rm.model.mechanism.joints:
@@ -197,8 +198,15 @@ def test_random_suite_covers_every_type() -> None:
     assert set(CUT_TYPES) <= cut, set(CUT_TYPES) - cut
 
 
-@pytest.mark.parametrize(("file", "drive"), [("fourbar.yaml", "O2.q"), ("double_wishbone.yaml", "LCA.q"),
-                                              ("slider_crank_offset.yaml", "O2.q"), ("fourbar_geared.yaml", "G.q")])  # fmt: skip
+@pytest.mark.parametrize(
+    ("file", "drive"),
+    [
+        ("fourbar.yaml", "O2.q"),
+        ("double_wishbone.yaml", "LCA.q"),
+        ("slider_crank_offset.yaml", "O2.q"),
+        ("fourbar_geared.yaml", "G.q"),
+    ],
+)
 def test_shipped_models_match_central_differences(file: str, drive: str) -> None:
     model = kp.assemble(kp.load_model(EXAMPLES / file)).after
     engine = kp.compile(model)

@@ -76,8 +76,10 @@ def travel_motion(engine: Engine, model: Model, travel_input: str | None = None)
         _, s, Vt = np.linalg.svd(fr_J)
         null = Vt[int(np.sum(s > 1e-10 * s[0])) :]
         if null.shape[0] != 1:
-            raise AddressError(f"the wheel's motion has {null.shape[0]} degrees of freedom: declare the travel input "
-                               "first in 'inputs:' (and the others, e.g. a rack, after it)")  # fmt: skip
+            raise AddressError(
+                f"the wheel's motion has {null.shape[0]} degrees of freedom: declare the travel input "
+                "first in 'inputs:' (and the others, e.g. a rack, after it)"
+            )
         col = int(np.argmax(np.abs(null[0])))
         drive, held = engine.column_labels[col], []
     rates = {drive: 1.0} | {a: 0.0 for a in held}
@@ -120,9 +122,16 @@ def _slope(w: Array, forward: float) -> float:
     return (wz / wx) * forward
 
 
-def first_order_metrics(ctx: OutputContext, engine: Engine, wheel: str, metrics: dict[str, float],
-                        points: dict[str, tuple[int, Array]], radius: float | None,
-                        reference_contact: Array | None, travel_input: str | None = None) -> dict[str, float]:  # fmt: skip
+def first_order_metrics(
+    ctx: OutputContext,
+    engine: Engine,
+    wheel: str,
+    metrics: dict[str, float],
+    points: dict[str, tuple[int, Array]],
+    radius: float | None,
+    reference_contact: Array | None,
+    travel_input: str | None = None,
+) -> dict[str, float]:
     """Every first-order metric the wheel supports (module docstring). ``points``: ``centre``,
     ``spin``, optionally ``upper``/``lower`` (the steering axis) as ``(body, position)``;
     ``metrics``: the position-level ones (for the steering axis' side and existence)."""
@@ -207,8 +216,10 @@ def first_order_names(model: Model, contact: bool, steer: bool, reference: bool)
     metrics of the vehicle's axle, the elements' motion ratios and the springs' wheel rate."""
     out = ["camber_gain", "bump_steer"] + (["caster_gain"] if steer else [])
     if contact:
-        out += (["half_track_change", "contact_patch_dx"] if reference else []) + ["half_track_gain",
-                                                                                  "contact_patch_dx_gain"]  # fmt: skip
+        out += (["half_track_change", "contact_patch_dx"] if reference else []) + [
+            "half_track_gain",
+            "contact_patch_dx_gain",
+        ]
         out += list(CENTRE_METRICS)
         if model.vehicle is not None:
             out += ["anti_dive", "anti_lift"] if model.vehicle.axle == "front" else ["anti_lift", "anti_squat"]

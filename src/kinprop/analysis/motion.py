@@ -189,8 +189,13 @@ class Motion:
         return s.point + lam * s.direction
 
 
-def motion(model: Model, rates: Mapping[str, Any], accelerations: Mapping[str, Any] | None = None,
-           *, engine: Engine | None = None) -> Motion:  # fmt: skip
+def motion(
+    model: Model,
+    rates: Mapping[str, Any],
+    accelerations: Mapping[str, Any] | None = None,
+    *,
+    engine: Engine | None = None,
+) -> Motion:
     """Velocities (and accelerations) of the assembled ``model`` driven by ``rates`` of
     coordinates (``{"O2.q": 10.0}``: 10 deg per unit time in a degree model); ``accelerations``
     of the same coordinates (missing ones 0). The status is ``singular`` (NaN rates) when the

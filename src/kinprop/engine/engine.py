@@ -788,7 +788,9 @@ class Engine:
                                    out[:, 5].astype(np.int64))  # fmt: skip
 
     # --- motion: velocities and accelerations (kinprop.engine.motion) ------------------------
-    def motion(self, state: State, rates: Mapping[str, Any], accelerations: Mapping[str, Any] | None = None) -> MotionState:
+    def motion(
+        self, state: State, rates: Mapping[str, Any], accelerations: Mapping[str, Any] | None = None
+    ) -> MotionState:
         """Every coordinate's rate (and acceleration) and every body's twist of an assembled
         ``state`` from the driven coordinates' ``rates`` (``{"O2.q": 1.0}``, solver units);
         status ``singular`` (NaN rates) when they do not determine the motion."""

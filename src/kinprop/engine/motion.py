@@ -183,13 +183,25 @@ def _solve(
     rank = int(np.sum(s > SINGULAR_RTOL * smax)) if smax > 0 else 0
     cond = float(s[-1] / smax) if smax > 0 and s.size == n else 0.0
     if rank < n:
-        return np.full(n, np.nan), cond, (f"singular: the driven rates leave {n - rank} direction(s) of motion "
-                                          "undetermined (a singular configuration, or too few driven coordinates)")  # fmt: skip
+        return (
+            np.full(n, np.nan),
+            cond,
+            (
+                f"singular: the driven rates leave {n - rank} direction(s) of motion "
+                "undetermined (a singular configuration, or too few driven coordinates)"
+            ),
+        )
     xs = Vt.T @ ((U.T @ b) / s)
     resid = float(np.linalg.norm(M @ xs - b))
     if resid > 1e-8 * max(1.0, float(np.linalg.norm(b))):
-        return np.full(n, np.nan), cond, ("singular: the driven rates violate the constraints (residual "
-                                          f"{resid:.3g}): a locked input or a singular configuration")  # fmt: skip
+        return (
+            np.full(n, np.nan),
+            cond,
+            (
+                "singular: the driven rates violate the constraints (residual "
+                f"{resid:.3g}): a locked input or a singular configuration"
+            ),
+        )
     return xs / cs, cond, ""
 
 
@@ -301,8 +313,19 @@ def motion_state(
     V = _tree_velocities(engine, fr, qdot)
     if msg or accelerations is None:
         nan = None if accelerations is None else np.full_like(qdot, np.nan)
-        return MotionState(SINGULAR if msg else OK, msg or "ok", qdot, V, fr.r, fr.A, fr.P, fr.R, nan,
-                           None if nan is None else np.full_like(V, np.nan), cond)  # fmt: skip
+        return MotionState(
+            SINGULAR if msg else OK,
+            msg or "ok",
+            qdot,
+            V,
+            fr.r,
+            fr.A,
+            fr.P,
+            fr.R,
+            nan,
+            None if nan is None else np.full_like(V, np.nan),
+            cond,
+        )
     acc = {a: 0.0 for a in rates} | dict(accelerations)
     acols, avals = _driven_rows(engine, acc)
     if sorted(acols) != sorted(cols):

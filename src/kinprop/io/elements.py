@@ -34,12 +34,19 @@ def build_elements(
     for name, e in specs.items():
         loc = f"elements.{name}"
         numbers = {k: getattr(e, k) for k in ("stiffness", "damping", "free_length", "preload")}
-        found = [Problem(p.location, p.message, file) for p in element_problems(
-            name, e.type, (e.bodies[0], e.bodies[1]), numbers, bodies, loc)]  # fmt: skip
+        found = [
+            Problem(p.location, p.message, file)
+            for p in element_problems(name, e.type, (e.bodies[0], e.bodies[1]), numbers, bodies, loc)
+        ]
         for key in other:
             if getattr(e, key) is not None:
-                found.append(Problem(f"{loc}.{key}", f"a {style}-style file gives an element's ends as {own[0]}, "
-                                     f"{own[1]}, found {key}", file))  # fmt: skip
+                found.append(
+                    Problem(
+                        f"{loc}.{key}",
+                        f"a {style}-style file gives an element's ends as {own[0]}, {own[1]}, found {key}",
+                        file,
+                    )
+                )
         for key in own:
             if getattr(e, key) is None:
                 where = "in its body's frame" if style == "frames" else "global, at the reference configuration"
