@@ -69,7 +69,10 @@ def _model(beta_deg: float) -> kp.Model:
         "style": "hardpoints",
         "units": {"length": "mm", "angle": "deg", "axes": "ISO8855", "force": "N"},
         "bodies": {
-            "chassis": {"fixed": True, "points": {"wheel_centre_ref": v(C), "contact_patch_ref": v(C - [0, 0, RADIUS])}},
+            "chassis": {
+                "fixed": True,
+                "points": {"wheel_centre_ref": v(C), "contact_patch_ref": v(C - [0, 0, RADIUS])},
+            },
             "lca": {},
             "uca": {},
             "upright": {
@@ -157,7 +160,7 @@ def test_motion_ratio_by_virtual_work() -> None:
     assert m["wheel_rate"] == pytest.approx(50.0 * mr**2, rel=1e-10)
 
 
-def _richardson(f, h: float) -> np.ndarray:  # noqa: ANN001
+def _richardson(f, h: float) -> np.ndarray:
     d = lambda k: (f(k * h) - f(-k * h)) / (2 * k * h)  # noqa: E731
     return (4 * d(0.5) - d(1.0)) / 3
 
@@ -173,7 +176,9 @@ def test_hmmwv_gains_match_central_differences() -> None:
                                              free=["q"], tol=1e-13).after  # fmt: skip
         s = suspension_metrics(m, "upright")
         kin = kp.compile(m).kinematics(m.design, m.coordinates)
-        ends = [kin.r[b] + kin.A[b] @ np.array(p) for b, p in ((spring.body_i, spring.s_i), (spring.body_j, spring.s_j))]
+        ends = [
+            kin.r[b] + kin.A[b] @ np.array(p) for b, p in ((spring.body_i, spring.s_i), (spring.body_j, spring.s_j))
+        ]
         cx = OutputContext.of(m)
         centre = cx.body_point("upright", "wheel_centre")
         E = contact_point(centre, cx.body_point("upright", "spin_axis") - centre, 470.0)

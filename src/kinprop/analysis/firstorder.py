@@ -30,7 +30,7 @@ import numpy as np
 from kinprop.analysis.context import OutputContext
 from kinprop.analysis.motion import point_of
 from kinprop.engine import Engine
-from kinprop.engine.motion import MotionState
+from kinprop.engine.motion import MotionState, cross3
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.spatial import EZ, Array
@@ -100,7 +100,7 @@ def _homogeneous(p: Array | None, u: Array, v: Array, normal: Array, E: Array) -
     """``(H, s)`` of the axis' intersection with the plane through E (module docstring); a
     pure translation (``p`` None) of velocity ``v``: the centre at infinity across ``v``."""
     if p is None:
-        return np.cross(normal, v), 0.0
+        return cross3(normal, v), 0.0
     s = float(normal @ u)
     return s * p + float(normal @ (E - p)) * u, s
 
@@ -150,7 +150,7 @@ def first_order_metrics(
     vc = ms.point_velocity(b, centre)
     dz = float(vc[2])
     per = (lambda x: x / dz) if dz != 0.0 else (lambda x: math.nan)
-    da = np.cross(w, axis)
+    da = cross3(w, axis)
     out["camber_gain"] = per(math.degrees(-da[2] / math.sqrt(max(1e-300, 1.0 - axis[2] ** 2))))
     ay = abs(axis[1])
     out["bump_steer"] = per(math.degrees((ay * da[0] - axis[0] * side * da[1]) / (axis[0] ** 2 + axis[1] ** 2)))
@@ -185,7 +185,7 @@ def first_order_metrics(
         p, u = None, np.zeros(3)
     else:
         u = w / nw
-        p = np.cross(w, V[:3]) / nw**2
+        p = cross3(w, V[:3]) / nw**2
     ex, ey = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
     Hf, sf = _homogeneous(p, u, vE, ex, E)  # front view: the plane x = x_E
     out["fvic_y"], out["fvic_z"], out["fvsa_length"] = _centre(Hf, sf, E, (1, 2))
