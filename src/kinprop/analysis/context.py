@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from kinprop.engine import Engine, Kinematics
+from kinprop.engine import Engine, Kinematics, State
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.model import Model
@@ -30,8 +30,9 @@ class OutputContext:
     kin: Kinematics
     reference: Model | None = None
     wheels: Mapping[str, WheelSpec] | None = None
-    #: the engine the kinematics came from (velocity analysis of first-order metrics)
+    #: the engine the kinematics came from and its packed state (velocity analysis of first-order metrics)
     engine: Engine | None = None
+    state: State | None = None
 
     @classmethod
     def of(
@@ -43,7 +44,8 @@ class OutputContext:
     ) -> OutputContext:
         """Forward kinematics of ``model`` at its current state."""
         eng = engine or compile_engine(model.mechanism)
-        return cls(model, eng.kinematics(model.design, model.coordinates), reference, wheels, eng)
+        st = eng.state_of(model)
+        return cls(model, eng.kinematics(st), reference, wheels, eng, st)
 
     def body_point(self, body: str, point: str) -> Array:
         """Global position of the named point ``point`` of ``body``."""

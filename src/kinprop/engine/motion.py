@@ -142,14 +142,16 @@ class _Frames:
         st = state.writable()
         tb = engine.tables
         ws = kernels.workspace(tb)
+        nq = engine.n_coordinates
         Phi, vals = np.zeros(engine.n_rows), np.zeros(engine.nnz)
-        need = np.ones(engine.n_columns, np.int8)
+        need = np.zeros(engine.n_columns, np.int8)
+        need[:nq] = 1  # the coordinate columns only (layout: q first)
         dummy = np.zeros(0, np.int64)
         kernels.evaluate(tb, st.Q, st.S, st.C, st.L, ws, Phi, vals, need, dummy, dummy)
-        J = np.zeros((engine.n_rows, engine.n_columns))
         rows, cols = engine.pattern
-        np.add.at(J, (rows, cols), vals)
-        self.Phi_q = J[:, : engine.n_coordinates]
+        q = cols < nq
+        self.Phi_q = np.zeros((engine.n_rows, nq))
+        np.add.at(self.Phi_q, (rows[q], cols[q]), vals[q])
         self.r, self.A, self.P, self.R, self.Tq = (np.array(ws[k]) for k in range(5))
         self.state = st
 
