@@ -31,16 +31,16 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=7)
     args = ap.parse_args()
     model = kp.assemble(kp.load_model(ROOT / "examples" / "double_wishbone.yaml")).after
-    times = {}
-    for name, outs in CASES.items():
+    for outs in CASES.values():
         sweep(model, [DRIVE], outputs=outs, tol=1e-9)  # warm-up (compiles)
-        runs = []
-        for _ in range(args.repeats):
+    runs: dict[str, list[float]] = {name: [] for name in CASES}
+    for _ in range(args.repeats):  # interleaved, so that a shared machine's load affects every case alike
+        for name, outs in CASES.items():
             t = time.perf_counter()
             res = sweep(model, [DRIVE], outputs=outs, tol=1e-9)
-            runs.append(time.perf_counter() - t)
-        assert len(res.frame) == 51
-        times[name] = statistics.median(runs)
+            runs[name].append(time.perf_counter() - t)
+            assert len(res.frame) == 51
+    times = {name: statistics.median(r) for name, r in runs.items()}
     base = times["positions only (wheel centre z)"]
     print(f"{'sweep (51 points)':40s} {'median ms':>10s} {'/ positions':>12s}")
     for name, t in times.items():
