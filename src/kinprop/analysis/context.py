@@ -5,7 +5,6 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -15,11 +14,19 @@ from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.spatial import Array
 
-if TYPE_CHECKING:
-    from kinprop.analysis.metrics import WheelSpec
-
 POINT = re.compile(r"^point:(?P<body>[^.\s\[\]]+)\.(?P<name>[^\s\[\]]+?)(\[(?P<c>[xyz012])\])?$")
 HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[ij])(\[(?P<c>[xyz012])\])?$")
+
+
+@dataclass(frozen=True)
+class WheelSpec:
+    """Per-call metric parameters of one wheel: the steering axis as two point specs
+    (``hardpoint:JOINT.i|j`` or ``point:BODY.NAME``), upper first
+    (:mod:`kinprop.analysis.metrics`)."""
+
+    steering_axis: tuple[str, str] | None = None
+    #: the coordinate driven in bump for the first-order metrics (default: the first declared input)
+    travel_input: str | None = None
 
 
 @dataclass

@@ -41,11 +41,10 @@ steering axis can also be given per call as two point specs (``hardpoint:JOINT.i
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from kinprop.analysis.context import OutputContext
+from kinprop.analysis.context import OutputContext, WheelSpec
 from kinprop.analysis.firstorder import (
     FIRST_ORDER,
     GAIN_METRICS,
@@ -67,16 +66,6 @@ METRICS = ANGLE_METRICS + LENGTH_METRICS + FIRST_ORDER
 POSITION_METRICS = ANGLE_METRICS + LENGTH_METRICS
 #: accepted long names
 METRIC_ALIASES = {"kingpin_inclination": "kpi", "scrub": "scrub_radius", "wheel_travel": "wheel_centre_dz"}
-
-
-@dataclass(frozen=True)
-class WheelSpec:
-    """Per-call metric parameters of one wheel: the steering axis as two point specs
-    (``hardpoint:JOINT.i|j`` or ``point:BODY.NAME``), upper first."""
-
-    steering_axis: tuple[str, str] | None = None
-    #: the coordinate driven in bump for the first-order metrics (default: the first declared input)
-    travel_input: str | None = None
 
 
 # --- closed-form geometry (vectors in vehicle axes) -----------------------------------------

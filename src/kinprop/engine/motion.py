@@ -152,7 +152,8 @@ class _Frames:
         q = cols < nq
         self.Phi_q = np.zeros((engine.n_rows, nq))
         np.add.at(self.Phi_q, (rows[q], cols[q]), vals[q])
-        self.r, self.A, self.P, self.R, self.Tq = (np.array(ws[k]) for k in range(5))
+        slots = (kernels.W_BODY_R, kernels.W_BODY_A, kernels.W_FRAME_P, kernels.W_FRAME_R, kernels.W_TWIST_Q)
+        self.r, self.A, self.P, self.R, self.Tq = (np.array(ws[k]) for k in slots)
         self.state = st
 
 
