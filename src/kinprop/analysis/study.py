@@ -146,11 +146,14 @@ def _model_payload(model: Model) -> dict[str, Any]:
         "design": {k: np.array(v) for k, v in model.design.items()},
         "coordinates": {k: np.array(v) for k, v in model.coordinates.items()},
         "units": dict(model.units),
+        "elements": model.elements,
+        "vehicle": model.vehicle,
     }
 
 
 def _model_from_payload(p: Mapping[str, Any]) -> Model:
-    return Model(p["mechanism"], Design(p["design"]), as_coordinates(p["coordinates"]), p["units"])
+    return Model(p["mechanism"], Design(p["design"]), as_coordinates(p["coordinates"]), p["units"],
+                 elements=p.get("elements", ()), vehicle=p.get("vehicle"))  # fmt: skip
 
 
 def _model_hash(model: Model) -> str:
