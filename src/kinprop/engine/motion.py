@@ -34,7 +34,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -66,8 +66,10 @@ from kinprop.kinematics.tables import (
 )
 from kinprop.spatial import Array
 
-if TYPE_CHECKING:
-    from kinprop.engine.engine import Engine, State
+#: ``kinprop.engine.Engine`` and its ``State``: engine.py calls into this module (``Engine.motion``),
+#: so this module names them without importing them (no import cycle, also for type checkers)
+Engine = Any
+State = Any
 
 #: relative singular value below which the velocity system counts as singular
 SINGULAR_RTOL = 1e-10
