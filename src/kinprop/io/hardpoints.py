@@ -39,6 +39,7 @@ from kinprop.engine import JointFrames
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.couplings import build_couplings, couplings_to_data
+from kinprop.io.elements import build_elements, build_vehicle, elements_to_data, vehicle_to_data
 from kinprop.io.loader import build_or_report
 from kinprop.io.points import attach_references, point_order, point_references, written_points
 from kinprop.io.schema import HardpointFile, HardpointJointSpec
@@ -371,10 +372,15 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
         final.append(Body(b.name, b.fixed, b.position, b.orientation, pts))
     if problems:
         raise ModelError(problems)
+    elements, eproblems = build_elements(spec.elements, set(pose), "hardpoints", file, lambda b: pose[b])
+    if eproblems:
+        raise ModelError(eproblems)
     mech = Mechanism(tuple(final), tuple(joints), spec.name, tuple(spec.inputs), couplings, spec.edits)
     values.update(coefs)
     units = {"length": spec.units.length, "angle": spec.units.angle, "axes": spec.units.axes}
-    model = Model(mech, Design(values), as_coordinates(coords), units, file)
+    if spec.units.force is not None:
+        units["force"] = spec.units.force
+    model = Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle))
     return attach_references(model, refs, file, point_order(spec.bodies))
 
 
@@ -429,6 +435,7 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
     """
     mech = model.mechanism
     frames = joint_frames(model)
+    kin = compile_engine(mech).kinematics(model.design, model.coordinates)
     bodies: dict[str, Any] = {}
     for b in mech.bodies:
         spec: dict[str, Any] = {}
@@ -468,6 +475,8 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
         joints[j.name] = spec
     units = {"length": model.units.get("length", "m"), "angle": model.units.get("angle", "rad")}
     units["axes"] = model.units.get("axes") or "right-handed"
+    if model.units.get("force"):
+        units["force"] = model.units["force"]
     return {
         "kinprop": 1,
         "name": mech.name,
@@ -479,7 +488,10 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
         **({"inputs": list(mech.inputs)} if mech.inputs else {}),
         **({"couplings": couplings_to_data(model, _coupled_now(model))} if mech.couplings else {}),
         **({"edits": mech.edits} if mech.edits != "design" else {}),
-    }
+        **({"elements": elements_to_data(model.elements, "hardpoints", lambda b: (kin.r[b], kin.A[b]))}
+           if model.elements else {}),
+        **({"vehicle": vehicle_to_data(model.vehicle)} if model.vehicle is not None else {}),
+    }  # fmt: skip
 
 
 def pivot_points(model: Model, joint: str) -> tuple[str, dict[str, Array]] | None:

@@ -19,6 +19,7 @@ from pydantic import BaseModel, ValidationError
 
 from kinprop.errors import ModelError, Problem
 from kinprop.io.couplings import build_couplings
+from kinprop.io.elements import build_elements, build_vehicle
 from kinprop.io.points import attach_references, point_order, point_references
 from kinprop.io.schema import ModelFile
 from kinprop.joints import REGISTRY, joint_type
@@ -333,6 +334,8 @@ def build_model(spec: ModelFile, file: str) -> Model:
     values.update(coefs)
     problems += cproblems
     problems += [Problem(p.location, p.message, file) for p in validate_couplings(tuple(joints), couplings)]
+    elements, eproblems = build_elements(spec.elements, {b.name for b in bodies}, "frames", file)
+    problems += eproblems
     if problems:
         raise ModelError(problems)
     mech = Mechanism(tuple(bodies), tuple(joints), spec.name, tuple(spec.inputs), couplings, spec.edits)
@@ -381,7 +384,9 @@ def build_model(spec: ModelFile, file: str) -> Model:
     units = {"length": spec.units.length, "angle": spec.units.angle}
     if spec.units.axes is not None:
         units["axes"] = spec.units.axes
-    model = Model(mech, Design(values), as_coordinates(coords), units, file)
+    if spec.units.force is not None:
+        units["force"] = spec.units.force
+    model = Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle))
     return attach_references(model, refs, file, point_order(spec.bodies))
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -88,7 +89,7 @@ def attach_references(
         mech = Mechanism(tuple(bodies), mech.joints, mech.name, mech.inputs, mech.couplings, mech.edits)
     bound = bind_coincident(mech, model.design)
     if bound is not model.mechanism:
-        model = Model(bound, model.design, model.coordinates, model.units, model.source)
+        model = replace(model, mechanism=bound)
     for message in steering_axis_mismatch(model):
         warnings.warn(f"{file}: {message}", JointPointWarning, stacklevel=4)
     return model
