@@ -14,6 +14,7 @@ from dw_oracle import HMMWV, solve
 from kinprop import SingularityWarning, load_model, propagate
 from kinprop.analysis.metrics import suspension_metrics
 from kinprop.analysis.outputs import evaluate_outputs
+from kinprop.analysis.study import run_study
 from kinprop.cli.sensitivity import sensitivities
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, ModelError
@@ -193,3 +194,22 @@ def test_pivots_are_outputs_and_the_chrono_importer_writes_them():
         eng, eng.reference, {"hardpoint:LCA.front": np.add(hp["joints"]["LCA"]["pivots"]["front"], [0, 0, 0.01])}
     )
     assert set(raised) == {"LCA.s_i", "LCA.C_i", "LCA.s_j", "LCA.C_j"}
+
+
+def test_a_study_varying_a_pivot_against_the_independent_solver():
+    """study --vary hardpoint:UCA.front[z] with the lower arm held at 5 deg: each variant's
+    camber, toe and caster are the oracle's for that pivot height."""
+    pytest.importorskip("pyarrow")
+    model = load_model(FILE)
+    eng = compile_engine(model)
+    z = HMMWV["UCA_F"][2] + np.array([-10.0, 0.0, 12.0])
+    addrs, plan = global_plan(eng, eng.reference, ["hardpoint:UCA.front[z]"], z[:, None])
+    frame = run_study(
+        model, plan=plan, addresses=addrs, sets={"LCA.q": np.radians(5.0)}, outputs=["camber", "toe", "caster"],
+        tol=1e-9, units="solver", engine="reference",
+    )  # fmt: skip
+    assert frame["converged"].all()
+    for n, zn in enumerate(z):
+        truth = solve({**HMMWV, "UCA_F": np.array([*HMMWV["UCA_F"][:2], zn])}, 5.0)
+        for name in ("camber", "toe", "caster"):
+            assert frame[name].iloc[n] == pytest.approx(truth[name], abs=1e-7), (name, zn)
