@@ -130,3 +130,18 @@ def test_ackermann_of_a_planar_trapezoid_against_its_closed_form():
     d_ack = math.atan(1 / (1 / math.tan(d_i) + track / wheelbase))
     assert got == pytest.approx(100 * (d_i - d_o) / (d_i - d_ack), abs=1e-6)
     assert 0 < got < 200
+
+
+@pytest.mark.parametrize(
+    ("file", "arm"),
+    [("hmmwv_front_axle.yaml", "LCA"), ("mcpherson_axle.yaml", "LCA"), ("multilink_rear_axle.yaml", "UA")],
+)
+def test_shipped_axles_are_mirror_images(file, arm):
+    model = model_from_data(yaml.safe_load((EXAMPLES / file).read_text()), file)
+    theta = 3.0
+    after = propagate(model, {f"{arm}_L.q": theta, f"{arm}_R.q": -theta}, ["q"], tol=1e-11).after
+    left, right = suspension_metrics(after, "upright_L"), suspension_metrics(after, "upright_R")
+    assert left["wheel_centre_dz"] > 0
+    for name, value in left.items():
+        mirrored = -right[name] if name == "wheel_centre_dy" else right[name]
+        assert value == pytest.approx(mirrored, abs=1e-9), name
