@@ -235,12 +235,15 @@ def steering_axis_mismatch(model: Model) -> list[str]:
     that do not coincide with the joint the default steering axis takes, at the model's
     coordinates: one message each, with the distance. Such points are used as declared."""
     out = []
-    ctx = OutputContext.of(model)
+    ctx = None  # forward kinematics only when a wheel declares its axis by coordinates
     for wheel in wheel_bodies(model):
         pair = steering_joints(model.mechanism, wheel)
         found = [_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
         if pair is None or None in found:
             continue
+        if all(model.mechanism.body(b).joint_point(k) is not None for b, k in found):  # type: ignore[misc]
+            continue
+        ctx = ctx or OutputContext.of(model)
         a, b = (ctx.hardpoint(*p) for p in pair)
         ordered = (pair[0], a), (pair[1], b)
         if a[2] < b[2]:
