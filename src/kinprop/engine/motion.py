@@ -34,7 +34,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -66,8 +66,9 @@ from kinprop.kinematics.tables import (
 )
 from kinprop.spatial import Array
 
-if TYPE_CHECKING:
-    from kinprop.engine.engine import Engine, State
+#: :class:`kinprop.engine.engine.Engine` and its ``State`` (which import this module: not imported here)
+Engine = Any
+State = Any
 
 #: relative singular value below which the velocity system counts as singular
 SINGULAR_RTOL = 1e-10
