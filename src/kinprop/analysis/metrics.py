@@ -148,9 +148,12 @@ def available_metrics(
     return out
 
 
-def metric_names(model: Model) -> list[str]:
-    """``metric:WHEEL.NAME`` for every wheel body and every metric it supports."""
-    return [f"metric:{w}.{m}" for w in wheel_bodies(model) for m in available_metrics(model, w)]
+def metric_names(model: Model, first_order: bool = False) -> list[str]:
+    """``metric:WHEEL.NAME`` for every wheel body and every position-level metric it supports
+    (the default outputs of sweeps and studies); ``first_order``: the first-order ones too
+    (a velocity analysis per state: asked for by name)."""
+    return [f"metric:{w}.{m}" for w in wheel_bodies(model) for m in available_metrics(model, w)
+            if first_order or not is_first_order(m)]  # fmt: skip
 
 
 def resolve_metric(model: Model, name: str) -> tuple[str, str]:
