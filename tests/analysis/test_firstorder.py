@@ -226,3 +226,20 @@ def test_results_do_not_depend_on_the_file_units() -> None:
                        "roll_centre_height": 1e-3, "half_track_change": 1e-3, "wheel_rate": 1e3}  # fmt: skip
     for n in names:
         assert m[n] == pytest.approx(mm[n] * per_mm_to_per_m.get(n, 1.0), rel=1e-9, abs=1e-12), n
+
+
+def test_first_order_targets_are_met() -> None:
+    """Targets on camber gain, anti-dive and a motion ratio move the upper arm's pivots until
+    the re-assembled design has them (checked by evaluating the metrics afresh)."""
+    from kinprop.analysis.targets import propagate_targets
+
+    base = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
+    res = propagate_targets(base, ["camber_gain=-0.025", "anti_dive=60", "motion_ratio:spring=0.46"],
+                            ["hardpoint:UCA", "hardpoint:LCA"])  # fmt: skip
+    assert res.status == "met"
+    got = evaluate_outputs(res.after, ["camber_gain", "anti_dive", "motion_ratio:spring"])
+    assert got["camber_gain"] == pytest.approx(-0.025, rel=1e-8)
+    assert got["anti_dive"] == pytest.approx(60.0, rel=1e-8)
+    assert got["motion_ratio:spring"] == pytest.approx(0.46, rel=1e-8)
+    rows = {r["output"].split(".")[-1]: r["unit"] for r in res.table()}
+    assert rows["camber_gain"] == "deg/mm" and rows["anti_dive"] == "%"
