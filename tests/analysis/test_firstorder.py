@@ -54,9 +54,11 @@ def _axis_point(a: np.ndarray) -> np.ndarray:
     return X[0] * e1 + X[1] * e2
 
 
-def _model(beta_deg: float, metres: bool = False) -> kp.Model:
-    """The parallel-axis double wishbone (mm and deg; or m and rad, the same suspension)."""
+def _model(beta_deg: float, metres: bool = False, right: bool = False, inputs: bool = True) -> kp.Model:
+    """The parallel-axis double wishbone (mm and deg; or m and rad, the same suspension; or its
+    mirror image, a right corner; without declared inputs)."""
     k = 1e-3 if metres else 1.0
+    mirror = np.array([1.0, -1.0 if right else 1.0, 1.0])
     b = math.radians(beta_deg)
     a = np.array([math.cos(b), 0.0, math.sin(b)])
     c = _axis_point(a)
@@ -64,7 +66,7 @@ def _model(beta_deg: float, metres: bool = False) -> kp.Model:
     T_I = T_O - 0.45 * _perp(T_O - c, a)
 
     def v(x: np.ndarray) -> list[float]:
-        return [float(y) * k for y in x]
+        return [float(y) * k for y in np.asarray(x) * mirror]
 
     data = {
         "kinprop": 1,
@@ -95,7 +97,7 @@ def _model(beta_deg: float, metres: bool = False) -> kp.Model:
             "UBJ": {"type": "spherical", "bodies": ["uca", "upright"], "cut": True, "point": v(UBJ)},
             "TR": {"type": "distance", "bodies": ["chassis", "upright"], "point_i": v(T_I), "point_j": v(T_O)},
         },
-        "inputs": ["LCA"],
+        "inputs": ["LCA"] if inputs else [],
         "elements": {
             "spring": {"type": "spring", "bodies": ["chassis", "lca"], "point_i": v(S_C), "point_j": v(S_A),
                        "stiffness": 50.0 / k},
@@ -243,3 +245,18 @@ def test_first_order_targets_are_met() -> None:
     assert got["motion_ratio:spring"] == pytest.approx(0.46, rel=1e-8)
     rows = {r["output"].split(".")[-1]: r["unit"] for r in res.table()}
     assert rows["camber_gain"] == "deg/mm" and rows["anti_dive"] == "%"
+
+
+def test_a_right_corner_and_no_declared_inputs_give_the_same_metrics() -> None:
+    """The mirror image (y -> -y) is a right corner: every metric is the same (the signs are
+    side-independent) except the FVIC's y; without declared inputs the bump motion is the
+    mechanism's only degree of freedom, and nothing changes either."""
+    names = ["camber_gain", "bump_steer", "caster_gain", "fvic_y", "fvic_z", "fvsa_length", "roll_centre_height",
+             "anti_dive", "half_track_gain", "contact_patch_dx_gain", "motion_ratio:spring", "wheel_rate"]  # fmt: skip
+    left = evaluate_outputs(_model(-5.0), names)
+    right = evaluate_outputs(_model(-5.0, right=True), names)
+    free = evaluate_outputs(_model(-5.0, inputs=False), names)
+    for n in names:
+        sign = -1.0 if n == "fvic_y" else 1.0
+        assert right[n] == pytest.approx(sign * left[n], rel=1e-9, abs=1e-12), n
+        assert free[n] == pytest.approx(left[n], rel=1e-9, abs=1e-12), n
