@@ -151,9 +151,12 @@ def available_metrics(
     return out
 
 
-def metric_names(model: Model) -> list[str]:
-    """``metric:WHEEL.NAME`` for every wheel body and every metric it supports."""
-    return [f"metric:{w}.{m}" for w in wheel_bodies(model) for m in available_metrics(model, w)]
+def metric_names(model: Model, first_order: bool = False) -> list[str]:
+    """``metric:WHEEL.NAME`` for every wheel body and every position-level metric it supports
+    (the default outputs of sweeps and studies); ``first_order``: the first-order ones too
+    (a velocity analysis per state: asked for by name)."""
+    return [f"metric:{w}.{m}" for w in wheel_bodies(model) for m in available_metrics(model, w)
+            if first_order or not is_first_order(m)]  # fmt: skip
 
 
 def resolve_metric(model: Model, name: str) -> tuple[str, str]:
@@ -311,7 +314,7 @@ def wheel_first_order(ctx: OutputContext, wheel: str, spec: WheelSpec | None = N
             if found_ref is not None:
                 ref = ctx.body_point(*found_ref)
     travel = spec.travel_input if spec is not None else None
-    return first_order_metrics(ctx, engine, wheel, {}, points, radius, ref, travel)
+    return first_order_metrics(ctx, engine, wheel, points, radius, ref, travel)
 
 
 def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:

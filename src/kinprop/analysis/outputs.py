@@ -229,7 +229,7 @@ def output_names(model: Model, engine: Engine | None = None) -> list[str]:
     for j in mech.joints:
         for side in "ij":
             names += _vector_name(f"hardpoint:{j.name}.{side}", 3, True)
-    names += metric_names(model)
+    names += metric_names(model, first_order=True)
     return names
 
 
