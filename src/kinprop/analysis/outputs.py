@@ -25,8 +25,15 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from kinprop.analysis.context import HARD, POINT, OutputContext
-from kinprop.analysis.metrics import WheelSpec, metric_names, resolve_metric, wheel_metrics
+from kinprop.analysis.context import HARD, POINT, OutputContext, pivot_point
+from kinprop.analysis.metrics import (
+    WheelSpec,
+    is_first_order,
+    metric_names,
+    resolve_metric,
+    wheel_first_order,
+    wheel_metrics,
+)
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
@@ -101,6 +108,11 @@ def _check_point(model: Model, name: str, m: re.Match[str]) -> None:
         raise AddressError(
             f"output {name!r}: unknown joint {m.group('joint')!r}; joints are {', '.join(mech.joint_names)}"
         )
+    elif m.group("side") not in ("i", "j"):
+        try:
+            pivot_point(model, m.group("joint"), m.group("side"))  # a pivot of the joint
+        except AddressError as exc:
+            raise AddressError(f"bad output {name!r}: {exc.args[0]}") from None
 
 
 def _parse_variable(engine: Engine, name: str) -> Address:
@@ -134,9 +146,11 @@ def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, flo
         return float(ctx.hardpoint(m.group("joint"), m.group("side"))[AXES[m.group("c")]])
     if name.startswith("metric:") or "." not in name:
         wheel, metric = resolve_metric(ctx.model, name)
-        if wheel not in metric_cache:
-            metric_cache[wheel] = wheel_metrics(ctx, wheel)
-        values = metric_cache[wheel]
+        first = is_first_order(metric)
+        key = f"{wheel}\x00first" if first else wheel
+        if key not in metric_cache:
+            metric_cache[key] = wheel_first_order(ctx, wheel) if first else wheel_metrics(ctx, wheel)
+        values = metric_cache[key]
         if metric not in values:
             available = ", ".join(values)
             raise AddressError(f"metric {metric!r} is not available for wheel {wheel!r}; available: {available}")
@@ -215,7 +229,7 @@ def output_names(model: Model, engine: Engine | None = None) -> list[str]:
     for j in mech.joints:
         for side in "ij":
             names += _vector_name(f"hardpoint:{j.name}.{side}", 3, True)
-    names += metric_names(model)
+    names += metric_names(model, first_order=True)
     return names
 
 

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from kinprop.constraints.coupling import N_COEF
+from kinprop.engine.motion import MotionState, motion_state
 from kinprop.errors import AddressError
 from kinprop.jit import get_num_threads, set_parallel_chunksize
 from kinprop.kinematics import kernels
@@ -832,6 +833,15 @@ class Engine:
         return steps.Q, BatchSolution(steps, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4],
                                       out[:, 2], out[:, 5].astype(np.int64), out[:, 3].astype(np.int64), cfg.tol,
                                       tol)  # fmt: skip
+
+    # --- motion: velocities and accelerations (kinprop.engine.motion) ------------------------
+    def motion(
+        self, state: State, rates: Mapping[str, Any], accelerations: Mapping[str, Any] | None = None
+    ) -> MotionState:
+        """Every coordinate's rate (and acceleration) and every body's twist of an assembled
+        ``state`` from the driven coordinates' ``rates`` (``{"O2.q": 1.0}``, solver units);
+        status ``singular`` (NaN rates) when they do not determine the motion."""
+        return motion_state(self, state, rates, accelerations)
 
 
 def compile(model: Model | Mechanism) -> Engine:
