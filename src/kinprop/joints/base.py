@@ -21,7 +21,7 @@ import numpy as np
 
 from kinprop.constraints.basic import BasicConstraint
 from kinprop.jit import kernel
-from kinprop.spatial import Array, eye_into
+from kinprop.spatial import Array, eye_into, matrix_to_euler
 
 
 @kernel
@@ -35,6 +35,22 @@ def no_placement(q: Array, A: Array, d: Array) -> None:
 def no_motion(q: Array, A: Array, d: Array, dd: Array, H: Array) -> None:
     dd[:, :] = 0.0
     H[:, :] = 0.0
+
+
+def angle_about_z(R: Array) -> float:
+    """The rotation angle of ``R`` about z'' (``atan2(R_10, R_00)``), radians."""
+    return float(np.arctan2(R[1, 0], R[0, 0]))
+
+
+def euler_of(R: Array) -> Array:
+    """Euler parameters ``[e0..e3]`` of ``R`` with ``e0 >= 0``."""
+    p = np.asarray(matrix_to_euler(R), dtype=float)
+    return -p if p[0] < 0 else p
+
+
+def distance_of(d: Array) -> float:
+    """``|d''|``: the distance of the two joint origins."""
+    return float(np.linalg.norm(d))
 
 
 @dataclass(frozen=True)
@@ -91,6 +107,14 @@ class JointType:
         dd, H = np.zeros((3, self.n_coordinates)), np.zeros((3, self.n_coordinates))
         type(self).motion_kernel(q, A, d, dd, H)
         return dd, H
+
+    # --- reading a joint back -------------------------------------------------------------------
+    def relative_values(self, R: Array, d: Array) -> dict[str, float | Array]:
+        """The joint's own named values from its relative placement ``R'' = R_i^T R_j``,
+        ``d'' = R_i^T (P_j - P_i)`` (frame i), by this type's convention: a tree joint's equal
+        its coordinates, a cut joint's are what they would be as a tree joint
+        (:mod:`kinprop.propagation.poses`). Angles in radians. None by default."""
+        return {}
 
     # --- cut form ----------------------------------------------------------------------------
     def constraints(self) -> tuple[BasicConstraint, ...]:

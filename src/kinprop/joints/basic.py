@@ -4,8 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from kinprop.constraints.basic import Distance, Dot1, Dot2, Spherical
-from kinprop.joints.base import JointType
+from kinprop.joints.base import JointType, distance_of
 from kinprop.spatial import EZ
 
 
@@ -14,6 +16,10 @@ class Dot1Joint(JointType):
     name: str = "dot-1"
     description: str = "z''_i perpendicular to z''_j (eq. 1; cut only)"
     tree: bool = False
+
+    def relative_values(self, R, d):
+        """``angle`` between z''_i and z''_j."""
+        return {"angle": float(np.arccos(np.clip(R[2, 2], -1.0, 1.0)))}
 
     def constraints(self):
         return (Dot1(EZ, EZ),)
@@ -35,6 +41,9 @@ class SphericalPoint(JointType):
     description: str = "the two joint origins coincide (eq. 15; cut only)"
     tree: bool = False
 
+    def relative_values(self, R, d):
+        return {"distance": distance_of(d)}
+
     def constraints(self):
         return (Spherical(),)
 
@@ -45,6 +54,9 @@ class DistanceJoint(JointType):
     description: str = "the joint origins are l apart: S-S link, tie rod (eq. 17; cut only)"
     has_length: bool = True
     tree: bool = False
+
+    def relative_values(self, R, d):
+        return {"distance": distance_of(d)}
 
     def constraints(self):
         return (Distance(),)

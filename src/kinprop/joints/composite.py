@@ -7,7 +7,7 @@ from typing import ClassVar
 
 from kinprop.constraints.basic import Distance, Dot2
 from kinprop.jit import kernel
-from kinprop.joints.base import JointType
+from kinprop.joints.base import JointType, distance_of, euler_of
 from kinprop.spatial import EX, EY, EZ, euler_A_into, euler_E_into
 
 ST_CODE, FREE_CODE, TD_CODE = 6, 7, 8
@@ -49,6 +49,10 @@ class SphericalTranslational(JointType):
     placement_kernel = st_placement
     motion_kernel = st_motion
 
+    def relative_values(self, R, d):
+        """``euler`` of the ball and ``displacement`` along the rotated z''."""
+        return {"euler": euler_of(R), "displacement": float(d @ R[:, 2])}
+
     def constraints(self):
         return (Dot2(EX, on="j"), Dot2(EY, on="j"))
 
@@ -61,6 +65,9 @@ class RevoluteSpherical(JointType):
     description: str = "link of length l: revolute on body i, ball on body j (cut only)"
     has_length: bool = True
     tree: bool = False
+
+    def relative_values(self, R, d):
+        return {"distance": distance_of(d)}
 
     def constraints(self):
         return (Dot2(EZ), Distance())
@@ -80,6 +87,9 @@ class TranslationalDistance(JointType):
     has_length: bool = True
     tree: bool = False
     code: ClassVar[int] = TD_CODE
+
+    def relative_values(self, R, d):
+        return {"distance": distance_of(d)}
 
     def constraints(self):
         return (Distance(),)
@@ -125,6 +135,9 @@ class Free(JointType):
     code: ClassVar[int] = FREE_CODE
     placement_kernel = free_placement
     motion_kernel = free_motion
+
+    def relative_values(self, R, d):
+        return {"euler": euler_of(R), "translation_i": d.copy()}
 
 
 __all__ = ["Free", "RevoluteSpherical", "SphericalTranslational", "TranslationalDistance"]

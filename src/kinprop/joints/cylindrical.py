@@ -7,7 +7,7 @@ from typing import ClassVar
 
 from kinprop.constraints.basic import Dot1, Dot2
 from kinprop.jit import kernel
-from kinprop.joints.base import JointType
+from kinprop.joints.base import JointType, angle_about_z
 from kinprop.spatial import EX, EY, EZ, rot_z_into
 
 CODE = 2
@@ -36,6 +36,9 @@ class Cylindrical(JointType):
     code: ClassVar[int] = CODE
     placement_kernel = placement
     motion_kernel = motion
+
+    def relative_values(self, R, d):
+        return {"angle": angle_about_z(R), "displacement": float(d[2])}
 
     def constraints(self):
         return (Dot1(EX, EZ), Dot1(EY, EZ), Dot2(EX), Dot2(EY))

@@ -35,6 +35,9 @@ class Prismatic(JointType):
     placement_kernel = placement
     motion_kernel = motion
 
+    def relative_values(self, R, d):
+        return {"displacement": float(d[2])}
+
     def constraints(self):
         # axes parallel, the offset along z''_i only, no twist about the axis
         return (Dot1(EX, EZ), Dot1(EY, EZ), Dot2(EX), Dot2(EY), Dot1(EX, EY))

@@ -7,7 +7,7 @@ from typing import ClassVar
 
 from kinprop.constraints.basic import Dot1, Spherical
 from kinprop.jit import kernel
-from kinprop.joints.base import JointType
+from kinprop.joints.base import JointType, angle_about_z
 from kinprop.spatial import EX, EY, EZ, rot_z_into
 
 CODE = 0
@@ -35,6 +35,9 @@ class Revolute(JointType):
     code: ClassVar[int] = CODE
     placement_kernel = placement
     motion_kernel = motion
+
+    def relative_values(self, R, d):
+        return {"angle": angle_about_z(R)}
 
     def constraints(self):
         return (Spherical(), Dot1(EX, EZ), Dot1(EY, EZ))

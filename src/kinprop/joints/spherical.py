@@ -7,7 +7,7 @@ from typing import ClassVar
 
 from kinprop.constraints.basic import Spherical as SphericalConstraint
 from kinprop.jit import kernel
-from kinprop.joints.base import JointType
+from kinprop.joints.base import JointType, euler_of
 from kinprop.spatial import euler_A_into, euler_E_into
 
 CODE = 4
@@ -34,6 +34,9 @@ class Spherical(JointType):
     code: ClassVar[int] = CODE
     placement_kernel = placement
     motion_kernel = motion
+
+    def relative_values(self, R, d):
+        return {"euler": euler_of(R)}
 
     def constraints(self):
         return (SphericalConstraint(),)

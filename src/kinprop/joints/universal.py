@@ -47,5 +47,9 @@ class Universal(JointType):
     placement_kernel = placement
     motion_kernel = motion
 
+    def relative_values(self, R, d):
+        """``R'' = Rz(q0) Ry(q1)``: ``angle_1 = atan2(-R''_01, R''_11)``, ``angle_2 = atan2(-R''_20, R''_22)``."""
+        return {"angle_1": float(np.arctan2(-R[0, 1], R[1, 1])), "angle_2": float(np.arctan2(-R[2, 0], R[2, 2]))}
+
     def constraints(self):
         return (Spherical(), Dot1(EZ, EY))
