@@ -19,7 +19,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from kinprop.constraints.basic import BasicConstraint
+from kinprop.constraints.basic import BasicConstraint, Spherical
 from kinprop.jit import kernel
 from kinprop.spatial import Array, eye_into, matrix_to_euler
 
@@ -127,6 +127,12 @@ class JointType:
 
     def default_cut_coordinates(self) -> Array:
         return np.zeros(self.n_cut_coordinates)
+
+    @property
+    def origins_coincide(self) -> bool:
+        """Whether the cut form holds the two joint-frame origins together (a spherical basic
+        constraint among its rows: revolute, universal, spherical, fixed, spherical-point)."""
+        return self.cut and any(isinstance(c, Spherical) for c in self.constraints())
 
     @property
     def n_constraints(self) -> int:
