@@ -70,6 +70,11 @@ class JointType:
     has_length: bool = False
     tree: bool = True
     cut: bool = True
+    #: the keys of its hardpoint form (global points and axes; kinprop.io.hardpoints):
+    #: (required, optional); None: the type has no hardpoint form
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = None
+    #: the design fields its cut form uses (those a hardpoint file defines for it as a cut joint)
+    cut_fields: tuple[str, ...] = ()
 
     #: the kernel's code for this type (:mod:`kinprop.joints.dispatch`)
     code: ClassVar[int] = -1

@@ -42,6 +42,8 @@ class SphericalTranslational(JointType):
     """
 
     name: str = "spherical-translational"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point", "axis"), ())
+    cut_fields: tuple[str, ...] = ("s_i", "s_j", "C_j")
     description: str = "Euler parameters then translation along the rotated z'' (5 coordinates)"
     n_coordinates: int = 5
     euler_start: int | None = 0
@@ -62,6 +64,8 @@ class RevoluteSpherical(JointType):
     """R-S: a link of length l, revolute about z''_i at body i, spherical at body j (eq. 52)."""
 
     name: str = "revolute-spherical"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point_i", "axis", "point_j"), ("length",))
+    cut_fields: tuple[str, ...] = ("s_i", "s_j", "C_i", "length")
     description: str = "link of length l: revolute on body i, ball on body j (cut only)"
     has_length: bool = True
     tree: bool = False
@@ -82,6 +86,8 @@ class TranslationalDistance(JointType):
     """
 
     name: str = "translational-distance"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point_i", "axis", "point_j"), ("length",))
+    cut_fields: tuple[str, ...] = ("s_i", "s_j", "C_i", "length")
     description: str = "rack along z''_i (1 own coordinate) and rod of length l (cut only)"
     n_cut_coordinates: int = 1
     has_length: bool = True
@@ -128,6 +134,7 @@ class Free(JointType):
     """
 
     name: str = "free"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = ((), ("point",))
     description: str = "translation then Euler parameters (7 coordinates; tree only)"
     n_coordinates: int = 7
     euler_start: int | None = 3

@@ -30,6 +30,8 @@ def motion(q, A, d, dd, H):
 @dataclass(frozen=True)
 class Cylindrical(JointType):
     name: str = "cylindrical"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point", "axis"), ())
+    cut_fields: tuple[str, ...] = ("s_i", "s_j", "C_i", "C_j")
     description: str = "rotation about and translation along z'' (2 coordinates)"
     n_coordinates: int = 2
     angle_indices: tuple[int, ...] = (0,)

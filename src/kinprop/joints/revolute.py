@@ -29,6 +29,8 @@ def motion(q, A, d, dd, H):
 @dataclass(frozen=True)
 class Revolute(JointType):
     name: str = "revolute"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point", "axis"), ())
+    cut_fields: tuple[str, ...] = ("s_i", "s_j", "C_i", "C_j")
     description: str = "rotation about z'' (1 coordinate)"
     n_coordinates: int = 1
     angle_indices: tuple[int, ...] = (0,)

@@ -28,6 +28,8 @@ def motion(q, A, d, dd, H):
 @dataclass(frozen=True)
 class Spherical(JointType):
     name: str = "spherical"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point",), ())
+    cut_fields: tuple[str, ...] = ("s_i", "s_j")
     description: str = "three rotations as Euler parameters [e0, e1, e2, e3] (4 coordinates)"
     n_coordinates: int = 4
     euler_start: int | None = 0

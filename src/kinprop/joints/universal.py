@@ -40,6 +40,8 @@ def motion(q, A, d, dd, H):
 @dataclass(frozen=True)
 class Universal(JointType):
     name: str = "universal"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point", "axis_i", "axis_j"), ())
+    cut_fields: tuple[str, ...] = ("s_i", "s_j", "C_i", "C_j")
     description: str = "rotations about z''_i then the rotated y'' (2 coordinates)"
     n_coordinates: int = 2
     angle_indices: tuple[int, ...] = (0, 1)
