@@ -25,7 +25,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from kinprop.analysis.context import HARD, POINT, OutputContext
+from kinprop.analysis.context import HARD, POINT, OutputContext, pivot_point
 from kinprop.analysis.metrics import (
     WheelSpec,
     is_first_order,
@@ -108,6 +108,11 @@ def _check_point(model: Model, name: str, m: re.Match[str]) -> None:
         raise AddressError(
             f"output {name!r}: unknown joint {m.group('joint')!r}; joints are {', '.join(mech.joint_names)}"
         )
+    elif m.group("side") not in ("i", "j"):
+        try:
+            pivot_point(model, m.group("joint"), m.group("side"))  # a pivot of the joint
+        except AddressError as exc:
+            raise AddressError(f"bad output {name!r}: {exc.args[0]}") from None
 
 
 def _parse_variable(engine: Engine, name: str) -> Address:
@@ -224,7 +229,7 @@ def output_names(model: Model, engine: Engine | None = None) -> list[str]:
     for j in mech.joints:
         for side in "ij":
             names += _vector_name(f"hardpoint:{j.name}.{side}", 3, True)
-    names += metric_names(model)
+    names += metric_names(model, first_order=True)
     return names
 
 
