@@ -1,0 +1,284 @@
+"""Loads of an assembled model, by name, in the model's units: ``kp.statics(model, loads)``.
+
+The engine does the work (:mod:`kinprop.engine.statics`: ``Phi_q^T lambda + Q + E_D^T tau =
+0`` on the kernel's Jacobian, tree-joint reactions by the Newton-Euler recursion from the
+leaves); this module turns the model's loads (:mod:`kinprop.model.loads`) into body wrenches
+and the engine's arrays into a record by joint, element and input.
+
+Sign conventions and units (force unit ``F`` = the model's ``units.force``, length ``L``):
+
+* **reaction** of a joint on a body: the force (``F``) and moment (``F L``, about the joint's
+  point on that body: its hardpoint ``P_i`` on body i, ``P_j`` on body j) the joint applies to
+  that body; the two sides are equal and opposite (moments too when ``P_i = P_j``). Global
+  axes, and joint frame i's axes (``local``). A tree joint's reaction includes the input
+  effort and coupling torques along its free directions.
+* **member force** of a distance joint (a two-force member: tie rod, push rod, link): the
+  axial force, **tension positive** (``F``).
+* **element force** of a spring or damper: **positive pushing the ends apart** (compression
+  of a coil spring; the ``preload`` convention), ``f = k (L0 - L)`` from ``free_length``
+  ``L0``, or ``preload + k (L_model - L)`` with ``L_model`` the length in the given model; a
+  damper carries no force at rest.
+* **effort** at a declared input: the generalised force the input applies to its coordinate
+  to hold the pose, positive along increasing ``q``: a torque (``F L``) for an angle whatever
+  the angle unit, a force for a slide. By virtual work ``effort = -sum F_k . dP_k/dq``.
+* **undetermined**: the components a redundant mechanism's loads do not determine
+  (``JOINT.fx`` ... ``JOINT.mz`` in joint frame i, on body j), reported NaN.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from kinprop.analysis.metrics import _radius, contact_point, wheel_bodies
+from kinprop.engine import Engine
+from kinprop.engine import compile as compile_engine
+from kinprop.engine.statics import StaticsState, element_laws, statics_state
+from kinprop.errors import AddressError
+from kinprop.model import Model
+from kinprop.model.loads import LoadCase, PointLoad
+from kinprop.spatial import Array
+
+COMPONENTS = ("fx", "fy", "fz", "mx", "my", "mz")
+
+
+@dataclass(frozen=True)
+class JointReaction:
+    """One joint's reaction on its two bodies (module docstring), model units; NaN: undetermined."""
+
+    joint: str
+    bodies: tuple[str, str]
+    #: the joint's point on body i and on body j (global)
+    points: tuple[Array, Array]
+    #: force and moment (about that body's point) on body i / body j, global axes
+    force: tuple[Array, Array]
+    moment: tuple[Array, Array]
+    #: the same in joint frame i's axes: (2, 6) [fx fy fz mx my mz] on body i / body j
+    local: Array
+    #: undetermined components of the reaction on body j (joint frame i): ``fx`` ... ``mz``
+    undetermined: tuple[str, ...] = ()
+
+    @property
+    def magnitude(self) -> float:
+        """``|F|`` of the force on body j (NaN when undetermined)."""
+        return float(np.linalg.norm(self.force[1]))
+
+
+@dataclass(frozen=True)
+class Statics:
+    """Loads of one assembled model under one load case (module docstring)."""
+
+    model: Model
+    engine: Engine
+    state: StaticsState
+    case: str | None
+    reactions: Mapping[str, JointReaction]
+    #: distance joints' axial forces, tension positive
+    member_forces: Mapping[str, float]
+    #: elements' forces (positive pushing apart) and lengths
+    element_forces: Mapping[str, float]
+    element_lengths: Mapping[str, float]
+    #: the inputs' efforts: ``{"O2.q": torque}`` (``JOINT.q[k]`` for a multi-coordinate joint)
+    efforts: Mapping[str, float]
+    #: ``JOINT.fx`` ... of every undetermined reaction component (on body j, joint frame i)
+    undetermined: tuple[str, ...]
+
+    @property
+    def status(self) -> str:
+        return self.state.status
+
+    @property
+    def ok(self) -> bool:
+        return self.state.ok
+
+    @property
+    def message(self) -> str:
+        return self.state.message
+
+    @property
+    def units(self) -> dict[str, str]:
+        F, L = self.model.units.get("force", "force"), self.model.units.get("length", "m")
+        return {"force": F, "moment": f"{F} {L}", "length": L}
+
+    def value(self, name: str) -> float:
+        """A load output: ``reaction:JOINT.fx|fy|fz|mx|my|mz|f`` (global axes, on body j,
+        moment about its point; ``f`` the magnitude), ``reaction:JOINT.local.fx`` ... (joint
+        frame i), ``force:NAME`` (a distance joint's tension or an element's force),
+        ``effort:JOINT`` (``effort:JOINT.q[k]``)."""
+        kind, _, rest = name.partition(":")
+        if kind == "reaction":
+            joint, _, comp = rest.partition(".")
+            if joint not in self.reactions:
+                raise AddressError(f"{name!r}: unknown joint {joint!r}; joints: {', '.join(self.reactions)}")
+            r = self.reactions[joint]
+            local = comp.startswith("local.")
+            comp = comp[len("local.") :] if local else comp
+            if comp == "f":
+                return float(np.linalg.norm(r.local[1, :3] if local else r.force[1]))
+            if comp not in COMPONENTS:
+                raise AddressError(f"{name!r}: expected a component {', '.join(COMPONENTS)} or f")
+            k = COMPONENTS.index(comp)
+            if local:
+                return float(r.local[1, k])
+            return float((r.force[1] if k < 3 else r.moment[1])[k % 3])
+        if kind == "force":
+            if rest in self.member_forces:
+                return self.member_forces[rest]
+            if rest in self.element_forces:
+                return self.element_forces[rest]
+            raise AddressError(
+                f"{name!r}: not a distance joint or an element; members: {', '.join(self.member_forces) or 'none'}; "
+                f"elements: {', '.join(self.element_forces) or 'none'}"
+            )
+        if kind == "effort":
+            key = rest if "." in rest else f"{rest}.q"
+            if key not in self.efforts:
+                raise AddressError(f"{name!r}: not a held input; inputs: {', '.join(self.efforts) or 'none'}")
+            return self.efforts[key]
+        raise AddressError(f"{name!r}: a load output is reaction:JOINT.COMPONENT, force:NAME or effort:JOINT")
+
+    def names(self) -> list[str]:
+        """Every load output :meth:`value` answers."""
+        out = [f"reaction:{j}.{c}" for j in self.reactions for c in (*COMPONENTS, "f")]
+        out += [f"force:{n}" for n in (*self.member_forces, *self.element_forces)]
+        return out + [f"effort:{a}" for a in self.efforts]
+
+    def __repr__(self) -> str:
+        u = self.units
+        lines = [
+            f"<Statics {self.case or '(no case)'}: {self.status}; forces in {u['force']}, moments in {u['moment']}>"
+        ]
+        for a, v in self.efforts.items():
+            lines.append(f"  effort {a}: {v:.6g}")
+        for j, r in self.reactions.items():
+            lines.append(f"  {j} on {r.bodies[1]}: F = {np.array2string(r.force[1], precision=5)}")
+        for n, v in {**self.member_forces, **self.element_forces}.items():
+            lines.append(f"  force {n}: {v:.6g}")
+        return "\n".join(lines)
+
+
+def input_columns(engine: Engine, inputs: Sequence[str]) -> tuple[list[int], list[str]]:
+    """Layout q columns and their addresses of driven inputs (``JOINT`` or ``JOINT.q[k]``)."""
+    cols, names = [], []
+    labels = engine.column_labels
+    for a in inputs:
+        t = engine.target(a if "." in a else f"{a}.q")
+        if t.group != "q":
+            raise AddressError(f"input {a!r}: an input is a joint coordinate (JOINT or JOINT.q[k])")
+        idx = [t.start + t.index] if t.index is not None else list(range(t.start, t.start + t.size))
+        for c in idx:
+            cols.append(c)
+            names.append(labels[c] if len(idx) > 1 or t.index is not None else f"{a.split('.')[0]}.q")
+    return cols, names
+
+
+def _point(model: Model, body: str, point: str | Sequence[float]) -> Array:
+    """Body-frame coordinates of a named point or of given coordinates."""
+    if isinstance(point, str):
+        pts = dict(model.mechanism.body(body).points)
+        if point not in pts:
+            raise AddressError(f"body {body!r} has no named point {point!r}; its points: {', '.join(pts) or 'none'}")
+        return np.asarray(pts[point], dtype=float)
+    return np.asarray(point, dtype=float)
+
+
+def applied_wrenches(model: Model, engine: Engine, r: Array, A: Array, case: LoadCase | None) -> Array:
+    """(nb, 6) wrenches ``[F ; M_O]`` about the global origin of a load case at poses ``r``, ``A``."""
+    W = np.zeros((r.shape[0], 6))
+    if case is None:
+        return W
+    names = set(model.mechanism.body_names)
+
+    def add(body: str, P: Array, F: Array, M: Array) -> None:
+        if body not in names:
+            raise AddressError(f"unknown body {body!r}; bodies are {', '.join(model.mechanism.body_names)}")
+        b = engine.body_index[body]
+        W[b] += np.concatenate([F, M + np.cross(P, F)])
+
+    for ld in case.forces:
+        b = engine.body_index.get(ld.body, -1)
+        if b < 0:
+            raise AddressError(f"unknown body {ld.body!r}; bodies are {', '.join(model.mechanism.body_names)}")
+        P = r[b] + A[b] @ _point(model, ld.body, ld.point)
+        F, M = np.asarray(ld.force, float), np.asarray(ld.moment, float)
+        if ld.axes == "body":
+            F, M = A[b] @ F, A[b] @ M
+        add(ld.body, P, F, M)
+    sae = model.units.get("axes") == "SAE"
+    for wheel, force in case.wheels.items():
+        if wheel not in wheel_bodies(model):
+            raise AddressError(f"wheel force on {wheel!r}: not a wheel body (named points 'wheel_centre' and "
+                               f"'spin_axis'); wheels: {', '.join(wheel_bodies(model)) or 'none'}")  # fmt: skip
+        radius = _radius(model, wheel)
+        if radius is None:
+            raise AddressError(f"wheel force on {wheel!r}: the wheel has no 'contact_patch' point (its loaded radius)")
+        b = engine.body_index[wheel]
+        centre = r[b] + A[b] @ _point(model, wheel, "wheel_centre")
+        axis = r[b] + A[b] @ _point(model, wheel, "spin_axis") - centre
+        F = np.asarray(force, float) * (np.array([1.0, -1.0, -1.0]) if sae else 1.0)
+        add(wheel, contact_point(centre, axis, radius), F, np.zeros(3))
+    if case.gravity is not None:
+        g = np.asarray(case.gravity, float)
+        for m in model.loads.masses if model.loads is not None else ():
+            b = engine.body_index[m.body]
+            add(m.body, r[b] + A[b] @ _point(model, m.body, m.cm), m.weight * g, np.zeros(3))
+    return W
+
+
+def _case(model: Model, loads: Any) -> LoadCase | None:
+    if loads is None or isinstance(loads, LoadCase):
+        return loads
+    if isinstance(loads, str):
+        if model.loads is None:
+            raise KeyError(f"load case {loads!r}: the model has no 'loads:' section")
+        return model.loads.case(loads)
+    if isinstance(loads, PointLoad):
+        return LoadCase("loads", (loads,))
+    return LoadCase("loads", tuple(loads))
+
+
+def statics(
+    model: Model,
+    loads: str | LoadCase | PointLoad | Sequence[PointLoad] | None = None,
+    *,
+    inputs: Sequence[str] | None = None,
+    engine: Engine | None = None,
+) -> Statics:
+    """Reactions, member and element forces and input efforts of the assembled ``model`` under
+    ``loads`` (a load case name of the model's ``loads:``, a :class:`LoadCase`, point loads, or
+    None: the elements only), held by ``inputs`` (default: the model's declared inputs).
+    Status ``unbalanced`` (NaN) when the constraints and inputs cannot hold the loads."""
+    eng = engine or compile_engine(model)
+    st = eng.state_of(model)
+    case = _case(model, loads)
+    r, A, _, _ = eng.poses(st)
+    W = applied_wrenches(model, eng, r, A, case)
+    cols, names = input_columns(eng, model.mechanism.inputs if inputs is None else inputs)
+    laws = element_laws(eng, model.elements, st)
+    ss = statics_state(eng, st, W, cols, laws)
+    mech = model.mechanism
+    reactions = {}
+    undetermined: list[str] = []
+    for k, j in enumerate(mech.joints):
+        F = (ss.wrench[k, 0, :3], ss.wrench[k, 1, :3])
+        M = tuple(ss.wrench[k, s, 3:] - np.cross(ss.P[k, s], ss.wrench[k, s, :3]) for s in range(2))
+        und = tuple(c for n, c in enumerate(COMPONENTS) if ss.undetermined[k, 1, n] or ss.undetermined[k, 0, n])
+        undetermined += [f"{j.name}.{c}" for c in und]
+        reactions[j.name] = JointReaction(j.name, (j.body_i, j.body_j), (ss.P[k, 0], ss.P[k, 1]), F, M,  # type: ignore[arg-type]
+                                          ss.local[k], und)  # fmt: skip
+    members = {}
+    for k, j in enumerate(mech.joints):
+        if j.jtype.name == "distance":
+            u = ss.P[k, 1] - ss.P[k, 0]
+            members[j.name] = float(-ss.wrench[k, 1, :3] @ u / np.linalg.norm(u))
+    ef = {e.name: float(ss.element_force[k]) for k, e in enumerate(model.elements)}
+    el = {e.name: float(ss.element_length[k]) for k, e in enumerate(model.elements)}
+    efforts = {n: float(ss.efforts[k]) for k, n in enumerate(names)}
+    return Statics(model, eng, ss, case.name if case else None, reactions, members, ef, el, efforts,
+                   tuple(undetermined))  # fmt: skip
+
+
+__all__ = ["COMPONENTS", "JointReaction", "Statics", "applied_wrenches", "input_columns", "statics"]

@@ -1,0 +1,337 @@
+"""Kinetostatics of an assembled state (Haug, *Computer-Aided Kinematics and Dynamics of
+Mechanical Systems*, 1989, sec. 6.3 (equilibrium), 6.6 (reaction forces)), on the compiled
+kernel's Jacobian and tree twists: one formulation of the kinematics, nothing differenced.
+
+**Generalised forces.** A wrench ``W = [F ; M_O]`` on body ``b`` (force, and moment about the
+global origin: ``M_O = M + P x F`` for a force ``F`` at ``P`` with a couple ``M``) does the
+virtual work ``V_b . W`` with ``V_b = [v_O ; omega]`` the body's twist. With the kernel's tree
+twists ``T_t`` (eq. 34, ``V_child = V_parent + T_t dq_t``) the generalised force on the
+coordinates of tree joint ``t`` is ``Q_t = T_t^T W_sub(t)``, ``W_sub(t)`` the sum of the
+wrenches on the subtree beyond ``t`` (accumulated from the leaves: one backward pass).
+
+**Equilibrium.** ``Phi_q^T lambda + Q + E_D^T tau = 0`` (Haug eq. 6.3.5 with the driven
+coordinates' efforts ``tau``: ``E_D`` picks their columns). ``tau`` is the generalised force
+the input applies to its coordinate (a torque about a revolute's axis, a force along a slide;
+positive in the direction of increasing ``q``) to hold the pose: by virtual work ``tau = -Q .
+dq/dq_D``. Solved by SVD of ``[Phi_q^T  E_D^T]`` (rows and columns scaled as the solver
+scales them); when ``Q`` is not in its range the inputs do not hold the loads (status
+``unbalanced``: a free motion, a singular pose or too few inputs).
+
+**Reactions.** The rows of a cut joint depend on the poses of its bodies ``i`` and ``j``
+through ``d = P_j - P_i`` (``P_i`` moved along ``z''_i`` by a T-D joint's own coordinate)
+and the frames' virtual rotations; their partials with respect to the bodies' twists are
+``Z_i = [-Phi_d , Phi_d x P_i + Phi_wi]`` and ``Z_j = [Phi_d , -Phi_d x P_j + Phi_wj]`` (the
+rows the kernel chains with ``T_t`` into ``Phi_q``, from the same basic-constraint rows), so
+the constraint wrench on body ``i`` is ``Z_i^T lambda`` and on ``j`` ``Z_j^T lambda``. A tree
+joint has no multipliers: the wrench it transmits onto its child body is minus the sum of
+every other wrench (applied, element, cut-joint) on the subtree beyond it (Newton-Euler
+recursion from the leaves); it includes the input effort and coupling torques along the
+joint's free directions. Every joint's wrench on its body ``i`` is minus the one on ``j``.
+
+**Redundancy.** When ``[Phi_q^T  E_D^T]`` has a null space (self-stress states: redundant
+constraints or inputs) the multipliers are not unique. Each null vector is a set of reactions
+in equilibrium with no load; a reported component that any of them changes is *undetermined*
+(NaN, and named); the others are the same for every solution and are reported.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from kinprop.constraints.basic import ROWS, basic_rows
+from kinprop.engine.motion import _Frames
+from kinprop.joints.composite import TD_CODE
+from kinprop.kinematics.tables import (
+    B_KIND,
+    B_ON_J,
+    J_BODY_I,
+    J_BODY_J,
+    J_CODE,
+    J_NQ,
+    J_QCOL,
+    K_BASIC0,
+    K_BASIC1,
+    K_JOINT,
+    K_ROW0,
+    T_CHILD,
+    T_JOINT,
+    T_PARENT,
+    T_REVERSED,
+)
+from kinprop.model.elements import Element
+from kinprop.spatial import Array
+
+if TYPE_CHECKING:
+    from kinprop.engine.engine import Engine, State
+
+#: relative singular value below which a direction of [Phi_q^T E_D^T] counts as null
+RANK_RTOL = 1e-10
+#: relative size above which a self-stress state changes a component (undetermined)
+UNDETERMINED_RTOL = 1e-7
+OK, UNBALANCED = "ok", "unbalanced"
+
+
+@dataclass(frozen=True)
+class ElementLaw:
+    """A two-point force element: ends ``s_i`` on ``body_i``, ``s_j`` on ``body_j`` (body
+    frames); force (positive: pushing the ends apart) ``f = f0 + k (L0 - L)`` at length ``L``
+    (a damper at rest: ``k = f0 = 0``)."""
+
+    body_i: int
+    body_j: int
+    s_i: Array
+    s_j: Array
+    k: float
+    L0: float
+    f0: float
+
+
+@dataclass(frozen=True)
+class StaticsState:
+    """Loads of one assembled state (solver units: the model's length and force units; the
+    efforts of angular coordinates are torques, force x length per radian)."""
+
+    status: str
+    message: str
+    #: multipliers of every row (NaN where undetermined is not tracked: use the reactions)
+    lam: Array
+    #: driven layout columns and the effort at each (NaN: undetermined)
+    driven: tuple[int, ...]
+    efforts: Array
+    #: (nj, 2, 6) wrench each joint applies to its body i (``[:, 0]``) and body j (``[:, 1]``),
+    #: ``[F ; M_O]`` about the global origin, global axes (NaN: undetermined)
+    wrench: Array
+    #: (nj, 2, 6) force and moment about the joint's point on each body, in joint frame i's
+    #: axes (NaN where undetermined)
+    local: Array
+    #: (nj, 2, 6) True where that component is not determined by the loads (self-stress)
+    undetermined: Array
+    #: (nb, 6) applied wrench on each body (loads and elements), about the origin
+    applied: Array
+    #: element forces (positive: pushing the ends apart) and lengths, by element
+    element_force: Array
+    element_length: Array
+    #: (ne, 2, 3) element end points (global)
+    element_ends: Array
+    #: self-stress basis: reactions (nj, 2, 6) of each null vector, and their count
+    self_stress: Array
+    r: Array
+    A: Array
+    P: Array
+    R: Array
+
+    @property
+    def ok(self) -> bool:
+        return self.status == OK
+
+    def joint_point(self, j: int, side: int) -> Array:
+        """Where the joint acts on its body ``side`` (the hardpoint ``P_i``/``P_j``)."""
+        return self.P[j, side]
+
+    def at_point(self, j: int, side: int) -> tuple[Array, Array]:
+        """``(F, M)`` of joint ``j`` on its body ``side``, the moment about the joint's point on that body."""
+        W = self.wrench[j, side]
+        return W[:3], W[3:] - np.cross(self.P[j, side], W[:3])
+
+
+def _cut_partials(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, c: int) -> tuple[Array, Array]:
+    """``(Z_i, Z_j)`` (m, 6) of cut joint ``c``: its rows' partials with respect to the twists of
+    its bodies (module docstring), from the compiled basic-constraint rows."""
+    tb = engine.tables
+    j = tb.cut[c, K_JOINT]
+    Pi = fr_P[j, 0].copy()
+    if tb.joint[j, J_CODE] == TD_CODE:
+        Pi = Pi + fr_R[j, 0, :, 2] * Q[tb.joint[j, J_QCOL]]
+    d = fr_P[j, 1] - Pi
+    kinds = [tb.basic[b, B_KIND] for b in range(tb.cut[c, K_BASIC0], tb.cut[c, K_BASIC1])]
+    m = sum(ROWS[k] for k in kinds)
+    Phi, Pd, Wi, Wj, Pl = np.zeros(m), np.zeros((m, 3)), np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m)
+    r = 0
+    for b in range(tb.cut[c, K_BASIC0], tb.cut[c, K_BASIC1]):
+        r += basic_rows(tb.basic[b, B_KIND], tb.basic[b, B_ON_J], tb.basic_axes[b], d, fr_R[j, 0], fr_R[j, 1],
+                        L[j], r, Phi, Pd, Wi, Wj, Pl)  # fmt: skip
+    Zi = np.hstack([-Pd, np.cross(Pd, Pi) + Wi])
+    Zj = np.hstack([Pd, -np.cross(Pd, fr_P[j, 1]) + Wj])
+    return Zi, Zj
+
+
+def subtree_sums(engine: Engine, W: Array) -> Array:
+    """``W_sub`` (nb, 6): each body's wrench plus those of every body below it in the tree."""
+    tb = engine.tables
+    Ws = np.array(W, dtype=float)
+    for t in range(tb.tree.shape[0] - 1, -1, -1):
+        Ws[tb.tree[t, T_PARENT]] += Ws[tb.tree[t, T_CHILD]]
+    return Ws
+
+
+def generalized_forces(engine: Engine, Tq: Array, W: Array) -> Array:
+    """``Q`` (n_q,) of body wrenches ``W`` (nb, 6) about the origin: ``Q_t = T_t^T W_sub(t)``."""
+    tb = engine.tables
+    Ws = subtree_sums(engine, W)
+    Qg = np.zeros(engine.n_coordinates)
+    for t in range(tb.tree.shape[0]):
+        j = tb.tree[t, T_JOINT]
+        q0, nq = tb.joint[j, J_QCOL], tb.joint[j, J_NQ]
+        if nq > 0:
+            Qg[q0 : q0 + nq] = Tq[t, :, :nq].T @ Ws[tb.tree[t, T_CHILD]]
+    return Qg
+
+
+def element_state(laws: Sequence[ElementLaw], r: Array, A: Array) -> tuple[Array, Array, Array, Array]:
+    """Forces, lengths, end points (ne, 2, 3) of the elements and their wrenches (nb, 6)."""
+    f, lengths, ends = np.zeros(len(laws)), np.zeros(len(laws)), np.zeros((len(laws), 2, 3))
+    W = np.zeros((r.shape[0], 6))
+    for k, e in enumerate(laws):
+        Pi, Pj = r[e.body_i] + A[e.body_i] @ e.s_i, r[e.body_j] + A[e.body_j] @ e.s_j
+        d = Pj - Pi
+        length = float(np.linalg.norm(d))
+        f[k], lengths[k], ends[k] = e.f0 + e.k * (e.L0 - length), length, (Pi, Pj)
+        if f[k] != 0.0:
+            if length == 0.0:
+                raise ValueError("an element with a force has zero length: its direction is undefined")
+            F = f[k] * d / length  # on body j, pushing it away from i
+            W[e.body_j] += np.concatenate([F, np.cross(Pj, F)])
+            W[e.body_i] -= np.concatenate([F, np.cross(Pi, F)])
+    return f, lengths, ends, W
+
+
+def element_laws(engine: Engine, elements: Sequence[Element], reference: State | None = None) -> list[ElementLaw]:
+    """The force laws of model elements; a ``preload`` is the force at the ``reference``
+    state's length (default: the engine's reference), ``free_length`` the length at zero force."""
+    laws = []
+    r = A = None
+    for e in elements:
+        bi, bj = engine.body_index[e.body_i], engine.body_index[e.body_j]
+        s_i, s_j = np.asarray(e.s_i, float), np.asarray(e.s_j, float)
+        k = float(e.stiffness or 0.0) if e.has_spring else 0.0
+        if not e.has_spring:
+            laws.append(ElementLaw(bi, bj, s_i, s_j, 0.0, 0.0, 0.0))
+        elif e.free_length is not None:
+            laws.append(ElementLaw(bi, bj, s_i, s_j, k, float(e.free_length), 0.0))
+        else:
+            if r is None:
+                st = reference if reference is not None else engine.reference
+                if st is None:
+                    raise ValueError("a preloaded element needs the reference state its preload is given at")
+                r, A, _, _ = engine.poses(st)
+            length = float(np.linalg.norm(r[bj] + A[bj] @ s_j - r[bi] - A[bi] @ s_i))
+            laws.append(ElementLaw(bi, bj, s_i, s_j, k, length, float(e.preload or 0.0)))
+    return laws
+
+
+def _reactions(engine: Engine, Zs: list[tuple[Array, Array]], lam: Array, W_applied: Array) -> Array:
+    """Every joint's wrench (nj, 2, 6) on its bodies i and j, from the multipliers and the
+    applied wrenches (module docstring)."""
+    tb = engine.tables
+    nj = tb.joint.shape[0]
+    out = np.zeros((nj, 2, 6))
+    W = np.array(W_applied, dtype=float)
+    for c, (Zi, Zj) in enumerate(Zs):
+        j, r0 = tb.cut[c, K_JOINT], tb.cut[c, K_ROW0]
+        lc = lam[r0 : r0 + Zi.shape[0]]
+        out[j, 0], out[j, 1] = Zi.T @ lc, Zj.T @ lc
+        W[tb.joint[j, J_BODY_I]] += out[j, 0]
+        W[tb.joint[j, J_BODY_J]] += out[j, 1]
+    Ws = subtree_sums(engine, W)
+    for t in range(tb.tree.shape[0]):
+        j = tb.tree[t, T_JOINT]
+        on_child = -Ws[tb.tree[t, T_CHILD]]
+        child_side = 0 if tb.tree[t, T_REVERSED] else 1
+        out[j, child_side], out[j, 1 - child_side] = on_child, -on_child
+    return out
+
+
+def _local(W: Array, P: Array, R: Array) -> Array:
+    """Components of joint wrenches (nj, 2, 6): force and moment about the joint's point on
+    each body, in joint frame i's axes."""
+    out = np.zeros_like(W)
+    for j in range(W.shape[0]):
+        for s in range(2):
+            F, M = W[j, s, :3], W[j, s, 3:] - np.cross(P[j, s], W[j, s, :3])
+            out[j, s] = np.concatenate([R[j, 0].T @ F, R[j, 0].T @ M])
+    return out
+
+
+def statics_state(
+    engine: Engine,
+    state: State,
+    applied: Array,
+    driven: Sequence[int] = (),
+    laws: Sequence[ElementLaw] = (),
+) -> StaticsState:
+    """Multipliers, input efforts, joint reactions and element forces of the assembled
+    ``state`` under body wrenches ``applied`` (nb, 6) about the origin, held by the efforts
+    at the ``driven`` layout columns (module docstring)."""
+    fr = _Frames(engine, state)
+    st = fr.state
+    tb = engine.tables
+    nq, m, nd = engine.n_coordinates, engine.n_rows, len(driven)
+    f, lengths, ends, W_el = element_state(laws, fr.r, fr.A)
+    W = np.asarray(applied, dtype=float) + W_el
+    Qg = generalized_forces(engine, fr.Tq, W)
+    rs, cs = engine.row_scale, engine.col_scale[:nq]
+    E = np.zeros((nd, nq))
+    E[np.arange(nd), list(driven)] = 1.0
+    As = np.hstack([(fr.Phi_q * rs[:, None] / cs[None, :]).T, E.T])  # unknowns [lambda / rs ; tau / cs_D]
+    b = -Qg / cs
+    U, s, Vt = np.linalg.svd(As, full_matrices=True)
+    smax = float(s[0]) if s.size and s[0] > 0 else 1.0
+    rank = int(np.sum(s > RANK_RTOL * smax))
+    xs = Vt[:rank].T @ ((U[:, :rank].T @ b) / s[:rank])
+    null = Vt[rank:]
+    unscale = np.concatenate([rs, cs[list(driven)] if nd else np.zeros(0)])
+    resid = float(np.linalg.norm(As @ xs - b))
+    Zs = [_cut_partials(engine, fr.P, fr.R, st.Q, st.L, c) for c in range(tb.cut.shape[0])]
+    nj = tb.joint.shape[0]
+    if resid > 1e-8 * max(float(np.linalg.norm(b)), 1e-300) and resid > 0:
+        nan = np.full((nj, 2, 6), np.nan)
+        return StaticsState(
+            UNBALANCED,
+            f"unbalanced: the constraints and the inputs do not hold the loads (residual {resid:.3g} of "
+            f"{float(np.linalg.norm(b)):.3g}): the mechanism can move under them (too few inputs, or a "
+            "singular pose)",
+            np.full(m, np.nan), tuple(driven), np.full(nd, np.nan), nan, nan, np.zeros((nj, 2, 6), bool), W,
+            f, lengths, ends, np.zeros((0, nj, 2, 6)), fr.r, fr.A, fr.P, fr.R,
+        )  # fmt: skip
+    x = xs * unscale
+    lam, tau = x[:m], x[m:]
+    wrench = _reactions(engine, Zs, lam, W)
+    stress = np.array([_reactions(engine, Zs, v * unscale, np.zeros_like(W)) for v in null]).reshape(-1, nj, 2, 6)
+    # a component is undetermined when some self-stress state changes it
+    Lsc = engine.length_scale or 1.0
+    und = np.zeros((nj, 2, 6), bool)
+    tau_und = np.zeros(nd, bool)
+    for k, v in enumerate(null):
+        loc = _local(stress[k], fr.P, fr.R)
+        loc[..., 3:] /= Lsc
+        t = v[m:] * unscale[m:] / Lsc if nd else np.zeros(0)  # efforts: torque-like scale
+        size = max(float(np.max(np.abs(loc))), float(np.max(np.abs(t))) if nd else 0.0)
+        if size == 0.0:
+            continue
+        und |= np.abs(loc) > UNDETERMINED_RTOL * size
+        if nd:
+            tau_und |= np.abs(t) > UNDETERMINED_RTOL * size
+    wrench_out, local = wrench.copy(), _local(wrench, fr.P, fr.R)
+    local[und] = np.nan
+    wrench_out[und.any(axis=2)] = np.nan  # a side with an undetermined component: no global wrench
+    tau = np.where(tau_und, np.nan, tau)
+    msg = "ok" if not null.shape[0] else (
+        f"ok: {null.shape[0]} self-stress state(s); {int(und.sum())} reaction component(s) are not determined by the loads"
+    )  # fmt: skip
+    return StaticsState(OK, msg, lam, tuple(driven), tau, wrench_out, local, und, W, f, lengths, ends, stress,
+                        fr.r, fr.A, fr.P, fr.R)  # fmt: skip
+
+
+__all__ = [
+    "ElementLaw",
+    "StaticsState",
+    "element_laws",
+    "element_state",
+    "generalized_forces",
+    "statics_state",
+    "subtree_sums",
+]
