@@ -157,7 +157,7 @@ def test_motion_ratio_by_virtual_work() -> None:
     assert m["wheel_rate"] == pytest.approx(50.0 * mr**2, rel=1e-10)
 
 
-def _richardson(f, h: float) -> np.ndarray:
+def _richardson(f, h: float) -> np.ndarray:  # noqa: ANN001
     d = lambda k: (f(k * h) - f(-k * h)) / (2 * k * h)  # noqa: E731
     return (4 * d(0.5) - d(1.0)) / 3
 
