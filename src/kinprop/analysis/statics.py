@@ -263,8 +263,8 @@ def statics(
     reactions = {}
     undetermined: list[str] = []
     for k, j in enumerate(mech.joints):
-        F = (ss.wrench[k, 0, :3], ss.wrench[k, 1, :3])
-        M = tuple(ss.wrench[k, s, 3:] - np.cross(ss.P[k, s], ss.wrench[k, s, :3]) for s in range(2))
+        F = (ss.at_point[k, 0, :3], ss.at_point[k, 1, :3])
+        M = (ss.at_point[k, 0, 3:], ss.at_point[k, 1, 3:])
         und = tuple(c for n, c in enumerate(COMPONENTS) if ss.undetermined[k, 1, n] or ss.undetermined[k, 0, n])
         undetermined += [f"{j.name}.{c}" for c in und]
         reactions[j.name] = JointReaction(j.name, (j.body_i, j.body_j), (ss.P[k, 0], ss.P[k, 1]), F, M,  # type: ignore[arg-type]
@@ -273,7 +273,7 @@ def statics(
     for k, j in enumerate(mech.joints):
         if j.jtype.name == "distance":
             u = ss.P[k, 1] - ss.P[k, 0]
-            members[j.name] = float(-ss.wrench[k, 1, :3] @ u / np.linalg.norm(u))
+            members[j.name] = float(-ss.at_point[k, 1, :3] @ u / np.linalg.norm(u))
     ef = {e.name: float(ss.element_force[k]) for k, e in enumerate(model.elements)}
     el = {e.name: float(ss.element_length[k]) for k, e in enumerate(model.elements)}
     efforts = {n: float(ss.efforts[k]) for k, n in enumerate(names)}

@@ -108,6 +108,8 @@ class StaticsState:
     #: (nj, 2, 6) force and moment about the joint's point on each body, in joint frame i's
     #: axes (NaN where undetermined)
     local: Array
+    #: (nj, 2, 6) the same in global axes (NaN where undetermined)
+    at_point: Array
     #: (nj, 2, 6) True where that component is not determined by the loads (self-stress)
     undetermined: Array
     #: (nb, 6) applied wrench on each body (loads and elements), about the origin
@@ -131,11 +133,6 @@ class StaticsState:
     def joint_point(self, j: int, side: int) -> Array:
         """Where the joint acts on its body ``side`` (the hardpoint ``P_i``/``P_j``)."""
         return self.P[j, side]
-
-    def at_point(self, j: int, side: int) -> tuple[Array, Array]:
-        """``(F, M)`` of joint ``j`` on its body ``side``, the moment about the joint's point on that body."""
-        W = self.wrench[j, side]
-        return W[:3], W[3:] - np.cross(self.P[j, side], W[:3])
 
 
 def _cut_partials(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, c: int) -> tuple[Array, Array]:
@@ -245,15 +242,19 @@ def _reactions(engine: Engine, Zs: list[tuple[Array, Array]], lam: Array, W_appl
     return out
 
 
+def _at_points(W: Array, P: Array) -> Array:
+    """Joint wrenches (nj, 2, 6) as force and moment about the joint's point on each body, global axes."""
+    return np.concatenate([W[..., :3], W[..., 3:] - np.cross(P, W[..., :3])], axis=-1)
+
+
 def _local(W: Array, P: Array, R: Array) -> Array:
     """Components of joint wrenches (nj, 2, 6): force and moment about the joint's point on
     each body, in joint frame i's axes."""
-    out = np.zeros_like(W)
-    for j in range(W.shape[0]):
-        for s in range(2):
-            F, M = W[j, s, :3], W[j, s, 3:] - np.cross(P[j, s], W[j, s, :3])
-            out[j, s] = np.concatenate([R[j, 0].T @ F, R[j, 0].T @ M])
-    return out
+    G = _at_points(W, P)
+    Ri = R[:, 0][:, None]  # (nj, 1, 3, 3): frame i's axes for both sides
+    return np.concatenate([np.einsum("jsba,jsb->jsa", np.broadcast_to(Ri, (*G.shape[:2], 3, 3)), G[..., :3]),
+                           np.einsum("jsba,jsb->jsa", np.broadcast_to(Ri, (*G.shape[:2], 3, 3)), G[..., 3:])],
+                          axis=-1)  # fmt: skip
 
 
 def statics_state(
@@ -294,7 +295,7 @@ def statics_state(
             f"unbalanced: the constraints and the inputs do not hold the loads (residual {resid:.3g} of "
             f"{float(np.linalg.norm(b)):.3g}): the mechanism can move under them (too few inputs, or a "
             "singular pose)",
-            np.full(m, np.nan), tuple(driven), np.full(nd, np.nan), nan, nan, np.zeros((nj, 2, 6), bool), W,
+            np.full(m, np.nan), tuple(driven), np.full(nd, np.nan), nan, nan, nan, np.zeros((nj, 2, 6), bool), W,
             f, lengths, ends, np.zeros((0, nj, 2, 6)), fr.r, fr.A, fr.P, fr.R,
         )  # fmt: skip
     x = xs * unscale
@@ -303,26 +304,30 @@ def statics_state(
     stress = np.array([_reactions(engine, Zs, v * unscale, np.zeros_like(W)) for v in null]).reshape(-1, nj, 2, 6)
     # a component is undetermined when some self-stress state changes it
     Lsc = engine.length_scale or 1.0
-    und = np.zeros((nj, 2, 6), bool)
+    und, und_g = np.zeros((nj, 2, 6), bool), np.zeros((nj, 2, 6), bool)
     tau_und = np.zeros(nd, bool)
     for k, v in enumerate(null):
-        loc = _local(stress[k], fr.P, fr.R)
+        loc, glob = _local(stress[k], fr.P, fr.R), _at_points(stress[k], fr.P)
         loc[..., 3:] /= Lsc
+        glob[..., 3:] /= Lsc
         t = v[m:] * unscale[m:] / Lsc if nd else np.zeros(0)  # efforts: torque-like scale
         size = max(float(np.max(np.abs(loc))), float(np.max(np.abs(t))) if nd else 0.0)
         if size == 0.0:
             continue
         und |= np.abs(loc) > UNDETERMINED_RTOL * size
+        und_g |= np.abs(glob) > UNDETERMINED_RTOL * size
         if nd:
             tau_und |= np.abs(t) > UNDETERMINED_RTOL * size
-    wrench_out, local = wrench.copy(), _local(wrench, fr.P, fr.R)
+    wrench_out, local, at_point = wrench.copy(), _local(wrench, fr.P, fr.R), _at_points(wrench, fr.P)
     local[und] = np.nan
+    at_point[und_g] = np.nan
     wrench_out[und.any(axis=2)] = np.nan  # a side with an undetermined component: no global wrench
     tau = np.where(tau_und, np.nan, tau)
     msg = "ok" if not null.shape[0] else (
-        f"ok: {null.shape[0]} self-stress state(s); {int(und.sum())} reaction component(s) are not determined by the loads"
+        f"ok: {null.shape[0]} self-stress state(s); {int(und.sum())} reaction component(s) are not determined "
+        "by the loads"
     )  # fmt: skip
-    return StaticsState(OK, msg, lam, tuple(driven), tau, wrench_out, local, und, W, f, lengths, ends, stress,
+    return StaticsState(OK, msg, lam, tuple(driven), tau, wrench_out, local, at_point, und, W, f, lengths, ends, stress,
                         fr.r, fr.A, fr.P, fr.R)  # fmt: skip
 
 

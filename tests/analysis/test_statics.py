@@ -1,0 +1,211 @@
+"""Loads of assembled models (kp.statics) against closed forms and independent balances:
+the four-bar's input torque for an output torque and for a coupler-point force (the loop's
+velocity ratios by hand, Norton, *Design of Machinery*, sec. 6.7, and virtual work), the offset
+slider-crank's input torque for a piston force, a redundant (all-revolute) planar four-bar
+whose out-of-plane reactions are named undetermined while the in-plane ones match, and the
+3D double wishbone's free-body balance of every moving body written here from the reported
+reactions, element and applied forces."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+import kinprop as kp
+from kinprop.analysis.metrics import contact_point
+from kinprop.model.loads import LoadCase, PointLoad
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def _assembled(source: str | Path | dict, tmp_path: Path | None = None) -> kp.Model:
+    if isinstance(source, dict):
+        assert tmp_path is not None
+        f = tmp_path / "model.yaml"
+        f.write_text(yaml.safe_dump(source))
+        source = f
+    return kp.assemble(kp.load_model(source), tol=1e-13).after
+
+
+def _angle(A: np.ndarray) -> float:
+    return math.atan2(A[1, 0], A[0, 0])
+
+
+def _fourbar_ratios(model: kp.Model) -> tuple[float, float, dict[str, np.ndarray]]:
+    """``(w3/w2, w4/w2)`` of the four-bar by hand: a e^{i t2} + b e^{i t3} - c e^{i t4} - d = 0
+    differentiated (Norton eq. 6.18); the angles checked against the loop closure first."""
+    kin = kp.compile(model).kinematics(model.design, model.coordinates)
+    t2, t3, t4 = (_angle(kin.A[b]) for b in ("crank", "coupler", "rocker"))
+    a, b, c, d = 0.15, 0.40, 0.30, 0.40
+    loop = a * np.exp(1j * t2) + b * np.exp(1j * t3) - c * np.exp(1j * t4) - d
+    assert abs(loop) < 1e-12
+    w3 = a * math.sin(t4 - t2) / (b * math.sin(t3 - t4))
+    w4 = a * math.sin(t2 - t3) / (c * math.sin(t4 - t3))
+    return w3, w4, {"t2": t2, "t3": t3, "t4": t4}
+
+
+@pytest.mark.parametrize("crank_deg", [60.0, 150.0, 250.0])
+def test_fourbar_input_torque_closed_form(crank_deg: float) -> None:
+    base = _assembled(EXAMPLES / "fourbar.yaml")
+    model = kp.propagate(base, {"O2.q": crank_deg}, free=["q"], tol=1e-13).after
+    w3, w4, ang = _fourbar_ratios(model)
+    T4 = 12.5  # N m on the rocker, counter-clockwise
+    s = kp.statics(model, PointLoad("rocker", (0.0, 0.0, 0.0), moment=(0.0, 0.0, T4)))
+    assert s.ok
+    assert s.efforts["O2.q"] == pytest.approx(-T4 * w4, rel=1e-10)
+    # a force at the coupler point P (0.2, 0.1 in the coupler frame): v_P = v_A + w3 x (P - A)
+    F = np.array([30.0, -45.0, 0.0])
+    s = kp.statics(model, PointLoad("coupler", "P", force=tuple(F)))
+    t2, t3 = ang["t2"], ang["t3"]
+    vA = 0.15 * np.array([-math.sin(t2), math.cos(t2), 0.0])
+    rel = np.array([0.2 * math.cos(t3) - 0.1 * math.sin(t3), 0.2 * math.sin(t3) + 0.1 * math.cos(t3), 0.0])
+    vP = vA + np.cross([0.0, 0.0, w3], rel)
+    assert s.efforts["O2.q"] == pytest.approx(-F @ vP, rel=1e-10)
+    # the rocker is a two-force member under the coupler load: its pin force at O4 along O4-B
+    B = s.reactions["B"].points[1]
+    F4 = s.reactions["O4"].force[1]
+    u = (B - s.reactions["O4"].points[1]) / np.linalg.norm(B - s.reactions["O4"].points[1])
+    assert abs(F4[0] * u[1] - F4[1] * u[0]) < 1e-10 * np.linalg.norm(F4)
+
+
+@pytest.mark.parametrize("crank_deg", [30.0, 100.0, 200.0, 300.0])
+def test_offset_slider_crank_input_torque_closed_form(crank_deg: float) -> None:
+    base = _assembled(EXAMPLES / "slider_crank_offset.yaml")
+    model = kp.propagate(base, {"O2.q": crank_deg}, free=["q"], tol=1e-13).after
+    t = math.radians(crank_deg)
+    a, b, e = 0.10, 0.35, 0.05
+    root = math.sqrt(b**2 - (e - a * math.sin(t)) ** 2)
+    dx = -a * math.sin(t) + (e - a * math.sin(t)) * a * math.cos(t) / root
+    Fx = -800.0  # gas force on the piston, towards the crank
+    s = kp.statics(model, PointLoad("slider", (0.0, 0.0, 0.0), force=(Fx, 0.0, 0.0)), inputs=["O2"])
+    assert s.efforts["O2.q"] == pytest.approx(-Fx * dx, rel=1e-10)
+    # the connecting rod is a two-force member: the pin force at A on the rod is along A-B
+    A_, B_ = s.reactions["A"].points[1], s.reactions["B"].points[0]
+    FA = s.reactions["A"].force[1]
+    u = (B_ - A_) / np.linalg.norm(B_ - A_)
+    assert np.linalg.norm(np.cross(FA, u)) < 1e-10 * np.linalg.norm(FA)
+
+
+def test_redundant_planar_fourbar_names_undetermined_components(tmp_path: Path) -> None:
+    """All four joints revolute: three redundant rows (the out-of-plane reactions). The
+    in-plane forces and the torques about the pins are determined (and equal the
+    non-redundant model's); the out-of-plane force and the moments about in-plane axes are
+    named undetermined and reported NaN, never a least-squares split."""
+    data = yaml.safe_load((EXAMPLES / "fourbar.yaml").read_text())
+    data["joints"]["B"] = {"type": "revolute", "bodies": ["coupler", "rocker"], "cut": True,
+                           "s_i": [0.40, 0, 0], "s_j": [0.30, 0, 0]}  # fmt: skip
+    redundant = _assembled(data, tmp_path)
+    plain = _assembled(EXAMPLES / "fourbar.yaml")
+    load = PointLoad("coupler", "P", force=(30.0, -45.0, 0.0), moment=(0.0, 0.0, 2.0))
+    s, ref = kp.statics(redundant, load), kp.statics(plain, load)
+    assert s.ok and s.undetermined
+    assert "self-stress" in s.message
+    assert s.efforts["O2.q"] == pytest.approx(ref.efforts["O2.q"], rel=1e-10)
+    comps = {u.split(".")[1] for u in s.undetermined}
+    assert comps <= {"fz", "mx", "my"}
+    for j in ("O2", "A", "B", "O4"):
+        r, r0 = s.reactions[j], ref.reactions[j]
+        inplane = [0, 1, 5]  # fx, fy, mz in the joint frame (z'' along global z)
+        assert not np.isnan(r.local[:, inplane]).any(), j
+        assert np.allclose(r.local[:, inplane], r0.local[:, inplane], atol=1e-9 * 100), j
+        for c in r.undetermined:
+            assert np.isnan(r.local[1, ("fx", "fy", "fz", "mx", "my", "mz").index(c)])
+    assert any(u.endswith(".fz") for u in s.undetermined)
+
+
+def _dw_balance(model: kp.Model, s) -> None:
+    """Every moving body: the reported joint forces and moments on it, the element forces
+    (recomputed here from the element's ends and reported force) and the applied loads sum to
+    zero; every joint's reactions are equal and opposite."""
+    kin = kp.compile(model).kinematics(model.design, model.coordinates)
+    scale = max(np.linalg.norm(r.force[1]) for r in s.reactions.values())
+    L = 1000.0
+    for body in ("lca", "uca", "upright"):
+        F, M = np.zeros(3), np.zeros(3)  # about the global origin
+        for j in model.mechanism.joints:
+            for side, b in enumerate((j.body_i, j.body_j)):
+                if b == body:
+                    r = s.reactions[j.name]
+                    F += r.force[side]
+                    M += r.moment[side] + np.cross(r.points[side], r.force[side])
+        for e in model.elements:
+            Pi = kin.r[e.body_i] + kin.A[e.body_i] @ np.array(e.s_i)
+            Pj = kin.r[e.body_j] + kin.A[e.body_j] @ np.array(e.s_j)
+            u = (Pj - Pi) / np.linalg.norm(Pj - Pi)
+            f = s.element_forces[e.name]
+            if e.body_j == body:
+                F += f * u
+                M += np.cross(Pj, f * u)
+            if e.body_i == body:
+                F -= f * u
+                M -= np.cross(Pi, f * u)
+        applied = s.state.applied[s.engine.body_index[body]]
+        # the applied wrench minus the elements' (recomputed above): the loads alone
+        W_el = np.zeros(6)
+        for e in model.elements:
+            Pi = kin.r[e.body_i] + kin.A[e.body_i] @ np.array(e.s_i)
+            Pj = kin.r[e.body_j] + kin.A[e.body_j] @ np.array(e.s_j)
+            fu = s.element_forces[e.name] * (Pj - Pi) / np.linalg.norm(Pj - Pi)
+            if e.body_j == body:
+                W_el += np.concatenate([fu, np.cross(Pj, fu)])
+            if e.body_i == body:
+                W_el -= np.concatenate([fu, np.cross(Pi, fu)])
+        F += applied[:3] - W_el[:3]
+        M += applied[3:] - W_el[3:]
+        assert np.linalg.norm(F) < 1e-9 * scale, body
+        assert np.linalg.norm(M) < 1e-9 * scale * L, body
+    for name, r in s.reactions.items():
+        assert np.allclose(r.force[0], -r.force[1], atol=1e-9 * scale), name
+        if np.allclose(r.points[0], r.points[1], atol=1e-9):
+            assert np.allclose(r.moment[0], -r.moment[1], atol=1e-9 * scale * L), name
+
+
+def test_double_wishbone_free_bodies_balance() -> None:
+    model = _assembled(EXAMPLES / "double_wishbone.yaml")
+    Fw = np.array([-4000.0, 2500.0, 9000.0])  # braking, cornering, vertical (ISO 8855, N)
+    s = kp.statics(model, LoadCase("combined", wheels={"upright": tuple(Fw)}))
+    assert s.ok and not s.undetermined
+    # the applied load is the wheel force at the contact point (recomputed here)
+    kin = kp.compile(model).kinematics(model.design, model.coordinates)
+    pts = dict(model.mechanism.body("upright").points)
+    centre = kin.r["upright"] + kin.A["upright"] @ np.array(pts["wheel_centre"])
+    axis = kin.A["upright"] @ (np.array(pts["spin_axis"]) - np.array(pts["wheel_centre"]))
+    radius = np.linalg.norm(np.array(pts["contact_patch"]) - np.array(pts["wheel_centre"]))
+    Pc = contact_point(centre, axis, radius)
+    b = s.engine.body_index["upright"]
+    assert np.allclose(s.state.applied[b, :3], Fw)
+    assert np.allclose(s.state.applied[b, 3:], np.cross(Pc, Fw), rtol=1e-12, atol=1e-6)
+    _dw_balance(model, s)
+    # joints: ball joints carry no moment; the upper arm's revolute no moment about its axis,
+    # the lower arm's the input effort; the tie rod a force along its line
+    scale = np.linalg.norm(Fw) * 1000.0
+    for j in ("LBJ", "UBJ"):
+        assert np.linalg.norm(s.reactions[j].moment[1]) < 1e-9 * scale
+    fr = kin.frames
+    assert abs(s.reactions["UCA"].moment[1] @ fr["UCA"].R_i[:, 2]) < 1e-9 * scale
+    assert s.reactions["LCA"].moment[1] @ fr["LCA"].R_i[:, 2] == pytest.approx(s.efforts["LCA.q"], rel=1e-10)
+    tr = s.reactions["TR"]
+    u = (tr.points[1] - tr.points[0]) / np.linalg.norm(tr.points[1] - tr.points[0])
+    assert np.linalg.norm(np.cross(tr.force[1], u)) < 1e-9 * np.linalg.norm(Fw)
+    assert s.member_forces["TR"] == pytest.approx(-tr.force[1] @ u, rel=1e-12)
+    # the spring's force from its stiffness and free length at the recomputed length
+    e = model.element("spring")
+    Pi = kin.r[e.body_i] + kin.A[e.body_i] @ np.array(e.s_i)
+    Pj = kin.r[e.body_j] + kin.A[e.body_j] @ np.array(e.s_j)
+    assert s.element_forces["spring"] == pytest.approx(e.stiffness * (e.free_length - np.linalg.norm(Pj - Pi)))
+    assert s.element_forces["shock"] == 0.0
+
+
+def test_tie_rod_tension_sign() -> None:
+    """Tension positive: a positive member force pulls body j towards body i (a longitudinal
+    wheel force ahead of the steering axis loads the tie rod)."""
+    model = _assembled(EXAMPLES / "double_wishbone.yaml")
+    s = kp.statics(model, LoadCase("steer", wheels={"upright": (2000.0, 0.0, 0.0)}))
+    tr = s.reactions["TR"]
+    towards_i = tr.points[0] - tr.points[1]
+    assert np.sign(tr.force[1] @ towards_i) == np.sign(s.member_forces["TR"])
+    assert abs(s.member_forces["TR"]) > 1.0
