@@ -20,6 +20,7 @@ from pydantic import BaseModel, ValidationError
 from kinprop.errors import ModelError, Problem
 from kinprop.io.couplings import build_couplings
 from kinprop.io.elements import build_elements, build_vehicle
+from kinprop.io.loads import build_loads
 from kinprop.io.schema import ModelFile
 from kinprop.joints import REGISTRY, joint_type
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates
@@ -331,6 +332,8 @@ def build_model(spec: ModelFile, file: str) -> Model:
     problems += [Problem(p.location, p.message, file) for p in validate_couplings(tuple(joints), couplings)]
     elements, eproblems = build_elements(spec.elements, {b.name for b in bodies}, "frames", file)
     problems += eproblems
+    loads, lproblems = build_loads(spec.loads, {b.name: [n for n, _ in b.points] for b in bodies}, "frames", file)
+    problems += lproblems
     if problems:
         raise ModelError(problems)
     mech = Mechanism(tuple(bodies), tuple(joints), spec.name, tuple(spec.inputs), couplings)
@@ -381,7 +384,8 @@ def build_model(spec: ModelFile, file: str) -> Model:
         units["axes"] = spec.units.axes
     if spec.units.force is not None:
         units["force"] = spec.units.force
-    return Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle))
+    return Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle),
+                 loads)  # fmt: skip
 
 
 def known_joint_types() -> list[str]:

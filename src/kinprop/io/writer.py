@@ -16,6 +16,7 @@ import yaml
 from kinprop.engine import compile as compile_engine
 from kinprop.io.couplings import couplings_to_data
 from kinprop.io.elements import elements_to_data, vehicle_to_data
+from kinprop.io.loads import loads_to_data
 from kinprop.io.hardpoints import model_to_hardpoints
 from kinprop.io.loader import parse_text
 from kinprop.model import Model
@@ -85,6 +86,7 @@ def model_to_data(model: Model) -> dict[str, Any]:
         **({"couplings": couplings_to_data(model)} if mech.couplings else {}),
         **({"elements": elements_to_data(model.elements, "frames")} if model.elements else {}),
         **({"vehicle": vehicle_to_data(model.vehicle)} if model.vehicle is not None else {}),
+        **({"loads": loads_to_data(model.loads, "frames")} if model.loads is not None else {}),
     }
 
 

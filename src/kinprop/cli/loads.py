@@ -1,0 +1,181 @@
+"""``kinprop loads``: joint reactions, member and element forces and input efforts of an
+assembled model under a load case (:func:`kinprop.statics`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.table import Table
+
+from kinprop.analysis.statics import Statics, statics
+from kinprop.cli.app import (
+    EXIT_NOT_CONVERGED,
+    app,
+    err,
+    fail,
+    handles_user_errors,
+    load_model_cli,
+    out,
+    parse_assignment,
+    print_json,
+)
+from kinprop.cli.checks import check_outputs, check_suffix
+from kinprop.errors import AddressError
+from kinprop.io.writer import atomic_write, csv_text
+from kinprop.model import Model
+from kinprop.model.loads import LoadCase, PointLoad
+from kinprop.propagation import assemble
+
+
+def _vec(text: str, option: str) -> tuple[str, tuple[float, float, float]]:
+    key, v = parse_assignment(text, option)
+    if v.size != 3:
+        raise AddressError(f"{option} {text!r}: expected three numbers")
+    return key, (float(v[0]), float(v[1]), float(v[2]))
+
+
+def build_case(model: Model, name: str | None, wheels: list[str], forces: list[str], moments: list[str],
+               gravity: str | None) -> LoadCase | None:  # fmt: skip
+    """The named case of the model's ``loads:`` plus the loads given on the command line."""
+    base = None
+    if name is not None:
+        if model.loads is None or name not in model.loads.cases:
+            known = ", ".join(model.loads.cases) if model.loads is not None else ""
+            raise AddressError(f"--load-case {name!r}: not a load case of the model; load cases: {known or 'none'}")
+        base = model.loads.cases[name]
+    if not (wheels or forces or moments or gravity):
+        return base
+    pts = list(base.forces) if base else []
+    for text in forces:
+        key, F = _vec(text, "--force")
+        body, _, point = key.partition(".")
+        if not point:
+            raise AddressError(f"--force {text!r}: expected BODY.POINT=Fx,Fy,Fz (a named point of the body)")
+        pts.append(PointLoad(body, point, force=F))
+    for text in moments:
+        body, M = _vec(text, "--moment")
+        pts.append(PointLoad(body, (0.0, 0.0, 0.0), moment=M))
+    wh = dict(base.wheels) if base else {}
+    for text in wheels:
+        body, F = _vec(text, "--wheel")
+        wh[body] = F
+    g = base.gravity if base else None
+    if gravity is not None:
+        _, g = _vec(f"g={gravity}", "--gravity")
+    return LoadCase(name or "command line", tuple(pts), wh, g)
+
+
+def statics_json(s: Statics) -> dict:
+    reactions = {}
+    for j, r in s.reactions.items():
+        reactions[j] = {
+            "bodies": list(r.bodies),
+            "points": [p.tolist() for p in r.points],
+            "force": [f.tolist() for f in r.force],
+            "moment": [m.tolist() for m in r.moment],
+            "local": r.local.tolist(),
+            "undetermined": list(r.undetermined),
+        }
+    return {
+        "model": s.model.mechanism.name,
+        "case": s.case,
+        "status": s.status,
+        "message": s.message,
+        "units": s.units,
+        "efforts": dict(s.efforts),
+        "reactions": reactions,
+        "member_forces": dict(s.member_forces),
+        "element_forces": dict(s.element_forces),
+        "element_lengths": dict(s.element_lengths),
+        "undetermined": list(s.undetermined),
+    }
+
+
+def statics_csv(s: Statics) -> str:
+    u = s.units
+    rows = []
+    for name in s.names():
+        unit = u["moment"] if name.split(".")[-1].startswith("m") and name.startswith("reaction:") else u["force"]
+        if name.startswith("effort:"):
+            jt = s.model.mechanism.joint(name[len("effort:") :].split(".")[0]).jtype
+            unit = u["moment"] if jt.angle_indices else u["force"]
+        rows.append({"output": name, "unit": unit, "value": s.value(name)})
+    return csv_text(["output", "unit", "value"], rows)
+
+
+@app.command()
+@handles_user_errors
+def loads(
+    model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
+    load_case: Annotated[
+        str | None, typer.Option("--load-case", help="a load case of the model's loads: section")
+    ] = None,
+    wheel: Annotated[
+        list[str], typer.Option("--wheel", help="WHEEL=Fx,Fy,Fz: contact-patch force, ISO 8855 axes")
+    ] = [],  # noqa: B006
+    force: Annotated[
+        list[str], typer.Option("--force", help="BODY.POINT=Fx,Fy,Fz: a force at a named point, global axes")
+    ] = [],  # noqa: B006
+    moment: Annotated[list[str], typer.Option("--moment", help="BODY=Mx,My,Mz: a couple on a body, global axes")] = [],  # noqa: B006
+    gravity: Annotated[
+        str | None, typer.Option("--gravity", help="gx,gy,gz in g (the weights of loads.masses)")
+    ] = None,
+    input_: Annotated[list[str], typer.Option("--input", help="held input (default: the model's inputs:)")] = [],  # noqa: B006
+    json_out: Annotated[bool, typer.Option("--json", help="one JSON object on stdout")] = False,
+    csv: Annotated[Path | None, typer.Option("--csv", help="write every load output as CSV")] = None,
+    tol: Annotated[float, typer.Option("--tol", help="assembly tolerance before the statics")] = 1e-10,
+) -> None:
+    """Joint reactions, member forces (tension positive), spring and damper forces (positive
+    pushing apart) and the efforts that hold the inputs, at the model's assembled pose.
+
+    Forces in the model's force unit (units: {force: N}), moments in force x length.
+    A redundant mechanism's undetermined reaction components are named and shown as nan.
+    """
+    check_suffix("--csv", csv, (".csv",))
+    check_outputs([model], [("--csv", csv)])
+    m = load_model_cli(model)
+    case = build_case(m, load_case, wheel, force, moment, gravity)
+    asm = assemble(m, tol=tol)
+    if asm.result.status != "converged":
+        fail(f"{model}: the model does not assemble ({asm.result.status}); no loads at an unassembled pose",
+             EXIT_NOT_CONVERGED)  # fmt: skip
+    s = statics(asm.after, case, inputs=input_ or None)
+    if csv is not None and s.ok:
+        atomic_write(csv, statics_csv(s))
+    if json_out:
+        print_json(statics_json(s))
+    else:
+        _print(s)
+    if not s.ok:
+        err.print(f"error: {model}: {s.message}", soft_wrap=True, markup=False)
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _print(s: Statics) -> None:
+    u = s.units
+    out.print(f"{s.model.mechanism.name}: load case {s.case or '(elements only)'}: {s.message}", soft_wrap=True)
+    t = Table(title=f"joint reactions on body j, global axes ({u['force']}; {u['moment']} about the joint's point)")
+    for c in ("joint", "on body", "fx", "fy", "fz", "|f|", "mx", "my", "mz"):
+        t.add_column(c, justify="left" if c in ("joint", "on body") else "right")
+    for j, r in s.reactions.items():
+        f, mo = r.force[1], r.moment[1]
+        t.add_row(j, r.bodies[1], *(f"{x:.6g}" for x in (*f, float(np.linalg.norm(f)), *mo)))
+    out.print(t)
+    if s.member_forces or s.element_forces:
+        t = Table(title=f"member forces (tension +) and element forces (pushing apart +), {u['force']}")
+        t.add_column("name")
+        t.add_column("kind")
+        t.add_column("force", justify="right")
+        for n, v in s.member_forces.items():
+            t.add_row(n, "member", f"{v:.6g}")
+        for n, v in s.element_forces.items():
+            t.add_row(n, s.model.element(n).kind, f"{v:.6g}")
+        out.print(t)
+    for a, v in s.efforts.items():
+        jt = s.model.mechanism.joint(a.split(".")[0]).jtype
+        out.print(f"effort {a}: {v:.6g} {u['moment'] if jt.angle_indices else u['force']}")
+    if s.undetermined:
+        out.print(f"undetermined (redundant constraints): {', '.join(s.undetermined)}", soft_wrap=True)
