@@ -50,18 +50,18 @@ def build_case(model: Model, name: str | None, wheels: list[str], forces: list[s
         return base
     pts = list(base.forces) if base else []
     for text in forces:
-        key, F = _vec(text, "--force")
+        key, f = _vec(text, "--force")
         body, _, point = key.partition(".")
         if not point:
             raise AddressError(f"--force {text!r}: expected BODY.POINT=Fx,Fy,Fz (a named point of the body)")
-        pts.append(PointLoad(body, point, force=F))
+        pts.append(PointLoad(body, point, force=f))
     for text in moments:
-        body, M = _vec(text, "--moment")
-        pts.append(PointLoad(body, (0.0, 0.0, 0.0), moment=M))
+        body, mo = _vec(text, "--moment")
+        pts.append(PointLoad(body, (0.0, 0.0, 0.0), moment=mo))
     wh = dict(base.wheels) if base else {}
     for text in wheels:
-        body, F = _vec(text, "--wheel")
-        wh[body] = F
+        body, fw = _vec(text, "--wheel")
+        wh[body] = fw
     g = base.gravity if base else None
     if gravity is not None:
         _, g = _vec(f"g={gravity}", "--gravity")

@@ -40,8 +40,8 @@ from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.couplings import build_couplings, couplings_to_data
 from kinprop.io.elements import build_elements, build_vehicle, elements_to_data, vehicle_to_data
-from kinprop.io.loads import build_loads, loads_to_data
 from kinprop.io.loader import build_or_report
+from kinprop.io.loads import build_loads, loads_to_data
 from kinprop.io.schema import HardpointFile, HardpointJointSpec
 from kinprop.joints import joint_type
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates, parse_address

@@ -88,8 +88,10 @@ def build_loads(
             if body_ok(wheel, f"{loc}.wheels.{wheel}"):
                 missing = [p for p in WHEEL_POINTS if p not in points[wheel]]
                 if missing:
-                    problems.append(Problem(f"{loc}.wheels.{wheel}", f"a wheel body needs the named points "
-                                            f"{', '.join(WHEEL_POINTS)}; {wheel!r} lacks {', '.join(missing)}", file))  # fmt: skip
+                    need = f"a wheel body needs the named points {', '.join(WHEEL_POINTS)}"
+                    problems.append(
+                        Problem(f"{loc}.wheels.{wheel}", f"{need}; {wheel!r} lacks {', '.join(missing)}", file)
+                    )
         if c.gravity is not None and not spec.masses:
             problems.append(Problem(f"{loc}.gravity", "gravity needs body weights: give 'loads.masses'", file))
         wheels = {w: (float(v[0]), float(v[1]), float(v[2])) for w, v in c.wheels.items()}

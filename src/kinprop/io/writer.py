@@ -16,9 +16,9 @@ import yaml
 from kinprop.engine import compile as compile_engine
 from kinprop.io.couplings import couplings_to_data
 from kinprop.io.elements import elements_to_data, vehicle_to_data
-from kinprop.io.loads import loads_to_data
 from kinprop.io.hardpoints import model_to_hardpoints
 from kinprop.io.loader import parse_text
+from kinprop.io.loads import loads_to_data
 from kinprop.model import Model
 
 
