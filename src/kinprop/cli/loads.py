@@ -29,6 +29,9 @@ from kinprop.model import Model
 from kinprop.model.loads import LoadCase, PointLoad
 from kinprop.propagation import assemble
 
+#: a table entry below this fraction of the table's largest is shown as 0 (round-off)
+ROUNDOFF = 1e-12
+
 
 def _vec(text: str, option: str) -> tuple[str, tuple[float, float, float]]:
     key, v = parse_assignment(text, option)
@@ -154,15 +157,22 @@ def loads(
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
+def _fmt(x: float, scale: float) -> str:
+    """Six significant digits; round-off (below 1e-12 of the table's largest) shown as 0."""
+    return "0" if abs(x) <= ROUNDOFF * scale else f"{x:.6g}"
+
+
 def _print(s: Statics) -> None:
     u = s.units
     out.print(f"{s.model.mechanism.name}: load case {s.case or '(elements only)'}: {s.message}", soft_wrap=True)
     t = Table(title=f"joint reactions on body j, global axes ({u['force']}; {u['moment']} about the joint's point)")
     for c in ("joint", "on body", "fx", "fy", "fz", "|f|", "mx", "my", "mz"):
         t.add_column(c, justify="left" if c in ("joint", "on body") else "right")
+    fs = max([float(np.nanmax(np.abs(r.force[1]), initial=0.0)) for r in s.reactions.values()] + [0.0])
+    ms = max([float(np.nanmax(np.abs(r.moment[1]), initial=0.0)) for r in s.reactions.values()] + [0.0])
     for j, r in s.reactions.items():
         f, mo = r.force[1], r.moment[1]
-        t.add_row(j, r.bodies[1], *(f"{x:.6g}" for x in (*f, float(np.linalg.norm(f)), *mo)))
+        t.add_row(j, r.bodies[1], *(_fmt(x, fs) for x in (*f, float(np.linalg.norm(f)))), *(_fmt(x, ms) for x in mo))
     out.print(t)
     if s.member_forces or s.element_forces:
         t = Table(title=f"member forces (tension +) and element forces (pushing apart +), {u['force']}")
