@@ -209,3 +209,28 @@ def test_tie_rod_tension_sign() -> None:
     towards_i = tr.points[0] - tr.points[1]
     assert np.sign(tr.force[1] @ towards_i) == np.sign(s.member_forces["TR"])
     assert abs(s.member_forces["TR"]) > 1.0
+
+
+def test_loads_as_outputs() -> None:
+    """``reaction:``, ``force:``, ``effort:`` outputs (``@CASE``) are kp.statics' numbers, with
+    their units; unknown joints, components, elements and cases are refused by name."""
+    from kinprop.analysis.outputs import evaluate_outputs
+    from kinprop.analysis.units import unit_of
+    from kinprop.errors import AddressError
+
+    base = _assembled(EXAMPLES / "double_wishbone.yaml")
+    model = kp.propagate(base, {"LCA.q": 4.0}, free=["q"], tol=1e-13).after
+    names = ["reaction:UBJ.fz@bump_3g", "reaction:LCA.local.mz@bump_3g", "force:TR@braking_1g", "force:spring",
+             "effort:LCA@cornering_1g"]  # fmt: skip
+    got = evaluate_outputs(model, names)
+    s = {c: kp.statics(model, c) for c in ("bump_3g", "braking_1g", "cornering_1g")}
+    tol = 1e-10 * 3e4  # round-off of the largest reaction (the engines' scalings differ)
+    assert got["reaction:UBJ.fz@bump_3g"] == pytest.approx(s["bump_3g"].reactions["UBJ"].force[1][2], abs=tol)
+    assert got["reaction:LCA.local.mz@bump_3g"] == pytest.approx(s["bump_3g"].efforts["LCA.q"], rel=1e-9)
+    assert got["force:TR@braking_1g"] == pytest.approx(s["braking_1g"].member_forces["TR"], abs=tol)
+    assert got["force:spring"] == pytest.approx(s["bump_3g"].element_forces["spring"], rel=1e-12)
+    assert got["effort:LCA@cornering_1g"] == pytest.approx(s["cornering_1g"].efforts["LCA.q"], rel=1e-10)
+    assert [unit_of(model, n) for n in names] == ["N", "N mm", "N", "N", "N mm"]
+    for bad in ("reaction:NOPE.fz", "reaction:UBJ.fw", "force:nope", "effort:UCA", "force:TR@nope"):
+        with pytest.raises((AddressError, KeyError)):
+            evaluate_outputs(model, [bad])

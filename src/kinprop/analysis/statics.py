@@ -140,9 +140,11 @@ class Statics:
             return self.efforts[key]
         raise AddressError(f"{name!r}: a load output is reaction:JOINT.COMPONENT, force:NAME or effort:JOINT")
 
-    def names(self) -> list[str]:
-        """Every load output :meth:`value` answers."""
+    def names(self, local: bool = False) -> list[str]:
+        """Every load output :meth:`value` answers (``local``: with the joint-frame components)."""
         out = [f"reaction:{j}.{c}" for j in self.reactions for c in (*COMPONENTS, "f")]
+        if local:
+            out += [f"reaction:{j}.local.{c}" for j in self.reactions for c in (*COMPONENTS, "f")]
         out += [f"force:{n}" for n in (*self.member_forces, *self.element_forces)]
         return out + [f"effort:{a}" for a in self.efforts]
 
@@ -246,18 +248,21 @@ def statics(
     *,
     inputs: Sequence[str] | None = None,
     engine: Engine | None = None,
+    reference: Model | None = None,
 ) -> Statics:
     """Reactions, member and element forces and input efforts of the assembled ``model`` under
     ``loads`` (a load case name of the model's ``loads:``, a :class:`LoadCase`, point loads, or
     None: the elements only), held by ``inputs`` (default: the model's declared inputs).
-    Status ``unbalanced`` (NaN) when the constraints and inputs cannot hold the loads."""
+    A preloaded element's ``preload`` is its force at ``reference``'s pose (default: this
+    model's own pose: give ``free_length`` for springs analysed over a sweep). Status
+    ``unbalanced`` (NaN) when the constraints and inputs cannot hold the loads."""
     eng = engine or compile_engine(model)
     st = eng.state_of(model)
     case = _case(model, loads)
     r, A, _, _ = eng.poses(st)
     W = applied_wrenches(model, eng, r, A, case)
     cols, names = input_columns(eng, model.mechanism.inputs if inputs is None else inputs)
-    laws = element_laws(eng, model.elements, st)
+    laws = element_laws(eng, model.elements, st if reference is None else eng.state_of(reference))
     ss = statics_state(eng, st, W, cols, laws)
     mech = model.mechanism
     reactions = {}
@@ -281,4 +286,58 @@ def statics(
                    tuple(undetermined))  # fmt: skip
 
 
-__all__ = ["COMPONENTS", "JointReaction", "Statics", "applied_wrenches", "input_columns", "statics"]
+# --- loads as outputs of sweeps, studies and evaluate_outputs ----------------------------------
+LOAD_PREFIXES = ("reaction:", "force:", "effort:")
+
+
+def is_load_output(name: str) -> bool:
+    """``reaction:...``, ``force:...``, ``effort:...`` (optionally ``@CASE``)."""
+    return name.startswith(LOAD_PREFIXES)
+
+
+def load_output_unit(model: Model, name: str) -> str:
+    """Force unit, or force x length for a moment or an angular input's effort."""
+    F, L = model.units.get("force", "force"), model.units.get("length", "m")
+    base = name.partition("@")[0]
+    if base.startswith("reaction:") and base.rsplit(".", 1)[-1] in ("mx", "my", "mz"):
+        return f"{F} {L}"
+    if base.startswith("effort:"):
+        joint = base[len("effort:") :].split(".")[0]
+        if joint in model.mechanism.joint_names and model.mechanism.joint(joint).jtype.angle_indices:
+            return f"{F} {L}"
+    return F
+
+
+def load_value(
+    model: Model,
+    name: str,
+    cache: dict[str, dict[str, float]],
+    engine: Engine | None = None,
+    reference: Model | None = None,
+) -> float:
+    """A load output ``NAME[@CASE]`` at the model's state (``CASE`` a load case of its
+    ``loads:``; without it the elements only); ``cache`` keeps one statics per case and state."""
+    base, _, case = name.partition("@")
+    key = f"\x00statics@{case}"
+    if key not in cache:
+        s = statics(model, case or None, engine=engine, reference=reference)
+        cache[key] = {n: s.value(n) for n in s.names(local=True)}
+    values = cache[key]
+    if base not in values:
+        s = statics(model, case or None, engine=engine, reference=reference)
+        return s.value(base)  # raises AddressError naming what is known
+    return values[base]
+
+
+__all__ = [
+    "COMPONENTS",
+    "LOAD_PREFIXES",
+    "JointReaction",
+    "Statics",
+    "applied_wrenches",
+    "input_columns",
+    "is_load_output",
+    "load_output_unit",
+    "load_value",
+    "statics",
+]
