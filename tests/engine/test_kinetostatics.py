@@ -185,3 +185,73 @@ def test_tree_joints_transmit_nothing_along_their_free_motion(rm) -> None:
         total[engine.body_index[jt.body_j]] += ss.wrench[k, 1]
     bad = np.isnan(total).any(axis=1)
     assert np.allclose(total[moving & ~bad], 0.0, atol=1e-9 * max(1.0, float(np.nanmax(np.abs(ss.wrench)))))
+
+
+def _random_point_forces(rng: np.random.Generator, engine: kp.Engine, r, A):
+    from kinprop.engine.statics import ElementLaw, PointForces
+
+    moving = [k for k, b in enumerate(engine.mechanism.bodies) if not b.fixed]
+    fixed = [k for k, b in enumerate(engine.mechanism.bodies) if b.fixed]
+    body = np.array(moving, np.int64)
+    s = rng.normal(size=(len(moving), 3))
+    P = r[body] + np.einsum("bij,bj->bi", A[body], s)
+    follows = rng.uniform(size=len(moving)) < 0.5
+    loads = PointForces(body, P, rng.normal(size=(len(moving), 3)), rng.normal(size=(len(moving), 3)), follows)
+    local = [(s[k], A[body[k]].T @ loads.F[k], A[body[k]].T @ loads.M[k]) for k in range(len(moving))]
+    laws = []
+    for _ in range(2):
+        bi = int(rng.choice(fixed + moving))
+        bj = int(rng.choice([b for b in moving if b != bi]))
+        laws.append(ElementLaw(bi, bj, rng.normal(size=3), rng.normal(size=3), float(rng.uniform(1, 5)),
+                               float(rng.uniform(0.5, 2)), float(rng.normal())))  # fmt: skip
+    return loads, local, laws
+
+
+def _loads_at(engine, st, loads, local):
+    """The same loads at another pose: material points; body-axes components turn, global ones do not."""
+    from kinprop.engine.statics import PointForces
+
+    r, A, _, _ = engine.poses(st)
+    P = np.array([r[b] + A[b] @ local[k][0] for k, b in enumerate(loads.body)])
+    F = np.array([A[b] @ local[k][1] if loads.follows[k] else loads.F[k] for k, b in enumerate(loads.body)])
+    M = np.array([A[b] @ local[k][2] if loads.follows[k] else loads.M[k] for k, b in enumerate(loads.body)])
+    return PointForces(loads.body, P, F, M, loads.follows).wrenches(r.shape[0])
+
+
+@pytest.mark.parametrize("rm", RANDOM[:24], ids=lambda rm: f"seed{rm.seed}")
+def test_reduced_stiffness_matches_central_differences(rm) -> None:
+    """``K = d tau / d q_D`` (analytic, second-order kinematics) against central differences of
+    the statics efforts at re-solved poses (other inputs held), springs and follower loads."""
+    from kinprop.engine.statics import reduced_stiffness
+
+    engine = kp.compile(rm.model)
+    st = engine.state_of(rm.model)
+    cols = _drivable(engine, st)
+    if not cols or len(engine.mechanism.bodies) < 3:
+        pytest.skip("no drivable coordinates")
+    rng = np.random.default_rng(300 + rm.seed)
+    r, A, _, _ = engine.poses(st)
+    loads, local, laws = _random_point_forces(rng, engine, np.array(r), np.array(A))
+    tau, K, msg = reduced_stiffness(engine, st, loads, cols, laws)
+    assert msg == "ok"
+    ss = statics_state(engine, st, loads.wrenches(len(r)), cols, laws)
+    assert np.allclose(tau, ss.efforts, atol=1e-9 * max(1.0, np.max(np.abs(tau))))
+    labels = engine.column_labels
+
+    def efforts_at(m: int, t: float) -> np.ndarray:
+        changes = {labels[c]: float(st.Q[c] + (t if k == m else 0.0)) for k, c in enumerate(cols)}
+        sol = engine.propagate(changes, free=["q"], start=st, tol=1e-15)
+        if not sol.converged:
+            raise RuntimeError(sol.message)
+        return statics_state(engine, sol.state, _loads_at(engine, sol.state, loads, local), cols, laws).efforts
+
+    h = 1e-4
+    try:
+        fd = np.column_stack([
+            (4 * (efforts_at(m, h / 2) - efforts_at(m, -h / 2)) / h - (efforts_at(m, h) - efforts_at(m, -h)) / (2 * h)) / 3
+            for m in range(len(cols))
+        ])  # fmt: skip
+    except RuntimeError as exc:
+        pytest.skip(f"the position solves do not follow this drive ({exc})")
+    scale = max(1.0, float(np.max(np.abs(fd))))
+    assert np.max(np.abs(K - fd)) < 1e-6 * scale

@@ -36,7 +36,7 @@ import numpy as np
 from kinprop.analysis.metrics import _radius, contact_point, wheel_bodies
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
-from kinprop.engine.statics import StaticsState, element_laws, statics_state
+from kinprop.engine.statics import PointForces, StaticsState, element_laws, reduced_stiffness, statics_state
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.loads import LoadCase, PointLoad
@@ -187,18 +187,18 @@ def _point(model: Model, body: str, point: str | Sequence[float]) -> Array:
     return np.asarray(point, dtype=float)
 
 
-def applied_wrenches(model: Model, engine: Engine, r: Array, A: Array, case: LoadCase | None) -> Array:
-    """(nb, 6) wrenches ``[F ; M_O]`` about the global origin of a load case at poses ``r``, ``A``."""
-    W = np.zeros((r.shape[0], 6))
+def applied_points(model: Model, engine: Engine, r: Array, A: Array, case: LoadCase | None) -> PointForces:
+    """The loads of a case as forces and couples at body points, global axes at poses ``r``, ``A``."""
+    body, Ps, Fs, Ms, follows = [], [], [], [], []
     if case is None:
-        return W
+        return PointForces.empty()
     names = set(model.mechanism.body_names)
 
-    def add(body: str, P: Array, F: Array, M: Array) -> None:
-        if body not in names:
-            raise AddressError(f"unknown body {body!r}; bodies are {', '.join(model.mechanism.body_names)}")
-        b = engine.body_index[body]
-        W[b] += np.concatenate([F, M + np.cross(P, F)])
+    def add(b_name: str, P: Array, F: Array, M: Array, turns: bool = False) -> None:
+        if b_name not in names:
+            raise AddressError(f"unknown body {b_name!r}; bodies are {', '.join(model.mechanism.body_names)}")
+        body.append(engine.body_index[b_name])
+        Ps.append(P), Fs.append(F), Ms.append(M), follows.append(turns)
 
     for ld in case.forces:
         b = engine.body_index.get(ld.body, -1)
@@ -208,7 +208,7 @@ def applied_wrenches(model: Model, engine: Engine, r: Array, A: Array, case: Loa
         F, M = np.asarray(ld.force, float), np.asarray(ld.moment, float)
         if ld.axes == "body":
             F, M = A[b] @ F, A[b] @ M
-        add(ld.body, P, F, M)
+        add(ld.body, P, F, M, ld.axes == "body")
     sae = model.units.get("axes") == "SAE"
     for wheel, force in case.wheels.items():
         if wheel not in wheel_bodies(model):
@@ -227,7 +227,15 @@ def applied_wrenches(model: Model, engine: Engine, r: Array, A: Array, case: Loa
         for m in model.loads.masses if model.loads is not None else ():
             b = engine.body_index[m.body]
             add(m.body, r[b] + A[b] @ _point(model, m.body, m.cm), m.weight * g, np.zeros(3))
-    return W
+    z = np.zeros((0, 3))
+    return PointForces(np.array(body, np.int64), np.array(Ps).reshape(-1, 3) if Ps else z,
+                       np.array(Fs).reshape(-1, 3) if Fs else z, np.array(Ms).reshape(-1, 3) if Ms else z,
+                       np.array(follows, bool))  # fmt: skip
+
+
+def applied_wrenches(model: Model, engine: Engine, r: Array, A: Array, case: LoadCase | None) -> Array:
+    """(nb, 6) wrenches ``[F ; M_O]`` about the global origin of a load case at poses ``r``, ``A``."""
+    return applied_points(model, engine, r, A, case).wrenches(r.shape[0])
 
 
 def _case(model: Model, loads: Any) -> LoadCase | None:

@@ -43,7 +43,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from kinprop.constraints.basic import ROWS, basic_rows
-from kinprop.engine.motion import _Frames
+from kinprop.engine.motion import _Frames, motion_state, spatial_cross
 from kinprop.joints.composite import TD_CODE
 from kinprop.kinematics.tables import (
     B_KIND,
@@ -220,6 +220,111 @@ def element_laws(engine: Engine, elements: Sequence[Element], reference: State |
     return laws
 
 
+@dataclass(frozen=True)
+class PointForces:
+    """Applied loads as forces and couples at body points (global axes at the current pose):
+    ``body`` (n,), ``P`` (n, 3) points, ``F`` (n, 3), ``M`` (n, 3); ``follows`` (n,) True when
+    the components are fixed in the body's axes (they turn with it), False when global."""
+
+    body: Array
+    P: Array
+    F: Array
+    M: Array
+    follows: Array
+
+    @classmethod
+    def empty(cls) -> PointForces:
+        z = np.zeros((0, 3))
+        return cls(np.zeros(0, np.int64), z, z, z, np.zeros(0, bool))
+
+    def wrenches(self, nb: int) -> Array:
+        """(nb, 6) ``[F ; M + P x F]`` summed by body."""
+        W = np.zeros((nb, 6))
+        for k in range(self.body.shape[0]):
+            W[self.body[k]] += np.concatenate([self.F[k], self.M[k] + np.cross(self.P[k], self.F[k])])
+        return W
+
+
+def _wrench_rates(loads: PointForces, laws: Sequence[ElementLaw], r: Array, A: Array, V: Array) -> Array:
+    """(nb, 6) time derivative of the applied wrenches (loads and elements) about the origin
+    along the motion with body twists ``V``: a force at a material point P moving with ``v_P``
+    has ``dM_O = v_P x F``; body-axes components turn with ``omega``; an element's force
+    changes with its length (``df = -k dL``) and direction."""
+    nb = r.shape[0]
+    dW = np.zeros((nb, 6))
+
+    def vel(b: int, x: Array) -> Array:
+        return V[b, :3] + np.cross(V[b, 3:], x)
+
+    for k in range(loads.body.shape[0]):
+        b, P, F, M = loads.body[k], loads.P[k], loads.F[k], loads.M[k]
+        dF = np.cross(V[b, 3:], F) if loads.follows[k] else np.zeros(3)
+        dM = np.cross(V[b, 3:], M) if loads.follows[k] else np.zeros(3)
+        dW[b] += np.concatenate([dF, dM + np.cross(vel(b, P), F) + np.cross(P, dF)])
+    for e in laws:
+        Pi, Pj = r[e.body_i] + A[e.body_i] @ e.s_i, r[e.body_j] + A[e.body_j] @ e.s_j
+        d = Pj - Pi
+        length = float(np.linalg.norm(d))
+        if length == 0.0:
+            continue
+        u = d / length
+        vi, vj = vel(e.body_i, Pi), vel(e.body_j, Pj)
+        dd = vj - vi
+        dL = float(u @ dd)
+        du = (dd - u * dL) / length
+        f = e.f0 + e.k * (e.L0 - length)
+        dFv = -e.k * dL * u + f * du  # d(f u)/dt
+        Fv = f * u
+        dW[e.body_j] += np.concatenate([dFv, np.cross(vj, Fv) + np.cross(Pj, dFv)])
+        dW[e.body_i] -= np.concatenate([dFv, np.cross(vi, Fv) + np.cross(Pi, dFv)])
+    return dW
+
+
+def reduced_stiffness(
+    engine: Engine, state: State, loads: PointForces, driven: Sequence[int], laws: Sequence[ElementLaw] = ()
+) -> tuple[Array, Array, str]:
+    """``(tau, K, message)``: the efforts at the ``driven`` columns and their exact derivatives
+    ``K[k, l] = d tau_k / d q_l`` (the other driven coordinates held, the constraints
+    re-solved): the tangent stiffness of the mechanism reduced to its inputs.
+
+    By virtual work ``tau_k = -sum_b W_b . V_b^(k)`` (``V^(k)``: the twists for a unit rate of
+    input k), so ``K[k, l] = -sum_b (dW_b/dq_l . V_b^(k) + W_b . dV_b^(k)/dq_l)``. The
+    symmetric part of ``dV^(k)/dq_l`` is the bias acceleration of the velocity analysis
+    (:mod:`kinprop.engine.motion`, Haug's ``gamma``: second order, analytic) polarised over
+    ``e_k + e_l``; the antisymmetric part is half the twists' spatial cross product
+    ``V^(l) x V^(k)``. Loads at material points (a wheel force at the contact point is
+    differentiated as fixed to the wheel body)."""
+    labels = engine.column_labels
+    nd = len(driven)
+    r, A, _, _ = engine.poses(state)
+    r, A = np.array(r), np.array(A)
+    W = loads.wrenches(r.shape[0]) + element_state(laws, r, A)[3]
+
+    def rates(weights: dict[int, float]) -> dict[str, float]:
+        return {labels[c]: weights.get(k, 0.0) for k, c in enumerate(driven)}
+
+    Vk, acc = [], {}
+    for k in range(nd):
+        ms = motion_state(engine, state, rates({k: 1.0}), {})
+        if not ms.ok:
+            return np.full(nd, np.nan), np.full((nd, nd), np.nan), ms.message
+        Vk.append(ms.V)
+        acc[k, k] = ms.dV
+    for k in range(nd):
+        for m in range(k + 1, nd):
+            ms = motion_state(engine, state, rates({k: 1.0, m: 1.0}), {})
+            acc[k, m] = 0.5 * (ms.dV - acc[k, k] - acc[m, m])
+    tau = np.array([-float(np.sum(W * V)) for V in Vk])
+    K = np.zeros((nd, nd))
+    for m in range(nd):
+        dW = _wrench_rates(loads, laws, r, A, Vk[m])
+        for k in range(nd):
+            sym = acc[min(k, m), max(k, m)]
+            anti = 0.5 * np.array([spatial_cross(Vk[m][b], Vk[k][b]) for b in range(r.shape[0])])
+            K[k, m] = -float(np.sum(dW * Vk[k]) + np.sum(W * (sym + anti)))
+    return tau, K, "ok"
+
+
 def _reactions(engine: Engine, Zs: list[tuple[Array, Array]], lam: Array, W_applied: Array) -> Array:
     """Every joint's wrench (nj, 2, 6) on its bodies i and j, from the multipliers and the
     applied wrenches (module docstring)."""
@@ -333,6 +438,8 @@ def statics_state(
 
 __all__ = [
     "ElementLaw",
+    "PointForces",
+    "reduced_stiffness",
     "StaticsState",
     "element_laws",
     "element_state",
