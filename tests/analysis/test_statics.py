@@ -234,3 +234,83 @@ def test_loads_as_outputs() -> None:
     for bad in ("reaction:NOPE.fz", "reaction:UBJ.fw", "force:nope", "effort:UCA", "force:TR@nope"):
         with pytest.raises((AddressError, KeyError)):
             evaluate_outputs(model, [bad])
+
+
+LEVER = {
+    "kinprop": 1,
+    "name": "spring-loaded lever",
+    "units": {"length": "m", "angle": "deg", "force": "N"},
+    "bodies": {"ground": {"fixed": True, "points": {"anchor": [0.3, 0.5, 0.0]}}, "lever": {"points": {"tip": [0.8, 0, 0]}}},
+    "joints": {"O": {"type": "revolute", "bodies": ["ground", "lever"], "s_i": [0, 0, 0], "q": [10.0]}},
+    "inputs": ["O"],
+    "elements": {"spring": {"type": "spring", "bodies": ["ground", "lever"], "s_i": [0.3, 0.5, 0.0],
+                            "s_j": [0.6, 0.0, 0.0], "stiffness": 2000.0, "free_length": 0.45}},
+}  # fmt: skip
+
+
+def _lever_tau(theta: float, Fy: float) -> float:
+    """Effort holding the lever at ``theta`` (rad) against the spring and a force Fy at the tip, by hand."""
+    c, s = math.cos(theta), math.sin(theta)
+    anchor, Pj, dPj = np.array([0.3, 0.5]), 0.6 * np.array([c, s]), 0.6 * np.array([-s, c])
+    d = Pj - anchor
+    L = np.linalg.norm(d)
+    f = 2000.0 * (0.45 - L)  # pushing apart
+    power = f * (d / L) @ dPj + Fy * 0.8 * c  # spring on the lever + tip force, per unit rate
+    return -power
+
+
+def test_equilibrium_of_a_spring_loaded_lever(tmp_path: Path) -> None:
+    """The equilibrium angle against a root of the hand-written effort (scipy's brentq)."""
+    import scipy.optimize
+
+    from kinprop.analysis.statics import equilibrium
+
+    model = _assembled(LEVER, tmp_path)
+    Fy = -150.0
+    e = equilibrium(model, PointLoad("lever", "tip", force=(0.0, Fy, 0.0)))
+    assert e.converged, e.message
+    theta = float(e.model.coordinates["O"][0])  # a Model keeps coordinates in radians
+    truth = scipy.optimize.brentq(lambda t: _lever_tau(t, Fy), theta - 0.3, theta + 0.3, xtol=1e-15)
+    assert theta == pytest.approx(truth, abs=1e-10)
+    assert abs(e.statics.efforts["O.q"]) < 1e-8
+    # the stiffness is the derivative of the hand-written effort
+    h = 1e-6
+    assert e.stiffness[0, 0] == pytest.approx(
+        (_lever_tau(truth + h, Fy) - _lever_tau(truth - h, Fy)) / (2 * h), rel=1e-6
+    )
+    assert e.stable == (e.stiffness[0, 0] > 0)
+
+
+def test_double_wishbone_equilibrium_and_wheel_rate() -> None:
+    """Ride height under an 11 kN corner load: no effort left at the input, every body in
+    balance; the wheel rate against central differences of the wheel-centre force that holds
+    the springs (from statics at re-solved poses) over the wheel-centre travel."""
+    from kinprop.analysis.statics import equilibrium, wheel_rate
+
+    model = _assembled(EXAMPLES / "double_wishbone.yaml")
+    e = equilibrium(model, LoadCase("corner", wheels={"upright": (0.0, 0.0, 11000.0)}))
+    assert e.converged and e.stable, e.message
+    assert abs(e.statics.efforts["LCA.q"]) < 1e-9 * 11000.0 * 1000.0
+    _dw_balance(e.model, e.statics)
+
+    def force_and_height(m: kp.Model) -> tuple[float, float]:
+        springs = kp.statics(m).efforts["LCA.q"]
+        with_unit = kp.statics(m, PointLoad("upright", "wheel_centre", force=(0.0, 0.0, 1.0))).efforts["LCA.q"]
+        unit = with_unit - springs  # loads superpose: the effort of 1 N up at the wheel centre
+        kin = kp.compile(m).kinematics(m.design, m.coordinates)
+        z = (kin.r["upright"] + kin.A["upright"] @ np.array(dict(m.mechanism.body("upright").points)["wheel_centre"]))[
+            2
+        ]
+        return -springs / unit, float(z)  # the vertical force at the wheel centre that replaces the input
+
+    for m in (model, e.model):
+        q0 = math.degrees(float(m.coordinates["LCA"][0]))  # propagate takes the model's unit
+
+        def at(t: float) -> tuple[float, float]:
+            return force_and_height(kp.propagate(m, {"LCA.q": q0 + t}, free=["q"], tol=1e-14).after)
+
+        h = 1e-3  # degrees
+        (f1, z1), (f0, z0) = at(h), at(-h)
+        (g1, y1), (g0, y0) = at(h / 2), at(-h / 2)
+        truth = (4 * (g1 - g0) / (y1 - y0) - (f1 - f0) / (z1 - z0)) / 3
+        assert wheel_rate(m) == pytest.approx(truth, rel=1e-6)

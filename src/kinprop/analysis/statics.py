@@ -36,7 +36,15 @@ import numpy as np
 from kinprop.analysis.metrics import _radius, contact_point, wheel_bodies
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
-from kinprop.engine.statics import PointForces, StaticsState, element_laws, reduced_stiffness, statics_state
+from kinprop.engine.motion import motion_state
+from kinprop.engine.statics import (
+    PointForces,
+    StaticsState,
+    element_laws,
+    element_state,
+    reduced_stiffness,
+    statics_state,
+)
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.loads import LoadCase, PointLoad
@@ -294,6 +302,130 @@ def statics(
                    tuple(undetermined))  # fmt: skip
 
 
+# --- static equilibrium and wheel rate --------------------------------------------------------
+#: Newton on the reduced equilibrium: converged when |tau| < EQ_TOL * (force scale x length scale)
+EQ_TOL, EQ_MAX_ITER, EQ_TRUST = 1e-12, 50, 0.35
+
+
+@dataclass(frozen=True)
+class Equilibrium:
+    """The pose at which the released inputs need no effort: ``status`` ``converged``,
+    ``not_converged`` or ``failed`` (a step the position solve could not follow on the
+    branch); ``stiffness`` the reduced tangent stiffness ``d tau / d q`` there (solver units:
+    per radian for an angle), ``stable`` when its symmetric part is positive definite."""
+
+    status: str
+    message: str
+    model: Model
+    statics: Statics
+    iterations: int
+    released: tuple[str, ...]
+    stiffness: Array
+    stable: bool
+
+    @property
+    def converged(self) -> bool:
+        return self.status == "converged"
+
+
+def _tau_scale(pf: PointForces, laws: Sequence[Any], model: Model, eng: Engine, st: Any) -> float:
+    L = eng.length_scale or eng._length_scale(st)
+    r, A, _, _ = eng.poses(st)
+    f_el = np.abs(element_state(laws, np.array(r), np.array(A))[0]).sum()
+    return float((np.abs(pf.F).sum() + f_el) * L + np.abs(pf.M).sum()) or 1.0
+
+
+def equilibrium(
+    model: Model,
+    loads: str | LoadCase | PointLoad | Sequence[PointLoad] | None = None,
+    *,
+    release: Sequence[str] | None = None,
+    tol: float = EQ_TOL,
+    max_iter: int = EQ_MAX_ITER,
+    engine: Engine | None = None,
+) -> Equilibrium:
+    r"""The static equilibrium of the spring-supported ``model`` under ``loads`` with the
+    ``release``\ d inputs (default: the declared inputs) free: Newton on ``tau(q_D) = 0`` with
+    the exact tangent stiffness (:func:`kinprop.engine.statics.reduced_stiffness`), each step
+    re-assembled on the start's branch (``Engine.propagate``), steps limited to a trust radius.
+    Preloads are taken at the given model's pose."""
+    eng = engine or compile_engine(model)
+    st0 = eng.state_of(model)
+    case = _case(model, loads)
+    names = list(model.mechanism.inputs if release is None else release)
+    cols, addresses = input_columns(eng, names)
+    labels = eng.column_labels
+    laws = element_laws(eng, model.elements, st0)
+    st, status, message, K, it = st0, "not_converged", "", np.zeros((len(cols), len(cols))), 0
+    for it in range(1, max_iter + 1):  # noqa: B007
+        r, A, _, _ = eng.poses(st)
+        pf = applied_points(model, eng, np.array(r), np.array(A), case)
+        tau, K, msg = reduced_stiffness(eng, st, pf, cols, laws)
+        if msg != "ok":
+            status, message = "failed", msg
+            break
+        if float(np.max(np.abs(tau), initial=0.0)) <= tol * _tau_scale(pf, laws, model, eng, st):
+            status, message = "converged", f"converged in {it - 1} step(s)"
+            break
+        dq = -np.linalg.lstsq(K, tau, rcond=None)[0]
+        size = float(np.max(np.abs(dq * eng.col_scale[cols])))
+        if size > EQ_TRUST:
+            dq *= EQ_TRUST / size
+        sol = eng.propagate({labels[c]: float(st.Q[c] + dq[k]) for k, c in enumerate(cols)}, free=["q"], start=st,
+                            tol=1e-13)  # fmt: skip
+        if not sol.converged:
+            status, message = "failed", f"the equilibrium step could not be followed: {sol.message}"
+            break
+        st = sol.state
+    else:
+        message = f"not converged in {max_iter} steps"
+    at = eng.model_of(st, model)
+    s = statics(at, case, inputs=names, engine=eng, reference=model)
+    stable = bool(np.all(np.linalg.eigvalsh(0.5 * (K + K.T)) > 0)) if K.size else True
+    return Equilibrium(status, message, at, s, it, tuple(addresses), K, stable)
+
+
+def wheel_rate(
+    model: Model,
+    wheel: str | None = None,
+    loads: str | LoadCase | PointLoad | Sequence[PointLoad] | None = None,
+    *,
+    inputs: Sequence[str] | None = None,
+    engine: Engine | None = None,
+) -> float:
+    """Wheel rate (force per length): the derivative of the vertical force at the wheel centre
+    that holds the mechanism against its springs (and ``loads``) with respect to the wheel
+    centre's vertical travel, ``K_w = dF_z/dz``, exact: with ``F_z = tau / z'`` (``tau`` the
+    effort of the single input, ``z' = dz/dq``), ``K_w = (tau' z' - tau z'') / z'^3`` from the
+    reduced stiffness ``tau'`` and the velocity analysis' ``z''``. Vertical is +z (ISO 8855;
+    -z in a model declared in SAE axes). Milliken & Milliken, *Race Car Vehicle Dynamics*,
+    ch. 16 (wheel rate; here at the wheel centre, the tyre excluded)."""
+    eng = engine or compile_engine(model)
+    st = eng.state_of(model)
+    wheels = wheel_bodies(model)
+    if wheel is None:
+        if len(wheels) != 1:
+            raise AddressError(f"wheel_rate: name the wheel; wheel bodies: {', '.join(wheels) or 'none'}")
+        wheel = wheels[0]
+    if wheel not in wheels:
+        raise AddressError(f"wheel_rate: {wheel!r} is not a wheel body; wheels: {', '.join(wheels) or 'none'}")
+    cols, _ = input_columns(eng, model.mechanism.inputs if inputs is None else inputs)
+    if len(cols) != 1:
+        raise ValueError(f"wheel_rate needs exactly one input coordinate (the wheel travel), found {len(cols)}")
+    r, A, _, _ = eng.poses(st)
+    r, A = np.array(r), np.array(A)
+    pf = applied_points(model, eng, r, A, _case(model, loads))
+    tau, K, msg = reduced_stiffness(eng, st, pf, cols, element_laws(eng, model.elements, st))
+    if msg != "ok":
+        return float("nan")
+    ms = motion_state(eng, st, {eng.column_labels[cols[0]]: 1.0}, {})
+    b = eng.body_index[wheel]
+    centre = r[b] + A[b] @ _point(model, wheel, "wheel_centre")
+    up = np.array([0.0, 0.0, -1.0 if model.units.get("axes") == "SAE" else 1.0])
+    z1, z2 = float(up @ ms.point_velocity(b, centre)), float(up @ ms.point_acceleration(b, centre))
+    return float((K[0, 0] * z1 - tau[0] * z2) / z1**3)
+
+
 # --- loads as outputs of sweeps, studies and evaluate_outputs ----------------------------------
 LOAD_PREFIXES = ("reaction:", "force:", "effort:")
 
@@ -339,6 +471,9 @@ def load_value(
 
 __all__ = [
     "COMPONENTS",
+    "Equilibrium",
+    "equilibrium",
+    "wheel_rate",
     "LOAD_PREFIXES",
     "JointReaction",
     "Statics",
