@@ -240,7 +240,10 @@ LEVER = {
     "kinprop": 1,
     "name": "spring-loaded lever",
     "units": {"length": "m", "angle": "deg", "force": "N"},
-    "bodies": {"ground": {"fixed": True, "points": {"anchor": [0.3, 0.5, 0.0]}}, "lever": {"points": {"tip": [0.8, 0, 0]}}},
+    "bodies": {
+        "ground": {"fixed": True, "points": {"anchor": [0.3, 0.5, 0.0]}},
+        "lever": {"points": {"tip": [0.8, 0, 0]}},
+    },
     "joints": {"O": {"type": "revolute", "bodies": ["ground", "lever"], "s_i": [0, 0, 0], "q": [10.0]}},
     "inputs": ["O"],
     "elements": {"spring": {"type": "spring", "bodies": ["ground", "lever"], "s_i": [0.3, 0.5, 0.0],
@@ -306,7 +309,7 @@ def test_double_wishbone_equilibrium_and_wheel_rate() -> None:
     for m in (model, e.model):
         q0 = math.degrees(float(m.coordinates["LCA"][0]))  # propagate takes the model's unit
 
-        def at(t: float) -> tuple[float, float]:
+        def at(t: float, m: kp.Model = m, q0: float = q0) -> tuple[float, float]:
             return force_and_height(kp.propagate(m, {"LCA.q": q0 + t}, free=["q"], tol=1e-14).after)
 
         h = 1e-3  # degrees

@@ -247,10 +247,9 @@ def test_reduced_stiffness_matches_central_differences(rm) -> None:
 
     h = 1e-4
     try:
-        fd = np.column_stack([
-            (4 * (efforts_at(m, h / 2) - efforts_at(m, -h / 2)) / h - (efforts_at(m, h) - efforts_at(m, -h)) / (2 * h)) / 3
-            for m in range(len(cols))
-        ])  # fmt: skip
+        half = [(efforts_at(m, h / 2) - efforts_at(m, -h / 2)) / h for m in range(len(cols))]
+        full = [(efforts_at(m, h) - efforts_at(m, -h)) / (2 * h) for m in range(len(cols))]
+        fd = np.column_stack([(4 * a - b) / 3 for a, b in zip(half, full, strict=True)])
     except RuntimeError as exc:
         pytest.skip(f"the position solves do not follow this drive ({exc})")
     scale = max(1.0, float(np.max(np.abs(fd))))

@@ -357,7 +357,7 @@ def equilibrium(
     labels = eng.column_labels
     laws = element_laws(eng, model.elements, st0)
     st, status, message, K, it = st0, "not_converged", "", np.zeros((len(cols), len(cols))), 0
-    for it in range(1, max_iter + 1):  # noqa: B007
+    for it in range(1, max_iter + 1):
         r, A, _, _ = eng.poses(st)
         pf = applied_points(model, eng, np.array(r), np.array(A), case)
         tau, K, msg = reduced_stiffness(eng, st, pf, cols, laws)
@@ -471,16 +471,16 @@ def load_value(
 
 __all__ = [
     "COMPONENTS",
-    "Equilibrium",
-    "equilibrium",
-    "wheel_rate",
     "LOAD_PREFIXES",
+    "Equilibrium",
     "JointReaction",
     "Statics",
     "applied_wrenches",
+    "equilibrium",
     "input_columns",
     "is_load_output",
     "load_output_unit",
     "load_value",
     "statics",
+    "wheel_rate",
 ]

@@ -439,11 +439,11 @@ def statics_state(
 __all__ = [
     "ElementLaw",
     "PointForces",
-    "reduced_stiffness",
     "StaticsState",
     "element_laws",
     "element_state",
     "generalized_forces",
+    "reduced_stiffness",
     "statics_state",
     "subtree_sums",
 ]
