@@ -49,3 +49,19 @@ def test_bad_case_and_unheld_loads() -> None:
     p = run_kinprop("loads", EXAMPLES / "slider_crank_offset.yaml", "--moment", "crank=0,0,5", "--input", "O2")
     assert p.returncode == 0, p.stderr
     assert "effort O2.q: -5 force m" in p.stdout
+
+
+def test_equilibrium_option() -> None:
+    p = run_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--wheel", "upright=0,0,11000", "--equilibrium", "--json")
+    assert p.returncode == 0, p.stderr
+    data = json.loads(p.stdout)
+    eq = data["equilibrium"]
+    assert eq["stable"] and eq["steps"] >= 1
+    assert abs(data["efforts"]["LCA.q"]) < 1e-9 * 11000 * 1000
+    model = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
+    at = kp.propagate(model, {"LCA.q": eq["coordinates"]["LCA.q"]}, free=["q"], tol=1e-13).after
+    s = kp.statics(at, kp.LoadCase("w", wheels={"upright": (0.0, 0.0, 11000.0)}))
+    assert abs(s.efforts["LCA.q"]) < 1e-6 * 11000 * 1000  # the printed angle is the balanced pose
+    from kinprop.analysis.statics import wheel_rate
+
+    assert eq["wheel_rate"] == pytest.approx(wheel_rate(at), rel=1e-8)

@@ -10,7 +10,8 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from kinprop.analysis.statics import Statics, statics
+from kinprop.analysis.metrics import wheel_bodies
+from kinprop.analysis.statics import Statics, equilibrium, statics, wheel_rate
 from kinprop.cli.app import (
     EXIT_NOT_CONVERGED,
     app,
@@ -28,6 +29,7 @@ from kinprop.io.writer import atomic_write, csv_text
 from kinprop.model import Model
 from kinprop.model.loads import LoadCase, PointLoad
 from kinprop.propagation import assemble
+from kinprop.propagation.units import from_solver_units
 
 #: a table entry below this fraction of the table's largest is shown as 0 (round-off)
 ROUNDOFF = 1e-12
@@ -130,6 +132,10 @@ def loads(
     json_out: Annotated[bool, typer.Option("--json", help="one JSON object on stdout")] = False,
     csv: Annotated[Path | None, typer.Option("--csv", help="write every load output as CSV")] = None,
     tol: Annotated[float, typer.Option("--tol", help="assembly tolerance before the statics")] = 1e-10,
+    equilibrium_: Annotated[
+        bool,
+        typer.Option("--equilibrium", help="first find the pose where the springs hold the loads (inputs released)"),
+    ] = False,
 ) -> None:
     """Joint reactions, member forces (tension positive), spring and damper forces (positive
     pushing apart) and the efforts that hold the inputs, at the model's assembled pose.
@@ -145,16 +151,50 @@ def loads(
     if asm.result.status != "converged":
         fail(f"{model}: the model does not assemble ({asm.result.status}); no loads at an unassembled pose",
              EXIT_NOT_CONVERGED)  # fmt: skip
-    s = statics(asm.after, case, inputs=input_ or None)
+    at = asm.after
+    eq = None
+    if equilibrium_:
+        eq = equilibrium(at, case, release=input_ or None)
+        if not eq.converged:
+            fail(f"{model}: no static equilibrium: {eq.message}", EXIT_NOT_CONVERGED)
+        at = eq.model
+    s = statics(at, case, inputs=input_ or None, reference=asm.after)
     if csv is not None and s.ok:
         atomic_write(csv, statics_csv(s))
+    rate = _wheel_rate(at, input_) if equilibrium_ else None
     if json_out:
-        print_json(statics_json(s))
+        data = statics_json(s)
+        if eq is not None:
+            data["equilibrium"] = {"coordinates": {a: _model_value(at, a) for a in eq.released}, "steps": eq.iterations,
+                                   "stable": eq.stable, "wheel_rate": rate}  # fmt: skip
+        print_json(data)
     else:
+        if eq is not None:
+            pos = ", ".join(f"{a} = {_model_value(at, a):.6g}" for a in eq.released)
+            out.print(
+                f"equilibrium after {eq.iterations - 1} Newton step(s): {pos} ({'stable' if eq.stable else 'UNSTABLE'})"
+            )
+            if rate is not None:
+                out.print(f"wheel rate at the wheel centre: {rate:.6g} {s.units['force']}/{s.units['length']}")
         _print(s)
     if not s.ok:
         err.print(f"error: {model}: {s.message}", soft_wrap=True, markup=False)
         raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _model_value(model: Model, address: str) -> float:
+    """A single input coordinate in the model's units."""
+    return float(np.atleast_1d(from_solver_units(model, address, model.coordinates[address.split(".")[0]]))[0])
+
+
+def _wheel_rate(model: Model, inputs: list[str]) -> float | None:
+    """The wheel rate of the springs when the model has one wheel body and one input, else None."""
+    if len(wheel_bodies(model)) != 1:
+        return None
+    try:
+        return wheel_rate(model, inputs=inputs or None)
+    except ValueError:
+        return None
 
 
 def _fmt(x: float, scale: float) -> str:
