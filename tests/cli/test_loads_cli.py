@@ -52,7 +52,8 @@ def test_bad_case_and_unheld_loads() -> None:
 
 
 def test_equilibrium_option() -> None:
-    p = run_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--wheel", "upright=0,0,11000", "--equilibrium", "--json")
+    dw = EXAMPLES / "double_wishbone.yaml"
+    p = run_kinprop("loads", dw, "--wheel", "upright=0,0,11000", "--equilibrium", "--json")
     assert p.returncode == 0, p.stderr
     data = json.loads(p.stdout)
     eq = data["equilibrium"]
