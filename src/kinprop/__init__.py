@@ -13,6 +13,8 @@ _EXPORTS = {
     "design_sensitivity": "kinprop.analysis",
     "evaluate_outputs": "kinprop.analysis",
     "mobility": "kinprop.analysis",
+    "motion": "kinprop.analysis.motion",
+    "Motion": "kinprop.analysis.motion",
     "output_sensitivity": "kinprop.analysis",
     "sweep": "kinprop.analysis",
     "TargetPropagation": "kinprop.analysis.targets",
@@ -48,6 +50,7 @@ _EXPORTS = {
 
 if TYPE_CHECKING:
     from kinprop.analysis import design_sensitivity, evaluate_outputs, mobility, output_sensitivity, sweep
+    from kinprop.analysis.motion import Motion, motion
     from kinprop.analysis.statics import Statics, statics
     from kinprop.analysis.targets import TargetPropagation, propagate_targets
     from kinprop.engine import BatchSolution, Engine, Solution, State, Status, compile
@@ -85,6 +88,7 @@ __all__ = [
     "Mechanism",
     "Model",
     "ModelError",
+    "Motion",
     "PointLoad",
     "Propagation",
     "SingularityWarning",
@@ -101,6 +105,7 @@ __all__ = [
     "evaluate_outputs",
     "load_model",
     "mobility",
+    "motion",
     "output_sensitivity",
     "propagate",
     "propagate_continuation",

@@ -54,7 +54,9 @@ def _axis_point(a: np.ndarray) -> np.ndarray:
     return X[0] * e1 + X[1] * e2
 
 
-def _model(beta_deg: float) -> kp.Model:
+def _model(beta_deg: float, metres: bool = False) -> kp.Model:
+    """The parallel-axis double wishbone (mm and deg; or m and rad, the same suspension)."""
+    k = 1e-3 if metres else 1.0
     b = math.radians(beta_deg)
     a = np.array([math.cos(b), 0.0, math.sin(b)])
     c = _axis_point(a)
@@ -62,14 +64,18 @@ def _model(beta_deg: float) -> kp.Model:
     T_I = T_O - 0.45 * _perp(T_O - c, a)
 
     def v(x: np.ndarray) -> list[float]:
-        return [float(y) for y in x]
+        return [float(y) * k for y in x]
 
     data = {
         "kinprop": 1,
         "style": "hardpoints",
-        "units": {"length": "mm", "angle": "deg", "axes": "ISO8855", "force": "N"},
+        "units": {"length": "m" if metres else "mm", "angle": "rad" if metres else "deg", "axes": "ISO8855",
+                  "force": "N"},
         "bodies": {
-            "chassis": {"fixed": True, "points": {"wheel_centre_ref": v(C), "contact_patch_ref": v(C - [0, 0, RADIUS])}},
+            "chassis": {
+                "fixed": True,
+                "points": {"wheel_centre_ref": v(C), "contact_patch_ref": v(C - [0, 0, RADIUS])},
+            },
             "lca": {},
             "uca": {},
             "upright": {
@@ -83,18 +89,18 @@ def _model(beta_deg: float) -> kp.Model:
             },
         },
         "joints": {
-            "LCA": {"type": "revolute", "bodies": ["chassis", "lca"], "point": v(O_L), "axis": v(a)},
+            "LCA": {"type": "revolute", "bodies": ["chassis", "lca"], "point": v(O_L), "axis": [float(y) for y in a]},
             "LBJ": {"type": "spherical", "bodies": ["lca", "upright"], "point": v(LBJ)},
-            "UCA": {"type": "revolute", "bodies": ["chassis", "uca"], "point": v(O_U), "axis": v(a)},
+            "UCA": {"type": "revolute", "bodies": ["chassis", "uca"], "point": v(O_U), "axis": [float(y) for y in a]},
             "UBJ": {"type": "spherical", "bodies": ["uca", "upright"], "cut": True, "point": v(UBJ)},
             "TR": {"type": "distance", "bodies": ["chassis", "upright"], "point_i": v(T_I), "point_j": v(T_O)},
         },
         "inputs": ["LCA"],
         "elements": {
             "spring": {"type": "spring", "bodies": ["chassis", "lca"], "point_i": v(S_C), "point_j": v(S_A),
-                       "stiffness": 50.0},
+                       "stiffness": 50.0 / k},
         },
-        "vehicle": {"wheelbase": WHEELBASE, "cg_height": CG, "brake_front": BRAKE, "axle": "front"},
+        "vehicle": {"wheelbase": WHEELBASE * k, "cg_height": CG * k, "brake_front": BRAKE, "axle": "front"},
     }  # fmt: skip
     return kp.assemble(model_from_data(data, "parallel.yaml")).after
 
@@ -157,7 +163,7 @@ def test_motion_ratio_by_virtual_work() -> None:
     assert m["wheel_rate"] == pytest.approx(50.0 * mr**2, rel=1e-10)
 
 
-def _richardson(f, h: float) -> np.ndarray:  # noqa: ANN001
+def _richardson(f, h: float) -> np.ndarray:
     d = lambda k: (f(k * h) - f(-k * h)) / (2 * k * h)  # noqa: E731
     return (4 * d(0.5) - d(1.0)) / 3
 
@@ -173,7 +179,9 @@ def test_hmmwv_gains_match_central_differences() -> None:
                                              free=["q"], tol=1e-13).after  # fmt: skip
         s = suspension_metrics(m, "upright")
         kin = kp.compile(m).kinematics(m.design, m.coordinates)
-        ends = [kin.r[b] + kin.A[b] @ np.array(p) for b, p in ((spring.body_i, spring.s_i), (spring.body_j, spring.s_j))]
+        ends = [
+            kin.r[b] + kin.A[b] @ np.array(p) for b, p in ((spring.body_i, spring.s_i), (spring.body_j, spring.s_j))
+        ]
         cx = OutputContext.of(m)
         centre = cx.body_point("upright", "wheel_centre")
         E = contact_point(centre, cx.body_point("upright", "spin_axis") - centre, 470.0)
@@ -205,3 +213,16 @@ def test_units_and_names() -> None:
     assert unit_of(base, "roll_centre_height") == "mm"
     with pytest.raises(kp.AddressError, match="unknown element 'nope'"):
         evaluate_outputs(base, ["motion_ratio:nope"])
+
+
+def test_results_do_not_depend_on_the_file_units() -> None:
+    """The same suspension written in m and rad: every first-order metric converts exactly."""
+    names = ["camber_gain", "bump_steer", "caster_gain", "fvic_y", "fvic_z", "fvsa_length", "roll_centre_height",
+             "anti_dive", "half_track_gain", "half_track_change", "motion_ratio:spring", "wheel_rate"]  # fmt: skip
+    mm = evaluate_outputs(_model(-5.0), names)
+    m = evaluate_outputs(_model(-5.0, metres=True), names)
+    per_mm_to_per_m = {"camber_gain": math.pi / 180 * 1e3, "bump_steer": math.pi / 180 * 1e3,
+                       "caster_gain": math.pi / 180 * 1e3, "fvic_y": 1e-3, "fvic_z": 1e-3, "fvsa_length": 1e-3,
+                       "roll_centre_height": 1e-3, "half_track_change": 1e-3, "wheel_rate": 1e3}  # fmt: skip
+    for n in names:
+        assert m[n] == pytest.approx(mm[n] * per_mm_to_per_m.get(n, 1.0), rel=1e-9, abs=1e-12), n

@@ -234,3 +234,18 @@ def test_dead_centre_is_singular_not_garbage() -> None:
     # the crank drives it fine there (the slider is at rest)
     mo = motion(model, {"O2": 1.0})
     assert mo.ok and mo.rate("P.q") == pytest.approx(0.0, abs=1e-12)
+
+
+def test_velocity_ratios_of_outputs() -> None:
+    """The slider-crank's d(slider)/d(crank) by the closed form, and a distance's rate."""
+    a, b, c = 0.10, 0.35, 0.05
+    model = _at(kp.load_model(EXAMPLES / "slider_crank_offset.yaml"), {"O2.q": [75.0]})
+    mo = motion(model, {"O2": 1.0})
+    t2 = 75.0 * D
+    t3 = math.asin((c - a * math.sin(t2)) / b)
+    w3 = -a * math.cos(t2) / (b * math.cos(t3))
+    xdot = (-a * math.sin(t2) - b * w3 * math.sin(t3)) * D  # per degree of crank
+    assert mo.ratio("P.q", "O2") == pytest.approx(xdot, rel=1e-10)
+    assert mo.ratio("hardpoint:B.j[x]", "O2.q") == pytest.approx(xdot, rel=1e-10)
+    # the distance from the crank pin to the slider: d/dt |B - A| = 0 (the rod is rigid)
+    assert mo.output_rate("distance:hardpoint:A.i,hardpoint:B.j") == pytest.approx(0.0, abs=1e-12)

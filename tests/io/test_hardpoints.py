@@ -405,7 +405,7 @@ def test_double_wishbone_from_published_hardpoints():
     example (whose s' and C were derived by hand, printed to ~10 digits)."""
     frames = load_model(EXAMPLES / "double_wishbone.yaml")
     hard = load_model(EXAMPLES / "double_wishbone_hardpoints.yaml")
-    assert hard.units == {"length": "mm", "angle": "deg", "axes": "ISO8855"}
+    assert hard.units == {"length": "mm", "angle": "deg", "axes": "ISO8855", "force": "N"}
     assert max(joint_mismatch(hard).values()) < 1e-9
     assert hardpoint_difference(frames, hard) < 1e-6
     jounce = {"LCA.q": [np.radians(5.0)]}

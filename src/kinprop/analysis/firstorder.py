@@ -29,8 +29,8 @@ import numpy as np
 
 from kinprop.analysis.context import OutputContext
 from kinprop.analysis.motion import point_of
-from kinprop.engine import Engine
-from kinprop.engine.motion import MotionState
+from kinprop.engine import Engine, State
+from kinprop.engine.motion import MotionState, cross3
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.spatial import EZ, Array
@@ -58,9 +58,12 @@ class WheelMotion:
     travel_rate: float
 
 
-def travel_motion(engine: Engine, model: Model, travel_input: str | None = None) -> MotionState:
-    """The velocity state of the bump motion (module docstring) at the model's state."""
-    st = engine.state_of(model)
+def travel_motion(
+    engine: Engine, model: Model, travel_input: str | None = None, state: State | None = None
+) -> MotionState:
+    """The velocity state of the bump motion (module docstring) at the model's state (``state``:
+    already packed)."""
+    st = state if state is not None else engine.state_of(model)
     inputs = [a if "." in a else f"{a}.q" for a in model.mechanism.inputs]
     if travel_input is not None:
         drive = travel_input if "." in travel_input else f"{travel_input}.q"
@@ -86,10 +89,14 @@ def travel_motion(engine: Engine, model: Model, travel_input: str | None = None)
     return engine.motion(st, rates)
 
 
+def _norm(v: Array) -> float:
+    return math.sqrt(float(v[0]) ** 2 + float(v[1]) ** 2 + float(v[2]) ** 2)
+
+
 def _contact(centre: Array, axis: Array, radius: float, v_centre: Array, da: Array) -> tuple[Array, Array]:
     """The contact point (lowest point of the wheel circle) and its rate."""
     g = -EZ + axis[2] * axis
-    ng = float(np.linalg.norm(g))
+    ng = _norm(g)
     n = g / ng
     dg = da[2] * axis + axis[2] * da
     dn = (dg - n * float(n @ dg)) / ng
@@ -100,7 +107,7 @@ def _homogeneous(p: Array | None, u: Array, v: Array, normal: Array, E: Array) -
     """``(H, s)`` of the axis' intersection with the plane through E (module docstring); a
     pure translation (``p`` None) of velocity ``v``: the centre at infinity across ``v``."""
     if p is None:
-        return np.cross(normal, v), 0.0
+        return cross3(normal, v), 0.0
     s = float(normal @ u)
     return s * p + float(normal @ (E - p)) * u, s
 
@@ -110,7 +117,8 @@ def _centre(H: Array, s: float, E: Array, plane: tuple[int, int]) -> tuple[float
     if abs(s) < PARALLEL_TOL:
         return math.nan, math.nan, math.inf
     X = H / s
-    return float(X[plane[0]]), float(X[plane[1]]), float(np.linalg.norm((X - E)[list(plane)]))
+    d = X - E
+    return float(X[plane[0]]), float(X[plane[1]]), math.hypot(float(d[plane[0]]), float(d[plane[1]]))
 
 
 def _slope(w: Array, forward: float) -> float:
@@ -136,7 +144,7 @@ def first_order_metrics(
     ``spin``, optionally ``upper``/``lower`` (the steering axis) as ``(body, position)``;
     ``metrics``: the position-level ones (for the steering axis' side and existence)."""
     model = ctx.model
-    ms = travel_motion(engine, model, travel_input)
+    ms = travel_motion(engine, model, travel_input, ctx.state if ctx.engine is engine else None)
     out: dict[str, float] = {}
     names = first_order_names(model, radius is not None, "upper" in points, reference_contact is not None)
     if not ms.ok:
@@ -145,12 +153,12 @@ def first_order_metrics(
     w = ms.V[b, 3:]
     centre = points["centre"][1]
     axis = points["spin"][1] - centre
-    axis = axis / np.linalg.norm(axis)
+    axis = axis / _norm(axis)
     side = 1 if axis[1] >= 0 else -1
     vc = ms.point_velocity(b, centre)
     dz = float(vc[2])
     per = (lambda x: x / dz) if dz != 0.0 else (lambda x: math.nan)
-    da = np.cross(w, axis)
+    da = cross3(w, axis)
     out["camber_gain"] = per(math.degrees(-da[2] / math.sqrt(max(1e-300, 1.0 - axis[2] ** 2))))
     ay = abs(axis[1])
     out["bump_steer"] = per(math.degrees((ay * da[0] - axis[0] * side * da[1]) / (axis[0] ** 2 + axis[1] ** 2)))
@@ -164,7 +172,7 @@ def first_order_metrics(
         pi = ms.r[bi] + ms.A[bi] @ np.asarray(e.s_i, dtype=float)
         pj = ms.r[bj] + ms.A[bj] @ np.asarray(e.s_j, dtype=float)
         d = pj - pi
-        dl = float(d @ (ms.point_velocity(bj, pj) - ms.point_velocity(bi, pi))) / float(np.linalg.norm(d))
+        dl = float(d @ (ms.point_velocity(bj, pj) - ms.point_velocity(bi, pi))) / _norm(d)
         out[f"{MOTION_RATIO}:{e.name}"] = abs(per(dl))
     springs = [e for e in model.elements if e.has_spring]
     if springs:
@@ -179,13 +187,13 @@ def first_order_metrics(
     out["contact_patch_dx_gain"] = per(float(vE[0]))
     # screw axis of the wheel relative to the fixed body (the fixed body's twist is zero)
     V = ms.V[b]
-    nw, nv = float(np.linalg.norm(w)), float(np.linalg.norm(vc))
-    scale = max(1.0, float(np.linalg.norm(centre)))
+    nw, nv = _norm(w), _norm(vc)
+    scale = max(1.0, _norm(centre))
     if nw * scale <= TRANSLATION_RTOL * nv or nw == 0.0:
         p, u = None, np.zeros(3)
     else:
         u = w / nw
-        p = np.cross(w, V[:3]) / nw**2
+        p = cross3(w, V[:3]) / nw**2
     ex, ey = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
     Hf, sf = _homogeneous(p, u, vE, ex, E)  # front view: the plane x = x_E
     out["fvic_y"], out["fvic_z"], out["fvsa_length"] = _centre(Hf, sf, E, (1, 2))

@@ -41,11 +41,10 @@ steering axis can also be given per call as two point specs (``hardpoint:JOINT.i
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from kinprop.analysis.context import OutputContext
+from kinprop.analysis.context import OutputContext, WheelSpec
 from kinprop.analysis.firstorder import (
     FIRST_ORDER,
     GAIN_METRICS,
@@ -67,16 +66,6 @@ METRICS = ANGLE_METRICS + LENGTH_METRICS + FIRST_ORDER
 POSITION_METRICS = ANGLE_METRICS + LENGTH_METRICS
 #: accepted long names
 METRIC_ALIASES = {"kingpin_inclination": "kpi", "scrub": "scrub_radius", "wheel_travel": "wheel_centre_dz"}
-
-
-@dataclass(frozen=True)
-class WheelSpec:
-    """Per-call metric parameters of one wheel: the steering axis as two point specs
-    (``hardpoint:JOINT.i|j`` or ``point:BODY.NAME``), upper first."""
-
-    steering_axis: tuple[str, str] | None = None
-    #: the coordinate driven in bump for the first-order metrics (default: the first declared input)
-    travel_input: str | None = None
 
 
 # --- closed-form geometry (vectors in vehicle axes) -----------------------------------------
@@ -159,9 +148,12 @@ def available_metrics(
     return out
 
 
-def metric_names(model: Model) -> list[str]:
-    """``metric:WHEEL.NAME`` for every wheel body and every metric it supports."""
-    return [f"metric:{w}.{m}" for w in wheel_bodies(model) for m in available_metrics(model, w)]
+def metric_names(model: Model, first_order: bool = False) -> list[str]:
+    """``metric:WHEEL.NAME`` for every wheel body and every position-level metric it supports
+    (the default outputs of sweeps and studies); ``first_order``: the first-order ones too
+    (a velocity analysis per state: asked for by name)."""
+    return [f"metric:{w}.{m}" for w in wheel_bodies(model) for m in available_metrics(model, w)
+            if first_order or not is_first_order(m)]  # fmt: skip
 
 
 def resolve_metric(model: Model, name: str) -> tuple[str, str]:

@@ -33,6 +33,7 @@ from kinprop.model import Model
 from kinprop.propagation.units import from_solver_units, to_solver_units
 from kinprop.spatial import Array
 
+AXES = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
 #: a relative angular velocity below this fraction of |v| / L is a pure translation
 TRANSLATION_RTOL = 1e-12
 
@@ -124,6 +125,34 @@ class Motion:
     def rate(self, address: str) -> Array | float:
         """Rate of a coordinate address (``J.q``, ``J.q[k]``), model units per time."""
         return self._by_address(address, self.state.qdot)
+
+    def output_rate(self, name: str) -> float:
+        """Rate of a scalar output: a coordinate (``J.q``, ``J.q[k]``), a point component
+        (``point:B.N[z]``, ``hardpoint:J.i[x]``) or a distance (``distance:A,B``), model units
+        per time. With one driven coordinate at unit rate this is the exact velocity ratio
+        d(output)/d(input)."""
+        m = POINT.match(name) or HARD.match(name)
+        if m and m.group("c") is not None:
+            spec = name[: name.index("[")]
+            return float(self.point_velocity(spec)[AXES[m.group("c")]])
+        if name.startswith("distance:"):
+            a, b = (x if x.startswith(("point:", "hardpoint:")) else f"point:{x}" for x in name[9:].split(","))
+            ctx = self._ctx()
+            (ba, xa), (bb, xb) = point_of(ctx, self.engine, a), point_of(ctx, self.engine, b)
+            d = xb - xa
+            return float(d @ (self.state.point_velocity(bb, xb) - self.state.point_velocity(ba, xa))) / float(
+                np.linalg.norm(d)
+            )
+        value = self.rate(name)
+        if not isinstance(value, float):
+            raise AddressError(f"{name!r} has {np.size(value)} components: name one ({name}[k])")
+        return value
+
+    def ratio(self, output: str, driven: str) -> float:
+        """Exact velocity ratio ``d(output)/d(driven)`` along this motion: the output's rate over
+        the driven coordinate's (model units)."""
+        d = self.rate(driven if "." in driven else f"{driven}.q")
+        return self.output_rate(output) / float(d)  # type: ignore[arg-type]
 
     def acceleration(self, address: str) -> Array | float:
         if self.state.qddot is None:

@@ -232,7 +232,7 @@ def output_names(model: Model) -> list[str]:
     for j in mech.joints:
         for side in "ij":
             names += _vector_name(f"hardpoint:{j.name}.{side}", 3, True)
-    names += metric_names(model)
+    names += metric_names(model, first_order=True)
     return names
 
 

@@ -499,7 +499,7 @@ class Engine:
         (nj, 2, 3), ``R`` (nj, 2, 3, 3) (global origins and axes of frames i and j) of a single state."""
         ws, state = kernels.workspace(self.tables), state.writable()
         kernels.forward_kinematics(self.tables, state.Q, state.S, state.C, ws)
-        return ws[0], ws[1], ws[2], ws[3]
+        return ws[kernels.W_BODY_R], ws[kernels.W_BODY_A], ws[kernels.W_FRAME_P], ws[kernels.W_FRAME_R]
 
     def kinematics(self, design: Design | State, coordinates: Mapping[str, Array] | None = None) -> Kinematics:
         """Body poses and joint frames by name, of a state or of ``(design, coordinates)``."""

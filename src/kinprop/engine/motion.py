@@ -34,7 +34,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -66,8 +66,9 @@ from kinprop.kinematics.tables import (
 )
 from kinprop.spatial import Array
 
-if TYPE_CHECKING:
-    from kinprop.engine.engine import Engine, State
+#: :class:`kinprop.engine.engine.Engine` and its ``State`` (which import this module: not imported here)
+Engine = Any
+State = Any
 
 #: relative singular value below which the velocity system counts as singular
 SINGULAR_RTOL = 1e-10
@@ -99,19 +100,26 @@ class MotionState:
     def point_velocity(self, body: int, point: Array) -> Array:
         """Velocity of the body point now at global ``point``: ``v_O + omega x P``."""
         v, w = self.V[body, :3], self.V[body, 3:]
-        return v + np.cross(w, point)
+        return v + cross3(w, point)
 
     def point_acceleration(self, body: int, point: Array) -> Array:
         """``dv_O + alpha x P + omega x (v_O + omega x P)`` of the body point now at ``point``."""
         if self.dV is None:
             raise ValueError("no accelerations: give the driven accelerations")
         w = self.V[body, 3:]
-        return self.dV[body, :3] + np.cross(self.dV[body, 3:], point) + np.cross(w, self.point_velocity(body, point))
+        return self.dV[body, :3] + cross3(self.dV[body, 3:], point) + cross3(w, self.point_velocity(body, point))
+
+
+def cross3(a: Array, b: Array) -> Array:
+    """``a x b`` of two 3-vectors (numpy's ``cross`` costs ten times more on single vectors)."""
+    a0, a1, a2 = float(a[0]), float(a[1]), float(a[2])
+    b0, b1, b2 = float(b[0]), float(b[1]), float(b[2])
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def spatial_cross(V1: Array, V2: Array) -> Array:
     """``V1 x V2`` of twists ``[v ; w]``: ``[w1 x v2 + v1 x w2 ; w1 x w2]``."""
-    return np.concatenate([np.cross(V1[3:], V2[:3]) + np.cross(V1[:3], V2[3:]), np.cross(V1[3:], V2[3:])])
+    return np.concatenate([cross3(V1[3:], V2[:3]) + cross3(V1[:3], V2[3:]), cross3(V1[3:], V2[3:])])
 
 
 def _local_bias(code: int, q: Array, qd: Array, d: Array, dd_qd: Array, w: Array, A: Array) -> tuple[Array, Array]:
@@ -121,7 +129,7 @@ def _local_bias(code: int, q: Array, qd: Array, d: Array, dd_qd: Array, w: Array
     if code == universal.CODE:  # H[:, 1] = Rz(q0) e_y
         return zero, qd[0] * qd[1] * np.array([-np.cos(q[0]), -np.sin(q[0]), 0.0])
     if code == composite.ST_CODE:  # dd qdot = w x d + A e_z tdot, H constant in p-dot
-        return np.cross(w, dd_qd) + qd[4] * np.cross(w, A[:, 2]), zero
+        return cross3(w, dd_qd) + qd[4] * cross3(w, A[:, 2]), zero
     if code == composite.FREE_CODE:  # H = 2E(p)/(p.p): E(pdot) pdot = 0
         p, pd = q[3:7], qd[3:7]
         return zero, -2.0 * float(p @ pd) / float(p @ p) * w
@@ -135,15 +143,18 @@ class _Frames:
         st = state.writable()
         tb = engine.tables
         ws = kernels.workspace(tb)
+        nq = engine.n_coordinates
         Phi, vals = np.zeros(engine.n_rows), np.zeros(engine.nnz)
-        need = np.ones(engine.n_columns, np.int8)
+        need = np.zeros(engine.n_columns, np.int8)
+        need[:nq] = 1  # the coordinate columns only (layout: q first)
         dummy = np.zeros(0, np.int64)
         kernels.evaluate(tb, st.Q, st.S, st.C, st.L, ws, Phi, vals, need, dummy, dummy)
-        J = np.zeros((engine.n_rows, engine.n_columns))
         rows, cols = engine.pattern
-        np.add.at(J, (rows, cols), vals)
-        self.Phi_q = J[:, : engine.n_coordinates]
-        self.r, self.A, self.P, self.R, self.Tq = (np.array(ws[k]) for k in range(5))
+        q = cols < nq
+        self.Phi_q = np.zeros((engine.n_rows, nq))
+        np.add.at(self.Phi_q, (rows[q], cols[q]), vals[q])
+        slots = (kernels.W_BODY_R, kernels.W_BODY_A, kernels.W_FRAME_P, kernels.W_FRAME_R, kernels.W_TWIST_Q)
+        self.r, self.A, self.P, self.R, self.Tq = (np.array(ws[k]) for k in slots)
         self.state = st
 
 
@@ -233,10 +244,10 @@ def _tree_bias(engine: Engine, fr: _Frames, qdot: Array, V: Array) -> Array:
         joint_motion(code, q, App, dpp, dd[:, :nq], H[:, :nq])
         w, dd_qd = H[:, :nq] @ qd, dd[:, :nq] @ qd
         dD, dH = _local_bias(code, q, qd, dpp, dd_qd, w, App)
-        dt_loc_v = dD + np.cross(dd_qd, w) + np.cross(dpp, dH)
+        dt_loc_v = dD + cross3(dd_qd, w) + cross3(dpp, dH)
         sign = -1.0 if tb.tree[t, T_REVERSED] else 1.0
         R0, P0 = fr.R[j, 0], fr.P[j, 0]
-        X = np.concatenate([R0 @ dt_loc_v + np.cross(P0, R0 @ dH), R0 @ dH])
+        X = np.concatenate([R0 @ dt_loc_v + cross3(P0, R0 @ dH), R0 @ dH])
         dV[chi] += spatial_cross(V[par], fr.Tq[t, :, :nq] @ qd) + sign * X
     return dV
 
@@ -247,12 +258,12 @@ def _gamma(engine: Engine, fr: _Frames, qdot: Array, V: Array, dV: Array) -> Arr
     g = np.zeros(engine.n_rows)
 
     def kin(b: int, x: Array) -> tuple[Array, Array]:  # velocity and bias acceleration of a point
-        v = V[b, :3] + np.cross(V[b, 3:], x)
-        return v, dV[b, :3] + np.cross(dV[b, 3:], x) + np.cross(V[b, 3:], v)
+        v = V[b, :3] + cross3(V[b, 3:], x)
+        return v, dV[b, :3] + cross3(dV[b, 3:], x) + cross3(V[b, 3:], v)
 
     def axis(b: int, a: Array) -> tuple[Array, Array]:  # rate and bias acceleration of a body axis
-        da = np.cross(V[b, 3:], a)
-        return da, np.cross(dV[b, 3:], a) + np.cross(V[b, 3:], da)
+        da = cross3(V[b, 3:], a)
+        return da, cross3(dV[b, 3:], a) + cross3(V[b, 3:], da)
 
     for c in range(tb.cut.shape[0]):
         j, row = tb.cut[c, K_JOINT], tb.cut[c, K_ROW0]
@@ -337,4 +348,4 @@ def motion_state(
     return MotionState(SINGULAR if msg else OK, msg or "ok", qdot, V, fr.r, fr.A, fr.P, fr.R, qddot, dV, cond)
 
 
-__all__ = ["MotionState", "motion_state", "spatial_cross"]
+__all__ = ["MotionState", "cross3", "motion_state", "spatial_cross"]

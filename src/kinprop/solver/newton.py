@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from kinprop.jit import GELSD, JIT, LAPACK_INT, inlined, kernel, njit, prange
-from kinprop.kinematics.kernels import evaluate, evaluate_inlined, retract, workspace
+from kinprop.kinematics.kernels import VEC_CALLER, W_MAT, W_VEC, evaluate, evaluate_inlined, retract, workspace
 from kinprop.kinematics.tables import V_COMPONENT, V_JOINT, V_KIND, V_SIDE, VAR_C, VAR_Q, VAR_S
 from kinprop.spatial import exp_so3_into, mm_into, mmT_into
 
@@ -479,7 +479,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
     # (given by a batch whose variants share an assembled start)
     sign_ref = start_sign if start_sign != UNKNOWN_SIGN and its0 == 0 else _sign_at(tb, plan, Q, S, C, L, buf)
     sign_start = sign_ref
-    T = ws[6][0]
+    T = ws[W_MAT][0]
     for j in range(nj):
         for side in range(2):
             turn[j, side] = False
@@ -492,7 +492,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
             if turn[j, side]:
                 mmT_into(C1[j, side], C0[j, side], T)
                 log_so3_into(T, W[j, side])
-    w, E = ws[7][5], ws[6][1]
+    w, E = ws[W_VEC][VEC_CALLER], ws[W_MAT][1]  # predictor scratch (evaluate overwrites E)
     t, h = 0.0, 1.0
     subs, its, last, hlen = 0, its0, CONVERGED, its0 + 1
     status, norm = CONVERGED, 0.0
