@@ -20,11 +20,11 @@ from kinprop.cli.app import (
     handles_user_errors,
     load_model_cli,
     out,
-    parse_assignment,
     print_json,
 )
 from kinprop.cli.checks import check_outputs, check_suffix
 from kinprop.errors import AddressError
+from kinprop.io.arguments import parse_assignment
 from kinprop.io.writer import atomic_write, csv_text
 from kinprop.model import Model
 from kinprop.model.loads import LoadCase, PointLoad
