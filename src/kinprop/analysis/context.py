@@ -37,7 +37,8 @@ class OutputContext:
     kin: Kinematics
     reference: Model | None = None
     wheels: Mapping[str, WheelSpec] | None = None
-    #: the engine the kinematics came from and its packed state (velocity analysis of first-order metrics)
+    #: the engine the kinematics came from and its packed state (reused for the reference
+    #: configuration and the velocity analysis of first-order metrics)
     engine: Engine | None = None
     state: State | None = None
 
@@ -49,8 +50,9 @@ class OutputContext:
         wheels: Mapping[str, WheelSpec] | None = None,
         engine: Engine | None = None,
     ) -> OutputContext:
-        """Forward kinematics of ``model`` at its current state."""
-        eng = engine or compile_engine(model.mechanism)
+        """Forward kinematics of ``model`` at its current state (``engine``: compiled from its
+        mechanism; None only at a public boundary, which then compiles once)."""
+        eng = engine if engine is not None else compile_engine(model.mechanism)
         st = eng.state_of(model)
         return cls(model, eng.kinematics(st), reference, wheels, eng, st)
 

@@ -268,7 +268,7 @@ def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None)
             out["scrub_radius"], out["trail"] = ground_offsets(upper, lower, contact, axis)
     ref = None
     if ctx.reference is not None:
-        ref = OutputContext.of(ctx.reference).body_point(wheel, "wheel_centre")
+        ref = OutputContext.of(ctx.reference, engine=ctx.engine).body_point(wheel, "wheel_centre")
     else:
         found_ref = _find_point(model, wheel, "wheel_centre_ref", on_wheel=False)
         if found_ref is not None:

@@ -1,8 +1,10 @@
 """Continuation and singularity warnings for ``kinprop propagate`` / ``assemble``.
 
-``--continuation`` runs :func:`kinprop.propagation.continuation.propagate_continuation`;
-without the flag a plain Newton propagation runs first and continuation is the fallback when
-it fails (``--no-continuation`` turns the fallback off). A change that cannot be assembled
+Every propagation is one engine solve that follows the change on the start's branch
+(:meth:`kinprop.Engine.propagate`). When it fails, the solution is diagnosed
+(:func:`kinprop.propagation.continuation.diagnose`: fraction reached, constraints in
+conflict; ``--no-continuation`` turns the diagnosis off); ``--continuation`` reports the
+sub-steps of a successful one too. A change that cannot be assembled
 prints the largest feasible fraction and the constraints in conflict and exits 1; no model
 is written for it.
 """
@@ -50,15 +52,14 @@ def shown_warnings() -> Iterator[None]:
 
 def print_continuation(res: ContinuationResult) -> None:
     """One summary line, and on failure the diagnosis: fraction and conflicting rows."""
-    n_ok = sum(s.accepted for s in res.steps)
     if res.converged:
-        out.print(f"continuation: {n_ok} sub-steps ({len(res.steps)} attempts)")
+        out.print(f"continuation: {res.substeps} sub-steps")
         return
     out.print(f"continuation: the change cannot be assembled beyond {res.fraction:.6g} of its size", style="red")
     for r, w in res.conflict:
         out.print(f"  in conflict: {r}  (weight {w:+.3f} in the left singular vector of the smallest singular value)")
     for r, v in res.residual_rows:
-        out.print(f"  residual at the failed attempt: {r} = {v:.3g}")
+        out.print(f"  residual of the full change at the last feasible state: {r} = {v:.3g}")
     out.print(f"  smallest/largest singular value at the last feasible state: {res.singularity_ratio:.3g}")
 
 
@@ -81,7 +82,7 @@ def run_propagation(
 
     def say_fallback(plain: Propagation) -> None:
         if not as_json:
-            err.print(f"{plain.result.message}; diagnosing by continuation")
+            err.print(f"{plain.result.message}; diagnosing")
 
     with shown_warnings():
         prop, res, newton_ran = solve_propagation(

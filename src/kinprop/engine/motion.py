@@ -66,7 +66,8 @@ from kinprop.kinematics.tables import (
 )
 from kinprop.spatial import Array
 
-#: :class:`kinprop.engine.engine.Engine` and its ``State`` (which import this module: not imported here)
+#: ``kinprop.engine.Engine`` and its ``State``: engine.py calls into this module (``Engine.motion``),
+#: so this module names them without importing them (no import cycle, also for type checkers)
 Engine = Any
 State = Any
 

@@ -22,9 +22,10 @@ from kinprop.io.results import comparison_rows, coordinates_json, design_json, p
 from kinprop.io.units import changes_to_internal, derivative_scale, unit_of
 from kinprop.io.writer import csv_text
 from kinprop.model import Model
-from kinprop.propagation import Propagation, propagate
-from kinprop.propagation.continuation import ContinuationResult, propagate_continuation
+from kinprop.propagation import Propagation
+from kinprop.propagation.continuation import ContinuationResult, continuation_of
 from kinprop.propagation.hardpoints import free_weights, global_columns, is_global
+from kinprop.propagation.propagate import propagation_of, solve_changes
 from kinprop.solver import SolveResult
 
 # --- kinprop check ---------------------------------------------------------------------------
@@ -123,51 +124,45 @@ def solve_propagation(
     continuation: bool | None,
     on_fallback: Callable[[Propagation], None] | None = None,
 ) -> tuple[Propagation, ContinuationResult | None, bool]:
-    """Plain Newton, continuation, or Newton with continuation as the fallback (``None``).
+    """One engine solve of the change, on the start's branch; its diagnosis when it failed
+    (``continuation`` None or True) or always (True). No second solve: the diagnosis is a
+    function of the solution (:func:`kinprop.propagation.continuation.diagnose`).
 
-    Returns ``(prop, res, newton_ran)``: the propagation to report, the continuation result
-    when continuation ran (else None) and whether plain Newton ran first. When ``res`` did
-    not converge, ``prop`` is the failed plain Newton propagation (or continuation's own).
-    ``on_fallback(plain)`` is called when plain Newton failed and continuation starts.
+    Returns ``(prop, res, newton_ran)``: the propagation to report (a failed one is the
+    solver's record), the continuation view when asked for (else None) and True.
+    ``on_fallback(prop)`` is called when the solve failed and the diagnosis follows.
     """
-    plain: Propagation | None = None
-    if continuation is not True:
-        plain = propagate(model, changes, free, tol=tol, max_iter=max_iter, weights=weights, units="solver")
-        if plain.converged or continuation is False or not changes:
-            return plain, None, True
-        if on_fallback is not None:
-            on_fallback(plain)
-    res = propagate_continuation(
-        model, changes, free, tol=tol, max_iter=min(max_iter, 20), weights=weights, units="solver"
-    )
-    if res.converged:
-        return res.propagation, res, plain is not None
-    return (plain if plain is not None else res.propagation), res, plain is not None
+    engine = compile_engine(model)
+    sol = solve_changes(engine, model, changes, free, tol=tol, max_iter=max_iter, weights=weights, units="solver")
+    prop = propagation_of(engine, model, sol, free)
+    if continuation is False or (continuation is None and (sol.converged or not changes)):
+        return prop, None, True
+    if not sol.converged and on_fallback is not None:
+        on_fallback(prop)
+    res = continuation_of(model, sol, free)
+    return (res.propagation if res.converged else prop), res, True
 
 
 def continuation_json(res: ContinuationResult) -> dict[str, Any]:
     return {
-        "status": res.status,
+        "status": res.status.value,
         "fraction": res.fraction,
         "message": res.message,
         "conflict": [{"row": r, "weight": w} for r, w in res.conflict],
         "residual_rows": [{"row": r, "value": v} for r, v in res.residual_rows],
         "singularity_ratio": res.singularity_ratio,
-        "sub_steps": [s.__dict__ for s in res.steps],
+        "sub_steps": res.substeps,
         "last_feasible": {"coordinates": coordinates_json(res.after), "design": design_json(res.after)},
     }
 
 
 def propagate_json(prop: Propagation, res: ContinuationResult | None = None, newton_ran: bool = True) -> dict[str, Any]:
     """What ``kinprop propagate --json`` prints for :func:`solve_propagation`'s result: the
-    propagation's JSON, and when continuation failed too, status ``not_converged`` and a
-    ``continuation`` object."""
+    propagation's JSON (its ``status`` the solution's, :class:`kinprop.Status`), and when the
+    change failed, a ``continuation`` object with the diagnosis."""
     obj = propagation_json(prop)
     if res is None or res.converged:
         return obj
-    obj["status"] = "not_converged"
-    if not newton_ran:
-        obj["message"] = res.message
     obj["continuation"] = continuation_json(res)
     return obj
 

@@ -620,12 +620,13 @@ def follow_batch_threaded(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co,
 
 
 @njit
-def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, row_scale, col_scale, cfg, Qout, out):
+def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, row_scale, col_scale, cfg, Qout, Sout, Cout, Lout,
+                    out):  # fmt: skip
     """Drive the q columns ``set_cols`` through the rows of ``values``, following each step
     from the last good one (a failed step leaves the state at the last good step: the next
-    step restarts from there, on the same branch). ``Qout[s]`` holds the coordinates after
-    step ``s`` (NaN when it failed); ``out[s]`` = (status, iterations, fraction, sub-steps,
-    residual, flags)."""
+    step restarts from there, on the same branch). ``Qout[s]``, ``Sout[s]``, ``Cout[s]``,
+    ``Lout[s]`` hold the state after step ``s`` (NaN when it failed: free design variables
+    move too); ``out[s]`` = (status, iterations, fraction, sub-steps, residual, flags)."""
     buf = buffers(tb, plan, nnz)
     fbuf = follow_buffers(Q, S, C, L)
     hist = np.zeros(0)
@@ -641,10 +642,10 @@ def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, row_scale, col_
         _store(out, s, r)
         if r[0] == CONVERGED:
             sign = r[8]
-            Qout[s] = Q
+            copy_state(Q, S, C, L, Qout[s], Sout[s], Cout[s], Lout[s])
             copy_state(Q, S, C, L, Qg, Sg, Cg, Lg)
         else:
-            Qout[s] = np.nan
+            Qout[s], Sout[s], Cout[s], Lout[s] = np.nan, np.nan, np.nan, np.nan
             copy_state(Qg, Sg, Cg, Lg, Q, S, C, L)
 
 
