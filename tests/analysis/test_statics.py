@@ -317,3 +317,30 @@ def test_double_wishbone_equilibrium_and_wheel_rate() -> None:
         (g1, y1), (g0, y0) = at(h / 2), at(-h / 2)
         truth = (4 * (g1 - g0) / (y1 - y0) - (f1 - f0) / (z1 - z0)) / 3
         assert wheel_rate(m) == pytest.approx(truth, rel=1e-6)
+
+
+def test_mcpherson_rods_carry_axial_forces() -> None:
+    """The McPherson strut's lower arm (revolute-spherical link) and tie rod (translational-
+    distance): each rod's tension from its distance row equals minus the reported force on
+    the wheel along the rod (the ball end transmits no moment, the link only its axial force
+    in its plane), and the wheel body balances."""
+    model = _assembled(EXAMPLES / "mcpherson.yaml")
+    F = np.array([-2000.0, 3000.0, 8000.0])
+    s = kp.statics(model, PointLoad("wheel", (0.0, 0.0, 0.0), force=tuple(F)), inputs=["TD", "ST.q[4]"])
+    assert s.ok and not s.undetermined
+    kin = kp.compile(model).kinematics(model.design, model.coordinates)
+    fr = kin.frames
+    for name in ("RS", "TD"):
+        r = s.reactions[name]
+        Pi = fr[name].P_i + (fr[name].R_i[:, 2] * model.coordinates["TD"][0] if name == "TD" else 0.0)
+        u = (r.points[1] - Pi) / np.linalg.norm(r.points[1] - Pi)
+        assert s.member_forces[name] == pytest.approx(-r.force[1] @ u, rel=1e-9, abs=1e-9 * 8000)
+        assert np.linalg.norm(r.moment[1]) < 1e-9 * 8000
+    total = np.concatenate([F, np.zeros(3)])
+    for j in model.mechanism.joints:
+        r = s.reactions[j.name]
+        total += np.concatenate([r.force[1], r.moment[1] + np.cross(r.points[1], r.force[1])])
+    # the load acts at the wheel frame's origin: its moment about the global origin
+    b = s.engine.body_index["wheel"]
+    total[3:] += np.cross(s.state.r[b], F)
+    assert np.allclose(total, 0.0, atol=1e-8 * 8000)

@@ -12,8 +12,9 @@ Sign conventions and units (force unit ``F`` = the model's ``units.force``, leng
   that body; the two sides are equal and opposite (moments too when ``P_i = P_j``). Global
   axes, and joint frame i's axes (``local``). A tree joint's reaction includes the input
   effort and coupling torques along its free directions.
-* **member force** of a distance joint (a two-force member: tie rod, push rod, link): the
-  axial force, **tension positive** (``F``).
+* **member force** of a joint with a rod (distance joint, revolute-spherical link,
+  translational-distance tie rod: tie rods, push rods, links): the rod's axial force,
+  **tension positive** (``F``), ``-2 lambda |d|`` of its distance row.
 * **element force** of a spring or damper: **positive pushing the ends apart** (compression
   of a coil spring; the ``preload`` convention), ``f = k (L0 - L)`` from ``free_length``
   ``L0``, or ``preload + k (L_model - L)`` with ``L_model`` the length in the given model; a
@@ -40,6 +41,7 @@ from kinprop.engine.motion import motion_state
 from kinprop.engine.statics import (
     PointForces,
     StaticsState,
+    distance_rows,
     element_laws,
     element_state,
     reduced_stiffness,
@@ -291,8 +293,11 @@ def statics(
         reactions[j.name] = JointReaction(j.name, (j.body_i, j.body_j), (ss.P[k, 0], ss.P[k, 1]), F, M,  # type: ignore[arg-type]
                                           ss.local[k], und)  # fmt: skip
     members = {}
+    rods = {j for j, _, _ in distance_rows(eng, ss.P, ss.R, st.Q)}
     for k, j in enumerate(mech.joints):
-        if j.jtype.name == "distance":
+        if k in rods:  # a cut joint with a rod: its distance row's multiplier
+            members[j.name] = float(ss.member[k])
+        elif j.jtype.name == "distance":  # a distance joint in the tree: the force along its line
             u = ss.P[k, 1] - ss.P[k, 0]
             members[j.name] = float(-ss.at_point[k, 1, :3] @ u / np.linalg.norm(u))
     ef = {e.name: float(ss.element_force[k]) for k, e in enumerate(model.elements)}

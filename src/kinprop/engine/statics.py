@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from kinprop.constraints.basic import ROWS, basic_rows
+from kinprop.constraints.basic import DISTANCE, ROWS, basic_rows
 from kinprop.engine.motion import _Frames, motion_state, spatial_cross
 from kinprop.joints.composite import TD_CODE
 from kinprop.kinematics.tables import (
@@ -119,6 +119,10 @@ class StaticsState:
     element_length: Array
     #: (ne, 2, 3) element end points (global)
     element_ends: Array
+    #: (nj,) axial force of the rod of every joint with a distance row (distance,
+    #: revolute-spherical, translational-distance: ``-2 lambda |d|``), tension positive; NaN
+    #: for the other joints and where undetermined
+    member: Array
     #: self-stress basis: reactions (nj, 2, 6) of each null vector, and their count
     self_stress: Array
     r: Array
@@ -154,6 +158,21 @@ def _cut_partials(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, 
     Zi = np.hstack([-Pd, np.cross(Pd, Pi) + Wi])
     Zj = np.hstack([Pd, -np.cross(Pd, fr_P[j, 1]) + Wj])
     return Zi, Zj
+
+
+def distance_rows(engine: Engine, P: Array, R: Array, Q: Array) -> list[tuple[int, int, float]]:
+    """``(joint, row, |d|)`` of every cut joint's distance row (its rod's length now)."""
+    tb = engine.tables
+    out = []
+    for c in range(tb.cut.shape[0]):
+        j, r = tb.cut[c, K_JOINT], tb.cut[c, K_ROW0]
+        Pi = P[j, 0] + (R[j, 0, :, 2] * Q[tb.joint[j, J_QCOL]] if tb.joint[j, J_CODE] == TD_CODE else 0.0)
+        for b in range(tb.cut[c, K_BASIC0], tb.cut[c, K_BASIC1]):
+            kind = tb.basic[b, B_KIND]
+            if kind == DISTANCE:
+                out.append((int(j), int(r), float(np.linalg.norm(P[j, 1] - Pi))))
+            r += ROWS[kind]
+    return out
 
 
 def subtree_sums(engine: Engine, W: Array) -> Array:
@@ -401,7 +420,7 @@ def statics_state(
             f"{float(np.linalg.norm(b)):.3g}): the mechanism can move under them (too few inputs, or a "
             "singular pose)",
             np.full(m, np.nan), tuple(driven), np.full(nd, np.nan), nan, nan, nan, np.zeros((nj, 2, 6), bool), W,
-            f, lengths, ends, np.zeros((0, nj, 2, 6)), fr.r, fr.A, fr.P, fr.R,
+            f, lengths, ends, np.full(nj, np.nan), np.zeros((0, nj, 2, 6)), fr.r, fr.A, fr.P, fr.R,
         )  # fmt: skip
     x = xs * unscale
     lam, tau = x[:m], x[m:]
@@ -411,6 +430,11 @@ def statics_state(
     Lsc = engine.length_scale or 1.0
     und, und_g = np.zeros((nj, 2, 6), bool), np.zeros((nj, 2, 6), bool)
     tau_und = np.zeros(nd, bool)
+    rods = distance_rows(engine, fr.P, fr.R, st.Q)
+    member = np.full(nj, np.nan)
+    for j, row, length in rods:
+        member[j] = -2.0 * lam[row] * length
+    member_und = np.zeros(nj, bool)
     for k, v in enumerate(null):
         loc, glob = _local(stress[k], fr.P, fr.R), _at_points(stress[k], fr.P)
         loc[..., 3:] /= Lsc
@@ -421,6 +445,8 @@ def statics_state(
             continue
         und |= np.abs(loc) > UNDETERMINED_RTOL * size
         und_g |= np.abs(glob) > UNDETERMINED_RTOL * size
+        for j, row, length in rods:
+            member_und[j] |= abs(2.0 * v[row] * unscale[row] * length) > UNDETERMINED_RTOL * size
         if nd:
             tau_und |= np.abs(t) > UNDETERMINED_RTOL * size
     wrench_out, local, at_point = wrench.copy(), _local(wrench, fr.P, fr.R), _at_points(wrench, fr.P)
@@ -428,11 +454,13 @@ def statics_state(
     at_point[und_g] = np.nan
     wrench_out[und.any(axis=2)] = np.nan  # a side with an undetermined component: no global wrench
     tau = np.where(tau_und, np.nan, tau)
+    member[member_und] = np.nan
     msg = "ok" if not null.shape[0] else (
         f"ok: {null.shape[0]} self-stress state(s); {int(und.sum())} reaction component(s) are not determined "
         "by the loads"
     )  # fmt: skip
-    return StaticsState(OK, msg, lam, tuple(driven), tau, wrench_out, local, at_point, und, W, f, lengths, ends, stress,
+    return StaticsState(OK, msg, lam, tuple(driven), tau, wrench_out, local, at_point, und, W, f, lengths, ends, member,
+                        stress,
                         fr.r, fr.A, fr.P, fr.R)  # fmt: skip
 
 
@@ -440,6 +468,7 @@ __all__ = [
     "ElementLaw",
     "PointForces",
     "StaticsState",
+    "distance_rows",
     "element_laws",
     "element_state",
     "generalized_forces",
