@@ -344,3 +344,23 @@ def test_mcpherson_rods_carry_axial_forces() -> None:
     b = s.engine.body_index["wheel"]
     total[3:] += np.cross(s.state.r[b], F)
     assert np.allclose(total, 0.0, atol=1e-8 * 8000)
+
+
+def test_wheel_forces_in_an_sae_model(tmp_path: Path) -> None:
+    """The double wishbone turned upside down about x (SAE J670 axes: y right, z down) under
+    the same ISO 8855 wheel force: the same input effort and member forces, every reaction
+    the ISO one turned by Rx(180 deg)."""
+    data = yaml.safe_load((EXAMPLES / "double_wishbone.yaml").read_text())
+    data["units"]["axes"] = "SAE"
+    data["bodies"]["chassis"]["orientation"] = [[1, 0, 0], [0, -1, 0], [0, 0, -1]]
+    data.pop("loads")
+    sae = _assembled(data, tmp_path)
+    iso = _assembled(EXAMPLES / "double_wishbone.yaml")
+    case = LoadCase("c", wheels={"upright": (-4000.0, 2500.0, 9000.0)})
+    a, b = kp.statics(iso, case), kp.statics(sae, case)
+    flip = np.array([1.0, -1.0, -1.0])
+    assert b.efforts["LCA.q"] == pytest.approx(a.efforts["LCA.q"], rel=1e-9)
+    assert b.member_forces["TR"] == pytest.approx(a.member_forces["TR"], rel=1e-9)
+    for j in a.reactions:
+        assert np.allclose(b.reactions[j].force[1], flip * a.reactions[j].force[1], rtol=1e-9, atol=1e-6)
+        assert np.allclose(b.reactions[j].moment[1], flip * a.reactions[j].moment[1], rtol=1e-9, atol=1e-3)

@@ -231,7 +231,11 @@ def applied_points(model: Model, engine: Engine, r: Array, A: Array, case: LoadC
         centre = r[b] + A[b] @ _point(model, wheel, "wheel_centre")
         axis = r[b] + A[b] @ _point(model, wheel, "spin_axis") - centre
         F = np.asarray(force, float) * (np.array([1.0, -1.0, -1.0]) if sae else 1.0)
-        add(wheel, contact_point(centre, axis, radius), F, np.zeros(3))
+        if sae:  # down is +z: the lowest point of the wheel circle in the z-mirrored axes, mirrored back
+            flip = np.array([1.0, 1.0, -1.0])
+            add(wheel, flip * contact_point(flip * centre, flip * axis, radius), F, np.zeros(3))
+        else:
+            add(wheel, contact_point(centre, axis, radius), F, np.zeros(3))
     if case.gravity is not None:
         g = np.asarray(case.gravity, float)
         for m in model.loads.masses if model.loads is not None else ():
