@@ -236,7 +236,7 @@ def wheel_first_order(ctx: OutputContext, wheel: str, spec: WheelSpec | None = N
             if found_ref is not None:
                 ref = ctx.body_point(*found_ref)
     travel = spec.travel_input if spec is not None else None
-    return first_order_metrics(ctx, engine, wheel, {}, points, radius, ref, travel)
+    return first_order_metrics(ctx, engine, wheel, points, radius, ref, travel)
 
 
 def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:
