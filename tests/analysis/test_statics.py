@@ -364,3 +364,10 @@ def test_wheel_forces_in_an_sae_model(tmp_path: Path) -> None:
     for j in a.reactions:
         assert np.allclose(b.reactions[j].force[1], flip * a.reactions[j].force[1], rtol=1e-9, atol=1e-6)
         assert np.allclose(b.reactions[j].moment[1], flip * a.reactions[j].moment[1], rtol=1e-9, atol=1e-3)
+
+
+def test_an_unassembled_model_has_no_loads() -> None:
+    raw = kp.load_model(EXAMPLES / "slider_crank.yaml")  # estimates: J12 open by more than 1e-4
+    s = kp.statics(raw, PointLoad("slider", (0.0, 0.0, 0.0), force=(100.0, 0.0, 0.0)))
+    assert s.status == "not_assembled" and "assemble" in s.message
+    assert all(np.isnan(r.force[1]).all() for r in s.reactions.values())

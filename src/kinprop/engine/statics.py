@@ -72,7 +72,9 @@ if TYPE_CHECKING:
 RANK_RTOL = 1e-10
 #: relative size above which a self-stress state changes a component (undetermined)
 UNDETERMINED_RTOL = 1e-7
-OK, UNBALANCED = "ok", "unbalanced"
+OK, UNBALANCED, NOT_ASSEMBLED = "ok", "unbalanced", "not_assembled"
+#: scaled residual norm above which a state is not an assembly (its loads would mean nothing)
+ASSEMBLED_TOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -412,10 +414,12 @@ def statics_state(
     resid = float(np.linalg.norm(As @ xs - b))
     Zs = [_cut_partials(engine, fr.P, fr.R, st.Q, st.L, c) for c in range(tb.cut.shape[0])]
     nj = tb.joint.shape[0]
-    if resid > 1e-8 * max(float(np.linalg.norm(b)), 1e-300) and resid > 0:
+    not_assembled = fr.residual > ASSEMBLED_TOL
+    if not_assembled or (resid > 1e-8 * max(float(np.linalg.norm(b)), 1e-300) and resid > 0):
         nan = np.full((nj, 2, 6), np.nan)
         return StaticsState(
-            UNBALANCED,
+            NOT_ASSEMBLED if not_assembled else UNBALANCED,
+            f"not an assembly (||Phi|| = {fr.residual:.3g}): assemble the model first" if not_assembled else
             f"unbalanced: the constraints and the inputs do not hold the loads (residual {resid:.3g} of "
             f"{float(np.linalg.norm(b)):.3g}): the mechanism can move under them (too few inputs, or a "
             "singular pose)",
