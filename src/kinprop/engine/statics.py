@@ -43,7 +43,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from kinprop.constraints.basic import DISTANCE, ROWS, basic_rows
-from kinprop.engine.motion import _Frames, motion_state, spatial_cross
+from kinprop.engine.motion import _Frames, cross3, motion_state, spatial_cross
 from kinprop.joints.composite import TD_CODE
 from kinprop.kinematics.tables import (
     B_KIND,
@@ -212,8 +212,8 @@ def element_state(laws: Sequence[ElementLaw], r: Array, A: Array) -> tuple[Array
             if length == 0.0:
                 raise ValueError("an element with a force has zero length: its direction is undefined")
             F = f[k] * d / length  # on body j, pushing it away from i
-            W[e.body_j] += np.concatenate([F, np.cross(Pj, F)])
-            W[e.body_i] -= np.concatenate([F, np.cross(Pi, F)])
+            W[e.body_j] += np.concatenate([F, cross3(Pj, F)])
+            W[e.body_i] -= np.concatenate([F, cross3(Pi, F)])
     return f, lengths, ends, W
 
 
@@ -262,7 +262,7 @@ class PointForces:
         """(nb, 6) ``[F ; M + P x F]`` summed by body."""
         W = np.zeros((nb, 6))
         for k in range(self.body.shape[0]):
-            W[self.body[k]] += np.concatenate([self.F[k], self.M[k] + np.cross(self.P[k], self.F[k])])
+            W[self.body[k]] += np.concatenate([self.F[k], self.M[k] + cross3(self.P[k], self.F[k])])
         return W
 
 
@@ -275,13 +275,13 @@ def _wrench_rates(loads: PointForces, laws: Sequence[ElementLaw], r: Array, A: A
     dW = np.zeros((nb, 6))
 
     def vel(b: int, x: Array) -> Array:
-        return V[b, :3] + np.cross(V[b, 3:], x)
+        return V[b, :3] + cross3(V[b, 3:], x)
 
     for k in range(loads.body.shape[0]):
         b, P, F, M = loads.body[k], loads.P[k], loads.F[k], loads.M[k]
-        dF = np.cross(V[b, 3:], F) if loads.follows[k] else np.zeros(3)
-        dM = np.cross(V[b, 3:], M) if loads.follows[k] else np.zeros(3)
-        dW[b] += np.concatenate([dF, dM + np.cross(vel(b, P), F) + np.cross(P, dF)])
+        dF = cross3(V[b, 3:], F) if loads.follows[k] else np.zeros(3)
+        dM = cross3(V[b, 3:], M) if loads.follows[k] else np.zeros(3)
+        dW[b] += np.concatenate([dF, dM + cross3(vel(b, P), F) + cross3(P, dF)])
     for e in laws:
         Pi, Pj = r[e.body_i] + A[e.body_i] @ e.s_i, r[e.body_j] + A[e.body_j] @ e.s_j
         d = Pj - Pi
@@ -296,8 +296,8 @@ def _wrench_rates(loads: PointForces, laws: Sequence[ElementLaw], r: Array, A: A
         f = e.f0 + e.k * (e.L0 - length)
         dFv = -e.k * dL * u + f * du  # d(f u)/dt
         Fv = f * u
-        dW[e.body_j] += np.concatenate([dFv, np.cross(vj, Fv) + np.cross(Pj, dFv)])
-        dW[e.body_i] -= np.concatenate([dFv, np.cross(vi, Fv) + np.cross(Pi, dFv)])
+        dW[e.body_j] += np.concatenate([dFv, cross3(vj, Fv) + cross3(Pj, dFv)])
+        dW[e.body_i] -= np.concatenate([dFv, cross3(vi, Fv) + cross3(Pi, dFv)])
     return dW
 
 
