@@ -25,7 +25,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from kinprop.analysis.context import HARD, POINT, OutputContext
+from kinprop.analysis.context import HARD, POINT, OutputContext, pivot_point
 from kinprop.analysis.metrics import (
     WheelSpec,
     is_first_order,
@@ -112,6 +112,11 @@ def _check_point(model: Model, name: str, m: re.Match[str]) -> None:
         raise AddressError(
             f"output {name!r}: unknown joint {m.group('joint')!r}; joints are {', '.join(mech.joint_names)}"
         )
+    elif m.group("side") not in ("i", "j"):
+        try:
+            pivot_point(model, m.group("joint"), m.group("side"))  # a pivot of the joint
+        except AddressError as exc:
+            raise AddressError(f"bad output {name!r}: {exc.args[0]}") from None
 
 
 def _parse_variable(engine: Engine, name: str) -> Address:

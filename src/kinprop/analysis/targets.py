@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from kinprop.analysis.context import HARD, POINT
+from kinprop.analysis.context import HARD, POINT, pivot_point
 from kinprop.analysis.firstorder import GAIN_METRICS
 from kinprop.analysis.metrics import (
     ANGLE_METRICS,
@@ -273,8 +273,16 @@ def _point_spec(model: Model, engine: Engine, spec: str) -> PointSpec:
     """A ``point:BODY.NAME`` / ``hardpoint:JOINT.i|j`` spec (no component) as a :class:`PointSpec`."""
     m = POINT.match(spec)
     if m:
-        return PointSpec(m["body"], tuple(float(x) for x in dict(model.mechanism.body(m["body"]).points)[m["name"]]))
+        body = model.mechanism.body(m["body"])
+        ref = body.joint_point(m["name"])
+        if ref is not None:  # a joint's point: as the hardpoint (it follows the joint's s')
+            spec = f"hardpoint:{ref[0]}.{ref[1]}"
+        else:
+            return PointSpec(m["body"], tuple(float(x) for x in dict(body.points)[m["name"]]))
     m = HARD.match(spec)
+    if m is not None and m["side"] not in ("i", "j"):  # a pivot: a fixed body's point
+        body, name = pivot_point(model, m["joint"], m["side"])
+        return PointSpec(body, tuple(float(x) for x in dict(model.mechanism.body(body).points)[name]))
     j = model.mechanism.joint(m["joint"])  # type: ignore[index]
     side = 0 if m["side"] == "i" else 1  # type: ignore[index]
     return PointSpec(j.body_i if side == 0 else j.body_j, joint=j.name, side=side)
@@ -309,9 +317,8 @@ def _analytic_rows(model: Model, engine: Engine, names: list[str]) -> tuple[list
             rows[name] = dist
         elif name.startswith("metric:"):
             wheel, metric = resolve_metric(model, name)
-            pts = dict(model.mechanism.body(wheel).points)
-            centre = idx(PointSpec(wheel, tuple(float(x) for x in pts["wheel_centre"])))
-            spin = idx(PointSpec(wheel, tuple(float(x) for x in pts["spin_axis"])))
+            centre = idx(_point_spec(model, engine, f"point:{wheel}.wheel_centre"))
+            spin = idx(_point_spec(model, engine, f"point:{wheel}.spin_axis"))
             if metric == "camber":
 
                 def camber(P, G, cols, c=centre, s=spin):
