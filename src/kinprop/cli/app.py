@@ -77,6 +77,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "smallest change of the --free design variables meeting the targets.",
     ),
     "sweep": ("kinprop.cli.sweep", "Drive joint coordinates over a range; each step is solved from the previous one."),
+    "loads": (
+        "kinprop.cli.loads",
+        "Joint reactions, member and spring forces and input efforts at the assembled pose under a load case.",
+    ),
     "import": ("kinprop.cli.importer", "Read another tool's mechanism file and write it as a kinprop model file."),
     "serve": (
         "kinprop.cli.serve",

@@ -41,6 +41,7 @@ from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.couplings import build_couplings, couplings_to_data
 from kinprop.io.elements import build_elements, build_vehicle, elements_to_data, vehicle_to_data
 from kinprop.io.loader import build_or_report
+from kinprop.io.loads import build_loads, loads_to_data
 from kinprop.io.points import attach_references, point_order, point_references, written_points
 from kinprop.io.schema import HardpointFile, HardpointJointSpec
 from kinprop.joints import REGISTRY, joint_type
@@ -346,14 +347,17 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
     if problems:
         raise ModelError(problems)
     elements, eproblems = build_elements(spec.elements, set(pose), "hardpoints", file, lambda b: pose[b])
-    if eproblems:
-        raise ModelError(eproblems)
+    loads, lproblems = build_loads(spec.loads, {b.name: [n for n, _ in b.points] for b in final}, "hardpoints", file,
+                                   lambda b: pose[b])  # fmt: skip
+    if eproblems or lproblems:
+        raise ModelError(eproblems + lproblems)
     mech = Mechanism(tuple(final), tuple(joints), spec.name, tuple(spec.inputs), couplings, spec.edits)
     values.update(coefs)
     units = {"length": spec.units.length, "angle": spec.units.angle, "axes": spec.units.axes}
     if spec.units.force is not None:
         units["force"] = spec.units.force
-    model = Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle))
+    model = Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle),
+                  loads)  # fmt: skip
     return attach_references(model, refs, file, point_order(spec.bodies))
 
 
@@ -464,6 +468,8 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
         **({"elements": elements_to_data(model.elements, "hardpoints", lambda b: (kin.r[b], kin.A[b]))}
            if model.elements else {}),
         **({"vehicle": vehicle_to_data(model.vehicle)} if model.vehicle is not None else {}),
+        **({"loads": loads_to_data(model.loads, "hardpoints", lambda b: (kin.r[b], kin.A[b]))}
+           if model.loads is not None else {}),
     }  # fmt: skip
 
 
