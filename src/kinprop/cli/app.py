@@ -79,7 +79,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "sweep": ("kinprop.cli.sweep", "Drive joint coordinates over a range; each step is solved from the previous one."),
     "loads": (
         "kinprop.cli.loads",
-        "Joint reactions, member and spring forces and input efforts at the assembled pose under a load case.",
+        "Joint reactions, member forces (tension positive), spring and damper forces (positive pushing apart) "
+        "and the efforts that hold the inputs, at the model's assembled pose.",
     ),
     "import": ("kinprop.cli.importer", "Read another tool's mechanism file and write it as a kinprop model file."),
     "serve": (
