@@ -160,8 +160,8 @@ def _message(e: Any) -> str:
     if kind == "extra_forbidden":
         if loc and loc[-1] in ("point", "axis", "axis_i", "axis_j", "point_i", "point_j"):
             return "unknown key (hardpoint keys need 'style: hardpoints' at the top level)"
-        if loc and loc[-1] in ("s_i", "s_j", "C_i", "C_j", "q", "euler_parameters"):
-            return "unknown key (s_i, s_j, C_i, C_j and q belong in a frame-style file)"
+        if loc and loc[-1] in ("s_i", "s_j", "C_i", "C_j", "euler_parameters"):
+            return "unknown key (s_i, s_j, C_i and C_j belong in a frame-style file)"
         return "unknown key"
     if kind in ("model_type", "dict_type", "model_attributes_type"):
         return f"expected a mapping, found {type(found).__name__}"

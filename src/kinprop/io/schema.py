@@ -7,7 +7,7 @@ declared angle unit.
 
 Hardpoint style (``style: hardpoints``): global joint points and axes at a reference
 (assembled) configuration, from which :mod:`kinprop.io.hardpoints` derives body frames,
-s', C and zero coordinates. Which keys a joint takes depends on its type
+s' and C, and the coordinates there (zero unless a joint gives ``q``). Which keys a joint takes depends on its type
 (:data:`kinprop.io.hardpoints.KEYS`); the schema accepts them all and the builder checks.
 """
 
@@ -119,6 +119,14 @@ class HardpointJointSpec(Strict):
     point_i: Vec3 | None = None
     point_j: Vec3 | None = None
     length: Positive | None = None
+    #: a tree joint's coordinates at the configuration the hardpoints describe (default zero),
+    #: in the declared angle unit; the points and axes then give the joint frame on body i
+    q: list[Finite] | None = None
+
+    @field_validator("q", mode="before")
+    @classmethod
+    def _scalar_q(cls, v: object) -> object:
+        return [v] if isinstance(v, (int, float)) and not isinstance(v, bool) else v
 
 
 class HardpointFile(Strict):
