@@ -142,6 +142,19 @@ def available_metrics(
     return out
 
 
+#: what a wheel needs for each metric beyond wheel_centre and spin_axis (for messages)
+METRIC_NEEDS = {
+    "caster": "a steering axis: named points kingpin_upper and kingpin_lower (or a WheelSpec steering_axis)",
+    "kpi": "a steering axis: named points kingpin_upper and kingpin_lower (or a WheelSpec steering_axis)",
+    "scrub_radius": "a steering axis (kingpin_upper, kingpin_lower) and a contact_patch point on the wheel",
+    "trail": "a steering axis (kingpin_upper, kingpin_lower) and a contact_patch point on the wheel",
+    **dict.fromkeys(
+        ("wheel_centre_dx", "wheel_centre_dy", "wheel_centre_dz"),
+        "a reference: a fixed-body point WHEEL.wheel_centre_ref (or wheel_centre_ref with one wheel)",
+    ),
+}
+
+
 def metric_names(model: Model) -> list[str]:
     """``metric:WHEEL.NAME`` for every wheel body and every metric it supports."""
     return [f"metric:{w}.{m}" for w in wheel_bodies(model) for m in available_metrics(model, w)]
@@ -232,6 +245,7 @@ def metric_unit(metric: str, length_unit: str = "m") -> str:
 
 __all__ = [
     "METRICS",
+    "METRIC_NEEDS",
     "WheelSpec",
     "camber_toe",
     "contact_point",

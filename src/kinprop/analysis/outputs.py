@@ -26,7 +26,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 
 from kinprop.analysis.context import HARD, POINT, OutputContext
-from kinprop.analysis.metrics import WheelSpec, metric_names, resolve_metric, wheel_metrics
+from kinprop.analysis.metrics import METRIC_NEEDS, WheelSpec, metric_names, resolve_metric, wheel_metrics
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
@@ -140,8 +140,11 @@ def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, flo
             metric_cache[wheel] = wheel_metrics(ctx, wheel)
         values = metric_cache[wheel]
         if metric not in values:
-            available = ", ".join(values)
-            raise AddressError(f"metric {metric!r} is not available for wheel {wheel!r}; available: {available}")
+            needs = METRIC_NEEDS.get(metric, "more named points").replace("WHEEL", wheel)
+            raise AddressError(
+                f"output {name!r}: metric {metric!r} of wheel {wheel!r} needs {needs}; "
+                f"this model gives: {', '.join(values)}"
+            )
         return float(values[metric])
     addr = _parse_variable(ctx.model, name)
     model = ctx.model
@@ -189,7 +192,13 @@ def output_function(
     wheels: Mapping[str, WheelSpec] | None = None,
     engine: Engine | None = None,
 ) -> tuple[Callable[[Model], Array], list[str]]:
-    """``(f, expanded)``: ``f(model) -> array`` of the expanded outputs (names checked once)."""
+    """``(f, expanded)``: ``f(model) -> array`` of the expanded outputs.
+
+    Checked once, here: every output is evaluated at ``model`` (whether an output exists
+    does not depend on the pose), so one that the model cannot give (a metric without the
+    points it needs) raises :class:`AddressError` naming it and what is missing, before any
+    solve, instead of a blank column later.
+    """
     expanded = expand_outputs(model, names)
     eng = engine or compile_engine(model.mechanism)
 
@@ -198,6 +207,10 @@ def output_function(
         cache: dict[str, dict[str, float]] = {}
         return np.array([_scalar(ctx, n, cache) for n in expanded])
 
+    ctx0 = OutputContext.of(model, reference, wheels, eng)
+    cache0: dict[str, dict[str, float]] = {}
+    for n in expanded:
+        _scalar(ctx0, n, cache0)
     return f, expanded
 
 

@@ -203,6 +203,28 @@ def coordinate_columns(model: Model) -> list[tuple[str, str, int, bool]]:
     return out
 
 
+def _each_output(
+    model: Model, names: list[str], expanded: list[str], scale: Array, engine: Any, note: str
+) -> dict[str, Any]:
+    """The outputs one by one (NaN for those that fail here), and a message naming the failures."""
+    from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
+
+    values: dict[str, Any] = {}
+    failed = []
+    wanted = set(expanded)
+    for name in names:
+        for e in expand_outputs(model, [name]):
+            if e not in wanted:
+                continue
+            try:
+                v = evaluate_outputs(model, [e], units="solver", engine=engine)[e]
+                values[e] = float(v) * float(scale[expanded.index(e)])
+            except Exception as exc:
+                failed.append(f"{e}: {exc}")
+    values["message"] = f"{note}; outputs: {'; '.join(failed)}" if failed else note
+    return values
+
+
 def default_outputs(model: Model) -> list[str]:
     """Named points of every body, plus the suspension metrics of wheel bodies if any."""
     names = [f"point:{b.name}.{p}" for b in model.mechanism.bodies for p, _ in b.points]
@@ -452,8 +474,8 @@ def sweep(
                     row.update(
                         zip(expanded, (float(values[i]) * s for i, s in zip(keep, out_scale, strict=True)), strict=True)
                     )
-                except Exception as exc:  # an output that cannot be evaluated here
-                    row["message"] = f"{r.message}; outputs: {exc}"
+                except Exception:  # one output that cannot be evaluated here: never blank the others
+                    row.update(_each_output(good, names, expanded, out_scale, engine, r.message))
             rows.append(row)
             if sink is not None:
                 sink.write(row)
