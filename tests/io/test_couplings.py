@@ -118,7 +118,7 @@ def test_hardpoint_style_keeps_the_coordinates_or_shifts_the_offsets(tmp_path) -
     assert float(sol.value("O2.q")[0]) == pytest.approx(float(ref.value("O2.q")[0]), abs=1e-12)
     assert float(sol.value("O4.q")[0]) == pytest.approx(float(ref.value("O4.q")[0]), abs=1e-12)
 
-    from kinprop.io.hardpoints import model_to_hardpoints, model_from_hardpoints
+    from kinprop.io.hardpoints import model_from_hardpoints, model_to_hardpoints
 
     rezeroed = model_to_hardpoints(kp.load_model(assembled), keep_coordinates=False)
     np.testing.assert_allclose(rezeroed["couplings"]["DRIVE"]["q0"], [10, -20], atol=1e-9)
