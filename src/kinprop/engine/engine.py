@@ -442,7 +442,7 @@ class Engine:
         if t.group not in ("C", "coef") and np.max(np.abs(val)) > bound:
             raise AddressError(
                 f"{address!r}: {float(np.max(np.abs(val))):.3g} is beyond {ABSURD:g} times the model's length scale "
-                f"({bound:.3g}); no mechanism assembles there"
+                f"(L = {self.length_scale or 1.0:.3g}; the limit is {bound:.3g}); no mechanism assembles there"
             )
         if t.group == "q":
             state.Q[t.start + (t.index or 0) : t.start + (t.index or 0) + (1 if t.index is not None else t.size)] = val

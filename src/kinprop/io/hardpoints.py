@@ -41,7 +41,7 @@ from kinprop.engine import JointFrames
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.couplings import build_couplings, couplings_to_data
-from kinprop.io.loader import EULER_TOL, build_or_report
+from kinprop.io.loader import EULER_TOL, absurd_lengths, build_or_report
 from kinprop.io.schema import HardpointFile, HardpointJointSpec
 from kinprop.joints import joint_type
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates, parse_address
@@ -235,7 +235,9 @@ def model_from_hardpoints(data: Any, file: str = "<data>") -> Model:
 
 def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
     """Derive body frames, s', C, lengths and the coordinates (module docstring)."""
-    problems: list[Problem] = []
+    problems: list[Problem] = absurd_lengths(spec, file)
+    if problems:
+        raise ModelError(problems)
     bodies: list[Body] = []
     pose: dict[str, tuple[Array, Array]] = {}
     for name, b in spec.bodies.items():

@@ -302,7 +302,9 @@ def _body(name: str, b: Any, file: str, problems: list[Problem]) -> Body:
 
 def build_model(spec: ModelFile, file: str) -> Model:
     """Build a frame-style Model from a validated file; semantic problems are collected."""
-    problems: list[Problem] = []
+    problems: list[Problem] = absurd_lengths(spec, file)
+    if problems:
+        raise ModelError(problems)
     deg = spec.units.angle == "deg"
     bodies = [_body(name, b, file, problems) for name, b in spec.bodies.items()]
     if not bodies:
@@ -377,6 +379,40 @@ def build_model(spec: ModelFile, file: str) -> Model:
     if spec.units.axes is not None:
         units["axes"] = spec.units.axes
     return Model(mech, Design(values), as_coordinates(coords), units, file)
+
+
+def absurd_lengths(spec: Any, file: str) -> list[Problem]:
+    """Lengths in a file beyond ``ABSURD`` times its length scale, one problem each.
+
+    The scale is the median size of the file's non-zero positions, points and lengths (a
+    single absurd number cannot inflate it, as it would the largest); the limit is
+    ``ABSURD * max(1, scale)``, the rule ``--set`` applies (:meth:`kinprop.engine.Engine.set`).
+    Checked before anything is computed from the numbers, so nothing overflows.
+    """
+    from kinprop.engine.engine import ABSURD
+
+    found: list[tuple[str, float]] = []
+    for name, b in spec.bodies.items():
+        if b.position is not None:
+            found.append((f"bodies.{name}.position", float(np.max(np.abs(b.position)))))
+        for k, v in b.points.items():
+            found.append((f"bodies.{name}.points.{k}", float(np.max(np.abs(v)))))
+    for name, j in spec.joints.items():
+        for f in ("s_i", "s_j", "point", "point_i", "point_j", "length"):
+            v = getattr(j, f, None)
+            if v is not None:
+                found.append((f"joints.{name}.{f}", float(np.max(np.abs(v)))))
+    sizes = [v for _, v in found if v > 0]
+    if not sizes:
+        return []
+    scale = float(np.median(sizes))
+    bound = ABSURD * max(1.0, scale)
+    return [
+        Problem(loc, f"{v:.3g} is beyond {ABSURD:g} times the model's length scale (L = {scale:.3g}, the median "
+                f"size of its lengths; the limit is {bound:.3g}); no mechanism assembles there", file)  # fmt: skip
+        for loc, v in found
+        if v > bound
+    ]
 
 
 def known_joint_types() -> list[str]:

@@ -1,0 +1,46 @@
+"""A model file with an absurd number is refused at load time (issue 19 item 6).
+
+A point of 1e300 made ``kinprop check`` exit 0 with a numpy overflow warning and extra
+degrees of freedom. Now: exit 2, one located line, nothing else on stderr; the limit is
+1e6 times the file's length scale (the median size of its lengths), as for ``--set``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from cli_run import one_error_line, run_kinprop
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+@pytest.mark.parametrize(
+    ("example", "old", "new", "location"),
+    [
+        ("fourbar.yaml", "s_i: [0.15, 0, 0]", "s_i: [1e300, 0, 0]", "joints.A.s_i"),
+        ("double_wishbone_hardpoints.yaml", "point: [-35.56, 786.511, -118.11]", "point: [-35.56, 1e300, -118.11]",
+         "joints.LBJ.point"),
+        ("double_wishbone_hardpoints.yaml", "[223.266, 307.086, 0.0]", "[223.266, 307.086, 1e300]",
+         "bodies.lca.points.front_pivot"),
+    ],
+)  # fmt: skip
+def test_absurd_number_is_refused_at_load(tmp_path, example, old, new, location):
+    text = (EXAMPLES / example).read_text()
+    assert old in text
+    bad = tmp_path / example
+    bad.write_text(text.replace(old, new, 1))
+    line = one_error_line(run_kinprop("check", bad))
+    assert f"{bad}: {location}: 1e+300 is beyond 1e+06 times the model's length scale" in line
+    assert "Warning" not in line and "site-packages" not in line
+
+
+def test_the_limit_follows_the_file_unit(tmp_path):
+    """7e8 mm is within the limit of a millimetre model (L = 751 mm -> 7.51e8)... and 8e8 is not."""
+    text = (EXAMPLES / "double_wishbone_hardpoints.yaml").read_text()
+    ok = tmp_path / "ok.yaml"
+    ok.write_text(text.replace("[223.266, 307.086, 0.0]", "[223.266, 307.086, 7e8]", 1))
+    assert run_kinprop("check", ok).returncode == 0
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(text.replace("[223.266, 307.086, 0.0]", "[223.266, 307.086, 8e8]", 1))
+    assert "the limit is 7.51e+08" in one_error_line(run_kinprop("check", bad))
