@@ -407,9 +407,9 @@ def absurd_lengths(spec: Any, file: str) -> list[Problem]:
         return []
     scale = float(np.median(sizes))
     bound = ABSURD * max(1.0, scale)
+    why = f"times the model's length scale (L = {scale:.3g}, the median size of its lengths; the limit is {bound:.3g})"
     return [
-        Problem(loc, f"{v:.3g} is beyond {ABSURD:g} times the model's length scale (L = {scale:.3g}, the median "
-                f"size of its lengths; the limit is {bound:.3g}); no mechanism assembles there", file)  # fmt: skip
+        Problem(loc, f"{v:.3g} is beyond {ABSURD:g} {why}; no mechanism assembles there", file)
         for loc, v in found
         if v > bound
     ]
