@@ -299,18 +299,33 @@ class ParquetSink:
         self.schema = pa.schema(fields)
         self.row_group_size = max(1, int(row_group_size))
         self._rows: list[Mapping[str, Any]] = []
-        self._writer = pq.ParquetWriter(str(self.partial), self.schema)
+        #: (file size before, rows) of the group being written: an interrupt can land after
+        #: ``write_table`` returned and before the rows are dropped; the file has then grown
+        #: past the mark and those rows are not written again (no duplicate, none lost)
+        self._mark: tuple[int, int] | None = None
+        self._file = pa.OSFile(str(self.partial), "wb")
+        self._writer = pq.ParquetWriter(self._file, self.schema)
 
     def write(self, row: Mapping[str, Any]) -> None:
         self._rows.append(dict(row))
         if len(self._rows) >= self.row_group_size:
             self.flush()
 
+    def _settle(self) -> None:
+        """Drop the rows of a group the file already holds (see ``_mark``)."""
+        if self._mark is not None:
+            size, n = self._mark
+            if self._file.tell() > size:
+                del self._rows[:n]
+            self._mark = None
+
     def flush(self) -> None:
+        self._settle()
         if self._rows:
             table = self._pa.Table.from_pylist(self._rows, schema=self.schema)
+            self._mark = (self._file.tell(), len(self._rows))
             self._writer.write_table(table)
-            self._rows = []
+            self._settle()
 
     def close(self) -> None:
         if self._writer is not None:
@@ -319,6 +334,7 @@ class ParquetSink:
             finally:
                 self._writer.close()
                 self._writer = None
+                self._file.close()
                 os.replace(self.partial, self.path)
 
 

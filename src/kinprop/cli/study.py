@@ -1,7 +1,7 @@
 """``kinprop study`` (design of experiments of propagations) and ``kinprop tolerance``.
 
 Exit codes: 0 every variant converged, 1 some variants failed (recorded in the output),
-2 invalid input, 130 interrupted (finished chunks are kept; ``--resume`` completes the study).
+2 invalid input, 130 interrupted (143 after SIGTERM) (finished chunks are kept; ``--resume`` completes the study).
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from kinprop.cli.app import (
     app,
     err,
     handles_user_errors,
+    interrupt_status,
     is_interrupt,
     load_model_cli,
     out,
@@ -39,7 +40,6 @@ Free = Annotated[
     list[str] | None,
     typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l coef) or addresses; default q"),
 ]
-EXIT_INTERRUPTED = 130
 Sets = Annotated[
     list[str] | None, typer.Option("--set", metavar="ADDRESS=VALUE", help="ADDRESS=VALUE applied to every variant")
 ]
@@ -136,7 +136,7 @@ def study_cmd(
         if not is_interrupt(exc):
             raise
         err.print(f"interrupted: finished chunks are kept in {output!s}; run again with --resume")
-        raise typer.Exit(EXIT_INTERRUPTED) from None
+        raise typer.Exit(interrupt_status(exc)) from None
     n_failed = int((~frame["converged"]).sum()) if len(frame) else 0
     if as_json:
         print_json({"variants": len(frame), "failed": n_failed, "output": str(output)})

@@ -1,7 +1,7 @@
 """``kinprop sweep``: drive joint coordinates over a range, one re-assembly per step.
 
 Exit codes: 0 every step converged, 1 some step failed (recorded, the sweep went on),
-2 invalid input, 130 interrupted (rows already computed are in the output file).
+2 invalid input, 130 interrupted (143 after SIGTERM) (rows already computed are in the output file).
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from kinprop.cli.app import (
     app,
     err,
     handles_user_errors,
+    interrupt_status,
     is_interrupt,
     load_model_cli,
     out,
@@ -281,7 +282,7 @@ def sweep_cmd(
                 raise
             where = f"; rows computed so far are in {output}" if output is not None else ""
             err.print(f"interrupted after {done} of {n} steps ({failed} failed){where}")
-            raise typer.Exit(130) from None
+            raise typer.Exit(interrupt_status(exc)) from None
     base = None
     if baseline:
         base = sweep(
