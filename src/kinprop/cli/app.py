@@ -269,12 +269,24 @@ def load_model_cli(path: Path) -> Model:
     except OSError:
         size = 0
     if size < PROGRESS_BYTES or not err.is_terminal:
-        return load_model(path)
-    with err.status(f"loading {path} ({size / 1e6:.1f} MB): parsing, validating, building the tree"):
         model = load_model(path)
-    mech = model.mechanism
-    err.print(f"loaded {path}: {len(mech.bodies)} bodies, {len(mech.joints)} joints", soft_wrap=True)
+    else:
+        with err.status(f"loading {path} ({size / 1e6:.1f} MB): parsing, validating, building the tree"):
+            model = load_model(path)
+        mech = model.mechanism
+        err.print(f"loaded {path}: {len(mech.bodies)} bodies, {len(mech.joints)} joints", soft_wrap=True)
+    warn_scales(model, path)
     return model
+
+
+def warn_scales(model: Model, source: object) -> None:
+    """One ``warning:`` line per number implausible in the declared unit (:mod:`kinprop.io.scales`)."""
+    from rich.markup import escape
+
+    from kinprop.io.scales import scale_warnings
+
+    for line in scale_warnings(model):
+        err.print(escape(f"warning: {source}: {line}"), soft_wrap=True)
 
 
 def parse_assignment(text: str, option: str = "--set") -> tuple[str, np.ndarray]:

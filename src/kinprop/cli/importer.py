@@ -9,7 +9,7 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 
-from kinprop.cli.app import app, err, fail, handles_user_errors, out
+from kinprop.cli.app import app, err, fail, handles_user_errors, out, warn_scales
 from kinprop.cli.convert import dump_text
 from kinprop.io import model_to_data
 from kinprop.io.writer import atomic_write
@@ -28,7 +28,9 @@ def import_cmd(
     ] = None,
     tire_radius: Annotated[
         float | None,
-        typer.Option("--tire-radius", help="Chrono: loaded tyre radius (m), adds the contact patch for scrub/trail"),
+        typer.Option(
+            "--tire-radius", help="Chrono: loaded tyre radius in metres (Chrono's unit), adds the contact patch"
+        ),
     ] = None,
 ) -> None:
     """Read another tool's mechanism file and write it as a kinprop model file.
@@ -67,6 +69,7 @@ def import_cmd(
         fail(f"{source}: expected an MJCF (.xml) or Project Chrono suspension (.json) file, found {suffix or 'none'!r}")
     for note in notes:
         err.print(escape(f"note: {source}: {note}"), soft_wrap=True)
+    warn_scales(model, source)
     text = dump_text(file_data, output)
     if output is None:
         sys.stdout.write(text)
