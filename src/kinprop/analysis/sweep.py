@@ -43,7 +43,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from kinprop.analysis.metrics import metric_names
-from kinprop.analysis.outputs import output_function
+from kinprop.analysis.outputs import evaluate_outputs, expand_outputs, output_function
 from kinprop.analysis.units import derivative_scale, unit_of
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
@@ -207,8 +207,6 @@ def _each_output(
     model: Model, names: list[str], expanded: list[str], scale: Array, engine: Any, note: str
 ) -> dict[str, Any]:
     """The outputs one by one (NaN for those that fail here), and a message naming the failures."""
-    from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
-
     values: dict[str, Any] = {}
     failed = []
     wanted = set(expanded)

@@ -17,6 +17,7 @@ import numpy as np
 import yaml
 from pydantic import BaseModel, ValidationError
 
+from kinprop.engine.engine import ABSURD
 from kinprop.errors import ModelError, Problem
 from kinprop.io.couplings import build_couplings
 from kinprop.io.schema import ModelFile
@@ -389,8 +390,6 @@ def absurd_lengths(spec: Any, file: str) -> list[Problem]:
     ``ABSURD * max(1, scale)``, the rule ``--set`` applies (:meth:`kinprop.engine.Engine.set`).
     Checked before anything is computed from the numbers, so nothing overflows.
     """
-    from kinprop.engine.engine import ABSURD
-
     found: list[tuple[str, float]] = []
     for name, b in spec.bodies.items():
         if b.position is not None:
