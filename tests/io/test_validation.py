@@ -305,7 +305,7 @@ def test_every_problem_at_once(tmp_path):
 
 
 def test_syntax_and_file_problems(tmp_path):
-    assert_reported(tmp_path, "kinprop: 1\nbodies: {a\n", [("syntax", "while parsing")])
+    assert_reported(tmp_path, "kinprop: 1\nbodies: {a\n", [("line 3, column 1", "YAML syntax: while parsing")])
     assert_reported(tmp_path, "- 1\n- 2\n", [("model", "expected a mapping at the top level, found list")])
     assert_reported(tmp_path, "", [("model", "found NoneType")])
     path = tmp_path / "latin1.yaml"

@@ -202,7 +202,8 @@ class Solution:
         if self.status is Status.STEP_LIMIT:
             return (f"sub-step cap reached ({self.substeps} sub-steps, at {self.fraction:.6g} of the change): "
                     "the change is too large or too close to a singular configuration to follow")  # fmt: skip
-        return f"not converged after {self.iterations} iterations: ||Phi|| = {self.residual:.3g} >= {bound}"
+        steps = f" in all, over {self.substeps} sub-steps of at most max_iter each" if self.substeps > 1 else ""
+        return f"not converged after {self.iterations} iterations{steps}: ||Phi|| = {self.residual:.3g} >= {bound}"
 
     @cached_property
     def design(self) -> Design:

@@ -277,7 +277,10 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
                     refs[name] = _reference(jt.name, j)
         fields = frozenset({"length"}) if jt is not None and jt.has_length else frozenset()
         provisional.append(Joint(name, j.type, j.bodies[0], j.bodies[1], fields, j.cut))
-    problems += [Problem(p.location, p.message, file) for p in validate_structure(tuple(bodies), tuple(provisional))]
+    problems += [
+        Problem(p.location, p.message, file)
+        for p in validate_structure(tuple(bodies), tuple(provisional), tuple(spec.inputs))
+    ]
     couplings, coefs, cproblems = build_couplings(
         spec.couplings, {j.name: j for j in provisional}, spec.units.angle == "deg", file
     )

@@ -106,6 +106,11 @@ def parse_document(text: str, file: str) -> tuple[Any, list[Problem]]:
                 data = None if node is None else loader.construct_document(node)
             finally:
                 loader.dispose()
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else "syntax"
+        what = " ".join(x for x in (exc.context, exc.problem) if x)
+        raise ModelError([Problem(where, f"YAML syntax: {what}", file)]) from None
     except (yaml.YAMLError, json.JSONDecodeError) as exc:
         raise ModelError([Problem("syntax", " ".join(str(exc).split()), file)]) from None
     except RecursionError:
@@ -326,7 +331,10 @@ def build_model(spec: ModelFile, file: str) -> Model:
         if j.length is not None:
             values[f"{name}.length"] = float(j.length)
         joints.append(Joint(name, j.type, j.bodies[0], j.bodies[1], fields, j.cut))
-    problems += [Problem(p.location, p.message, file) for p in validate_structure(tuple(bodies), tuple(joints))]
+    problems += [
+        Problem(p.location, p.message, file)
+        for p in validate_structure(tuple(bodies), tuple(joints), tuple(spec.inputs))
+    ]
     couplings, coefs, cproblems = build_couplings(spec.couplings, {j.name: j for j in joints}, deg, file)
     values.update(coefs)
     problems += cproblems
