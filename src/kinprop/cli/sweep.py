@@ -101,6 +101,11 @@ def label_units(res, base=None) -> None:
             r.frame.attrs["column_units"] = units
 
 
+def baseline_path(output: Path) -> Path:
+    """Where ``--baseline -o NAME.csv`` writes the baseline's rows: ``NAME.baseline.csv``."""
+    return output.with_name(f"{output.stem}.baseline{output.suffix}")
+
+
 def sweep_json(res, base, output: Path | None = None, plot: Path | None = None) -> dict:
     """What ``kinprop sweep --json`` prints: counts, failed steps and every row (and the
     baseline's rows when ``base`` is given), with the unit of every column."""
@@ -115,6 +120,7 @@ def sweep_json(res, base, output: Path | None = None, plot: Path | None = None) 
         "drives": [d.label for d in res.drives],
         "outputs": list(res.outputs),
         "output_file": None if output is None else str(output),
+        "baseline_file": None if output is None or base is None else str(baseline_path(output)),
         "plot_file": None if plot is None else str(plot),
         "rows": _records(df),
         "units": {c: u for c, u in df.attrs.get("column_units", {}).items() if u},
@@ -208,7 +214,10 @@ def sweep_cmd(
     continuation: Annotated[bool, typer.Option("--continuation", help="retry a failed step by continuation")] = False,
     baseline: Annotated[
         bool,
-        typer.Option("--baseline", help="also sweep the design without --set; --plot draws before and after together"),
+        typer.Option(
+            "--baseline",
+            help="also sweep the design without --set; --plot draws both, -o NAME.csv also writes NAME.baseline.csv",
+        ),
     ] = False,
     x: Annotated[
         str | None, typer.Option("--x", help="abscissa of the --plot curves (an output, e.g. wheel_centre_dz)")
@@ -223,7 +232,8 @@ def sweep_cmd(
     check_int("--max-iter", max_iter, 1, MAX_ITER)
     check_suffix("-o", output, (".csv", ".parquet", ".pq"))
     check_suffix("--plot", plot, (".png", ".pdf", ".svg"))
-    check_outputs([model], [("-o", output), ("--plot", plot)])
+    base_output = baseline_path(output) if baseline and output is not None else None
+    check_outputs([model], [("-o", output), ("-o (baseline)", base_output), ("--plot", plot)])
     given = parse_assignments("--set", set_)
     check_set_not_free(given, free)
     if baseline and not given:
@@ -286,8 +296,9 @@ def sweep_cmd(
     base = None
     if baseline:
         base = sweep(
-            m, drives, free=tuple(free or ["q"]), outputs=outputs, tol=tol, max_iter=max_iter, continuation=continuation
-        )
+            m, drives, free=tuple(free or ["q"]), outputs=outputs, tol=tol, max_iter=max_iter,
+            continuation=continuation, output=base_output,
+        )  # fmt: skip
     df = res.frame
     label_units(res, base)
     if as_json:
@@ -309,7 +320,10 @@ def sweep_cmd(
         why = str(first["message"])
         say(f"first failure at step {int(first['step'])} ({label} = {first[label]:g}): {why}", style="red")
     if output is not None:
-        say(f"wrote {output}")
+        say(
+            f"wrote {output}"
+            + (f" (with the --set changes) and {base_output} (the baseline, without)" if base_output else "")
+        )
     if plot is not None:
         if base is None and x is None:
             plot_sweep(res, plot, title=f"sweep {model.name}")

@@ -20,8 +20,8 @@ from rich.text import Text
 
 from kinprop.analysis.targets import TargetPropagation, propagate_targets
 from kinprop.cli.app import EXIT_NOT_CONVERGED, err, out, print_json
-from kinprop.io import dump_model
 from kinprop.io.results import propagation_json
+from kinprop.io.writer import dump_model_like
 from kinprop.model import Model
 from kinprop.propagation import Propagation
 
@@ -91,7 +91,7 @@ def run_targets(
     tp = propagate_targets(model, targets, [f for f in free if f != "q"], changes=changes, weights=weights,
                            max_iter=max_iter, units="solver")  # fmt: skip
     r = tp.result
-    for dest, write in [(output, lambda p, where: dump_model(p.after, where)), *writers]:
+    for dest, write in [(output, lambda p, where: dump_model_like(p.after, where, path)), *writers]:
         if dest is None:
             continue
         if r.status == "met":

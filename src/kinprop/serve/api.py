@@ -43,8 +43,8 @@ from kinprop.cli.sensitivity import sensitivities, sensitivity_json
 from kinprop.cli.solve import comparison_csv
 from kinprop.cli.sweep import sweep_inputs, sweep_json
 from kinprop.errors import AddressError, ModelError, SingularityWarning
-from kinprop.io import dump_model
 from kinprop.io.units import changes_to_internal
+from kinprop.io.writer import dump_model_like
 from kinprop.model import Model
 from kinprop.propagation import assemble
 from kinprop.serve.session import Session, Sessions
@@ -318,11 +318,13 @@ def create_app(model: Model, label: str | None = None, *, assemble_first: bool =
 
     @app.get("/api/model.yaml")
     def model_yaml(sid: Sid = None, q: QSid = None) -> Response:
-        """The current model as ``kinprop propagate -o MODEL.yaml`` writes it (full precision)."""
+        """The current model as ``kinprop propagate -o MODEL.yaml`` writes it (full precision, the
+        input file's style)."""
         m = session(sid, q).model
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / "model.yaml"
-            dump_model(m, path)
+            source = model.source if model.source and Path(model.source).is_file() else None
+            dump_model_like(m, path, source)  # a hardpoint-style input comes back hardpoint style
             text = path.read_text(encoding="utf-8")
         return Response(text, media_type="application/yaml", headers=_attachment(f"{stem}.yaml"))
 
