@@ -116,7 +116,7 @@ def test_readme_and_import_guide_commands_from_the_wheel(installed, tmp_path) ->
             "UCA.q",
             "--free",
             "LCA_U.q",
-        ],  # fmt: skip
+        ],
         ["check", "dw.yaml", "--assemble"],
     ]
     for args in commands:
