@@ -415,8 +415,9 @@ def sweep(
     it receives each row as it is computed and is closed at the end, also on an exception
     (KeyboardInterrupt). ``on_step(k, n, row)`` is called after
     each row (progress). Step 0 goes from the model's (assembled) estimates to the start values
-    by continuation (:mod:`kinprop.propagation.continuation`); later steps are plain Newton
-    propagations, with continuation as a fallback for a failed step when ``continuation``.
+    by continuation (:mod:`kinprop.propagation.continuation`); later steps are propagations
+    from the last good state that follow the start's branch (:func:`kinprop.propagation.propagate`),
+    with the diagnosing continuation as a fallback for a failed step when ``continuation``.
     """
     import pandas as pd
 

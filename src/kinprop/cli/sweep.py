@@ -189,7 +189,8 @@ def sweep_cmd(
         typer.Option(
             "--drive",
             metavar="JOINT=START:STOP:STEPS",
-            help="JOINT=START:STOP:STEPS (model units; repeat to drive together)",
+            help="JOINT=START:STOP:STEPS (STEPS+1 values), JOINT=v1,v2,... or JOINT=@FILE.csv[:COL] (a CSV "
+            "column, by name or 0-based index); model units; repeat to drive together",
         ),
     ],
     set_: Annotated[
