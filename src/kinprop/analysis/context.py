@@ -5,21 +5,28 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from kinprop.engine import Engine, Kinematics
+from kinprop.engine import Engine, Kinematics, State
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.spatial import Array
 
-if TYPE_CHECKING:
-    from kinprop.analysis.metrics import WheelSpec
-
 POINT = re.compile(r"^point:(?P<body>[^.\s\[\]]+)\.(?P<name>[^\s\[\]]+?)(\[(?P<c>[xyz012])\])?$")
-HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[ij])(\[(?P<c>[xyz012])\])?$")
+HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[^\s.\[\]]+)(\[(?P<c>[xyz012])\])?$")
+
+
+@dataclass(frozen=True)
+class WheelSpec:
+    """Per-call metric parameters of one wheel: the steering axis as two point specs
+    (``hardpoint:JOINT.i|j`` or ``point:BODY.NAME``), upper first
+    (:mod:`kinprop.analysis.metrics`)."""
+
+    steering_axis: tuple[str, str] | None = None
+    #: the coordinate driven in bump for the first-order metrics (default: the first declared input)
+    travel_input: str | None = None
 
 
 @dataclass
@@ -30,6 +37,10 @@ class OutputContext:
     kin: Kinematics
     reference: Model | None = None
     wheels: Mapping[str, WheelSpec] | None = None
+    #: the engine the kinematics came from and its packed state (reused for the reference
+    #: configuration and the velocity analysis of first-order metrics)
+    engine: Engine | None = None
+    state: State | None = None
 
     @classmethod
     def of(
@@ -39,19 +50,25 @@ class OutputContext:
         wheels: Mapping[str, WheelSpec] | None = None,
         engine: Engine | None = None,
     ) -> OutputContext:
-        """Forward kinematics of ``model`` at its current state."""
-        eng = engine or compile_engine(model.mechanism)
-        return cls(model, eng.kinematics(model.design, model.coordinates), reference, wheels)
+        """Forward kinematics of ``model`` at its current state (``engine``: compiled from its
+        mechanism; None only at a public boundary, which then compiles once)."""
+        eng = engine if engine is not None else compile_engine(model.mechanism)
+        st = eng.state_of(model)
+        return cls(model, eng.kinematics(st), reference, wheels, eng, st)
 
     def body_point(self, body: str, point: str) -> Array:
         """Global position of the named point ``point`` of ``body``."""
         mech = self.model.mechanism
         if body not in mech.body_names:
             raise AddressError(f"unknown body {body!r}; bodies are {', '.join(mech.body_names)}")
-        pts = dict(mech.body(body).points)
+        b = mech.body(body)
+        pts = dict(b.points)
         if point not in pts:
             known = ", ".join(pts) or "none"
             raise AddressError(f"body {body!r} has no named point {point!r}; its points: {known}")
+        ref = b.joint_point(point)
+        if ref is not None:  # a joint's point: it follows the joint (kinprop.model.joint_points)
+            return self.hardpoint(*ref)
         return self.kin.r[body] + self.kin.A[body] @ np.asarray(pts[point], dtype=float)
 
     def hardpoint(self, joint: str, side: str) -> Array:
@@ -59,6 +76,8 @@ class OutputContext:
         mech = self.model.mechanism
         if joint not in mech.joint_names:
             raise AddressError(f"unknown joint {joint!r}; joints are {', '.join(mech.joint_names)}")
+        if side not in ("i", "j"):  # a pivot: the fixed body's point JOINT.NAME
+            return self.body_point(*pivot_point(self.model, joint, side))
         f = self.kin.frames[joint]
         return f.P_i if side == "i" else f.P_j
 
@@ -71,3 +90,15 @@ class OutputContext:
         if m and m.group("c") is None:
             return self.hardpoint(m.group("joint"), m.group("side"))
         raise AddressError(f"{spec!r} is not a point: expected point:BODY.NAME or hardpoint:JOINT.i|j")
+
+
+def pivot_point(model: Model, joint: str, name: str) -> tuple[str, str]:
+    """``(fixed body, point name)`` of the pivot ``name`` of ``joint`` (``hardpoint:UCA.front``)."""
+    j = model.mechanism.joint(joint)
+    for body in (j.body_i, j.body_j):
+        b = model.mechanism.body(body)
+        if b.fixed and f"{joint}.{name}" in dict(b.points):
+            return body, f"{joint}.{name}"
+    raise AddressError(
+        f"hardpoint:{joint}.{name}: expected {joint}.i, {joint}.j or a pivot of {joint} (none is named {name!r})"
+    )

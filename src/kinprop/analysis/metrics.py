@@ -41,28 +41,32 @@ steering axis can also be given per call as two point specs (``hardpoint:JOINT.i
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from kinprop.analysis.context import OutputContext
+from kinprop.analysis.context import OutputContext, WheelSpec
+from kinprop.analysis.firstorder import (
+    FIRST_ORDER,
+    GAIN_METRICS,
+    MOTION_RATIO,
+    first_order_metrics,
+    first_order_names,
+    first_order_unit,
+)
+from kinprop.analysis.motion import point_of
+from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.model import Model
+from kinprop.model.joint_points import steering_joints
 from kinprop.spatial import EZ, Array
 
 ANGLE_METRICS = ("camber", "toe", "caster", "kpi")
 LENGTH_METRICS = ("scrub_radius", "trail", "wheel_centre_dx", "wheel_centre_dy", "wheel_centre_dz")
-METRICS = ANGLE_METRICS + LENGTH_METRICS
+METRICS = ANGLE_METRICS + LENGTH_METRICS + FIRST_ORDER
+#: position-level metrics (:func:`wheel_metrics`); the others are first-order (velocity analysis)
+POSITION_METRICS = ANGLE_METRICS + LENGTH_METRICS
 #: accepted long names
 METRIC_ALIASES = {"kingpin_inclination": "kpi", "scrub": "scrub_radius", "wheel_travel": "wheel_centre_dz"}
-
-
-@dataclass(frozen=True)
-class WheelSpec:
-    """Per-call metric parameters of one wheel: the steering axis as two point specs
-    (``hardpoint:JOINT.i|j`` or ``point:BODY.NAME``), upper first."""
-
-    steering_axis: tuple[str, str] | None = None
 
 
 # --- closed-form geometry (vectors in vehicle axes) -----------------------------------------
@@ -130,8 +134,10 @@ def available_metrics(
 ) -> list[str]:
     """Metrics a wheel body supports with the points the model declares."""
     out = ["camber", "toe"]
-    steer = (spec is not None and spec.steering_axis is not None) or all(
-        _find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")
+    steer = (
+        (spec is not None and spec.steering_axis is not None)
+        or all(_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
+        or steering_joints(model.mechanism, wheel) is not None
     )
     if steer:
         out += ["caster", "kpi"]
@@ -139,6 +145,9 @@ def available_metrics(
             out += ["scrub_radius", "trail"]
     if has_reference or _find_point(model, wheel, "wheel_centre_ref", on_wheel=False):
         out += ["wheel_centre_dx", "wheel_centre_dy", "wheel_centre_dz"]
+    contact = "contact_patch" in dict(model.mechanism.body(wheel).points)
+    ref = has_reference or _find_point(model, wheel, "contact_patch_ref", on_wheel=False) is not None
+    out += first_order_names(model, contact, steer, ref)
     return out
 
 
@@ -155,9 +164,12 @@ METRIC_NEEDS = {
 }
 
 
-def metric_names(model: Model) -> list[str]:
-    """``metric:WHEEL.NAME`` for every wheel body and every metric it supports."""
-    return [f"metric:{w}.{m}" for w in wheel_bodies(model) for m in available_metrics(model, w)]
+def metric_names(model: Model, first_order: bool = False) -> list[str]:
+    """``metric:WHEEL.NAME`` for every wheel body and every position-level metric it supports
+    (the default outputs of sweeps and studies); ``first_order``: the first-order ones too
+    (a velocity analysis per state: asked for by name)."""
+    return [f"metric:{w}.{m}" for w in wheel_bodies(model) for m in available_metrics(model, w)
+            if first_order or not is_first_order(m)]  # fmt: skip
 
 
 def resolve_metric(model: Model, name: str) -> tuple[str, str]:
@@ -179,9 +191,143 @@ def resolve_metric(model: Model, name: str) -> tuple[str, str]:
             )
         wheel = wheels[0]
     metric = METRIC_ALIASES.get(metric, metric)
+    if metric.startswith(f"{MOTION_RATIO}:"):
+        element = metric.split(":", 1)[1]
+        known = [e.name for e in model.elements]
+        if element not in known:
+            raise AddressError(f"output {name!r}: unknown element {element!r}; elements: {', '.join(known) or 'none'}")
+        return wheel, metric
     if metric not in METRICS:
-        raise AddressError(f"output {name!r}: unknown metric {metric!r}; metrics: {', '.join(METRICS)}")
+        raise AddressError(f"output {name!r}: unknown metric {metric!r}; metrics: {', '.join(METRICS)}, "
+                           f"{MOTION_RATIO}:ELEMENT")  # fmt: skip
     return wheel, metric
+
+
+def steering_points(ctx: OutputContext, wheel: str) -> tuple[Array | None, Array | None]:
+    """Global upper and lower points of the wheel's steering axis at the context's state: the
+    declared ``kingpin_upper``/``kingpin_lower`` points (coordinates, or references to joints
+    that follow them), else the default joints of :func:`kinprop.model.joint_points.steering_joints`
+    (two ball joints, or a strut top mount and the lower ball joint), the higher one upper."""
+    model = ctx.model
+    found_upper, found_lower = (_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
+    if found_upper is not None and found_lower is not None:
+        return ctx.body_point(*found_upper), ctx.body_point(*found_lower)
+    pair = steering_joints(model.mechanism, wheel)
+    if pair is None:
+        return None, None
+    a, b = (ctx.hardpoint(*p) for p in pair)
+    return (a, b) if a[2] >= b[2] else (b, a)
+
+
+def steering_bodies(ctx: OutputContext, wheel: str) -> tuple[tuple[str, Array], tuple[str, Array]] | None:
+    """``((body, point), (body, point))`` of the steering axis' upper and lower points (as
+    :func:`steering_points`), each with the body it moves with (a joint's point: that side's)."""
+    model = ctx.model
+    mech = model.mechanism
+    found = [_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
+    if found[0] is not None and found[1] is not None:
+        out = []
+        for body, name in found:  # type: ignore[misc]
+            ref = mech.body(body).joint_point(name)
+            if ref is not None:
+                j = mech.joint(ref[0])
+                out.append((j.body_i if ref[1] == "i" else j.body_j, ctx.hardpoint(*ref)))
+            else:
+                out.append((body, ctx.body_point(body, name)))
+        return out[0], out[1]
+    pair = steering_joints(mech, wheel)
+    if pair is None:
+        return None
+    ends = []
+    for joint, side in pair:
+        j = mech.joint(joint)
+        ends.append((j.body_i if side == "i" else j.body_j, ctx.hardpoint(joint, side)))
+    a, b = ends
+    return (a, b) if a[1][2] >= b[1][2] else (b, a)
+
+
+def steering_axis_mismatch(model: Model) -> list[str]:
+    """Declared steering-axis points (``kingpin_upper``/``kingpin_lower`` given by coordinates)
+    that do not coincide with the joint the default steering axis takes, at the model's
+    coordinates: one message each, with the distance. Such points are used as declared."""
+    out = []
+    ctx = None  # forward kinematics only when a wheel declares its axis by coordinates
+    for wheel in wheel_bodies(model):
+        pair = steering_joints(model.mechanism, wheel)
+        found = [_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
+        if pair is None or None in found:
+            continue
+        if all(model.mechanism.body(b).joint_point(k) is not None for b, k in found):  # type: ignore[misc]
+            continue
+        ctx = ctx or OutputContext.of(model)
+        a, b = (ctx.hardpoint(*p) for p in pair)
+        ordered = (pair[0], a), (pair[1], b)
+        if a[2] < b[2]:
+            ordered = ordered[::-1]
+        names = ("kingpin_upper", "kingpin_lower")
+        for name, (body, key), ((joint, side), p) in zip(names, found, ordered, strict=True):
+            if model.mechanism.body(body).joint_point(key) is not None:
+                continue
+            d = float(np.linalg.norm(ctx.body_point(body, key) - p))
+            if d > 1e-6 * max(1.0, float(np.max(np.abs(p)))):
+                out.append(
+                    f"bodies.{body}.points.{key}: the declared {name} is {d:.6g} from joint {joint} ({joint}.{side} "
+                    f"at {np.round(p, 6).tolist()}), which the steering axis would otherwise follow; it is used as "
+                    f"declared. Write '{key}: {joint}' (or delete it) to follow the joint."
+                )
+    return out
+
+
+def is_first_order(metric: str) -> bool:
+    """A metric from the velocity analysis (a gain, a centre, anti, motion ratio, wheel rate)."""
+    return metric in FIRST_ORDER or metric.startswith(f"{MOTION_RATIO}:")
+
+
+def _radius(model: Model, wheel: str) -> float | None:
+    """The loaded radius: the ``contact_patch`` point's distance from the spin axis."""
+    pts = dict(model.mechanism.body(wheel).points)
+    if "contact_patch" not in pts:
+        return None
+    v = np.asarray(pts["contact_patch"], dtype=float) - np.asarray(pts["wheel_centre"], dtype=float)
+    a_B = np.asarray(pts["spin_axis"], dtype=float) - np.asarray(pts["wheel_centre"], dtype=float)
+    a_B /= np.linalg.norm(a_B)
+    return float(np.linalg.norm(v - (v @ a_B) * a_B))
+
+
+def _contact_of(ctx: OutputContext, wheel: str, radius: float) -> Array:
+    centre = ctx.body_point(wheel, "wheel_centre")
+    return contact_point(centre, ctx.body_point(wheel, "spin_axis") - centre, radius)
+
+
+def wheel_first_order(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:
+    """Every first-order metric the wheel supports at the context's state
+    (:mod:`kinprop.analysis.firstorder`; gains in degrees per length unit)."""
+    model = ctx.model
+    spec = spec if spec is not None else ctx.wheels.get(wheel) if ctx.wheels else None
+    engine = ctx.engine or compile_engine(model.mechanism)
+    b = engine.body_index[wheel]
+    points: dict[str, tuple[int, Array]] = {
+        "centre": (b, ctx.body_point(wheel, "wheel_centre")),
+        "spin": (b, ctx.body_point(wheel, "spin_axis")),
+    }
+    if spec is not None and spec.steering_axis is not None:
+        points["upper"], points["lower"] = (point_of(ctx, engine, s) for s in spec.steering_axis)
+    else:
+        found = steering_bodies(ctx, wheel)
+        if found is not None:
+            for key, (body, p) in zip(("upper", "lower"), found, strict=True):
+                points[key] = (engine.body_index[body], p)
+    radius = _radius(model, wheel)
+    ref = None
+    if radius is not None:
+        if ctx.reference is not None:
+            ref = _contact_of(OutputContext.of(ctx.reference, engine=engine), wheel, radius)
+        else:
+            found_ref = _find_point(model, wheel, "contact_patch_ref", on_wheel=False)
+            if found_ref is not None:
+                ref = ctx.body_point(*found_ref)
+    travel = spec.travel_input if spec is not None else None
+    return first_order_metrics(ctx, engine, wheel, points, radius, ref, travel)
 
 
 def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:
@@ -198,22 +344,18 @@ def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None)
     if spec is not None and spec.steering_axis is not None:
         upper, lower = (ctx.point(s) for s in spec.steering_axis)
     else:
-        found_upper, found_lower = (_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
-        if found_upper is not None and found_lower is not None:
-            upper, lower = ctx.body_point(*found_upper), ctx.body_point(*found_lower)
+        upper, lower = steering_points(ctx, wheel)
     if upper is not None and lower is not None:
         out["caster"], out["kpi"] = steering_angles(upper, lower, side)
         pts = dict(model.mechanism.body(wheel).points)
         if "contact_patch" in pts:
-            v = np.asarray(pts["contact_patch"], dtype=float) - np.asarray(pts["wheel_centre"], dtype=float)
-            a_B = np.asarray(pts["spin_axis"], dtype=float) - np.asarray(pts["wheel_centre"], dtype=float)
-            a_B /= np.linalg.norm(a_B)
-            radius = float(np.linalg.norm(v - (v @ a_B) * a_B))
+            v = ctx.body_point(wheel, "contact_patch") - centre
+            radius = float(np.linalg.norm(v - (v @ axis) * axis))
             contact = contact_point(centre, axis, radius)
             out["scrub_radius"], out["trail"] = ground_offsets(upper, lower, contact, axis)
     ref = None
     if ctx.reference is not None:
-        ref = OutputContext.of(ctx.reference).body_point(wheel, "wheel_centre")
+        ref = OutputContext.of(ctx.reference, engine=ctx.engine).body_point(wheel, "wheel_centre")
     else:
         found_ref = _find_point(model, wheel, "wheel_centre_ref", on_wheel=False)
         if found_ref is not None:
@@ -238,22 +380,40 @@ def suspension_metrics(
     return wheel_metrics(OutputContext.of(model, reference), wheel, spec)
 
 
-def metric_unit(metric: str, length_unit: str = "m") -> str:
-    """``deg`` for angle metrics, the model's length unit otherwise."""
-    return "deg" if METRIC_ALIASES.get(metric, metric) in ANGLE_METRICS else length_unit
+def metric_unit(metric: str, length_unit: str = "m", angle_unit: str = "deg", force_unit: str | None = None) -> str:
+    """Unit of a metric: ``angle_unit`` for angles (computed in ``deg``), ``angle/length`` for
+    gains, ``%`` for anti metrics, ``""`` for ratios, ``force/length`` for the wheel rate, the
+    length unit otherwise."""
+    metric = METRIC_ALIASES.get(metric, metric)
+    if metric in ANGLE_METRICS:
+        return angle_unit
+    if is_first_order(metric):
+        units = {"length": length_unit, "angle": angle_unit} | ({"force": force_unit} if force_unit else {})
+        return first_order_unit(metric, units)
+    return length_unit
+
+
+def is_angle_valued(metric: str) -> bool:
+    """Computed in degrees (an angle or a gain in degrees per length): scaled to the model's angle unit."""
+    metric = METRIC_ALIASES.get(metric, metric)
+    return metric in ANGLE_METRICS or metric in GAIN_METRICS
 
 
 __all__ = [
     "METRICS",
     "METRIC_NEEDS",
+    "POSITION_METRICS",
     "WheelSpec",
     "camber_toe",
     "contact_point",
     "ground_offsets",
+    "is_angle_valued",
+    "is_first_order",
     "metric_names",
     "metric_unit",
     "steering_angles",
     "suspension_metrics",
     "wheel_bodies",
+    "wheel_first_order",
     "wheel_metrics",
 ]

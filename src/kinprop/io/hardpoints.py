@@ -41,7 +41,9 @@ from kinprop.engine import JointFrames
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.couplings import build_couplings, couplings_to_data
+from kinprop.io.elements import build_elements, build_vehicle, elements_to_data, vehicle_to_data
 from kinprop.io.loader import EULER_TOL, absurd_lengths, build_or_report
+from kinprop.io.points import attach_references, point_order, point_references, written_points
 from kinprop.io.schema import HardpointFile, HardpointJointSpec
 from kinprop.joints import joint_type
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates, parse_address
@@ -95,6 +97,8 @@ CUT_FIELDS: dict[str, tuple[str, ...]] = {
     "dot-2": ("s_i", "s_j", "C_i"),
 }
 
+#: joint types that may be given by two pivots (their axis runs from the second to the first)
+PIVOT_TYPES = ("revolute", "cylindrical")
 #: a direction shorter than this is "zero"
 ZERO_AXIS = 1e-12
 #: largest |cos| between the two axes of a universal joint (they are made exactly perpendicular)
@@ -182,6 +186,26 @@ def _check_keys(name: str, jtype: str, spec: HardpointJointSpec, file: str) -> l
     return problems
 
 
+def _pivot_problems(name: str, spec: HardpointJointSpec, fixed: set[str], file: str) -> list[Problem]:
+    """A joint by its pivots: a revolute (or cylindrical) to a fixed body, no point or axis."""
+    loc = f"joints.{name}.pivots"
+    out = []
+    try:
+        jtype = joint_type(spec.type).name
+    except KeyError:
+        jtype = None  # reported with the known types
+    if jtype is not None and jtype not in PIVOT_TYPES:
+        out.append(Problem(loc, f"only {' and '.join(PIVOT_TYPES)} joints take pivots, found type {spec.type!r}", file))
+    if spec.point is not None or spec.axis is not None:
+        out.append(Problem(loc, "give either pivots or point and axis, not both", file))
+    if not set(spec.bodies) & fixed:
+        out.append(Problem(loc, "pivots are on a fixed body: one of the joint's bodies must be fixed", file))
+    (_, a), (_, b) = spec.pivots.items()  # type: ignore[union-attr]
+    if np.linalg.norm(np.subtract(a, b)) <= ZERO_AXIS:
+        out.append(Problem(loc, "the two pivots coincide: they define no axis", file))
+    return out
+
+
 def _reference(jtype: str, spec: HardpointJointSpec) -> _Reference:
     """The joint's global frames at the reference (keys already checked)."""
     point, axis = _vec(spec.point), _vec(spec.axis)
@@ -262,6 +286,20 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
 
     refs: dict[str, _Reference] = {}
     provisional: list[Joint] = []
+    pivots: dict[str, tuple[str, dict[str, list[float]]]] = {}
+    fixed_bodies = {n for n, b in spec.bodies.items() if b.fixed}
+    for name, j in list(spec.joints.items()):
+        if j.pivots is None:
+            continue
+        found = _pivot_problems(name, j, fixed_bodies, file)
+        problems += found
+        if not found:
+            (_, front), (_, rear) = j.pivots.items()
+            front, rear = np.array(front, dtype=float), np.array(rear, dtype=float)
+            spec.joints[name] = j.model_copy(
+                update={"point": ((front + rear) / 2).tolist(), "axis": (front - rear).tolist()}
+            )
+            pivots[name] = (j.bodies[0] if j.bodies[0] in fixed_bodies else j.bodies[1], dict(j.pivots))
     for name, j in spec.joints.items():
         try:
             jt = joint_type(j.type)
@@ -323,6 +361,7 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
         ref = refs[t.joint]
         point, rot = (ref.p_i, ref.r_i) if t.reversed else (ref.p_j, ref.r_j)
         pose[t.child] = (point, rot if spec.body_frames == "joint" else np.eye(3))
+    design_edits = spec.edits == "design"
 
     values: dict[str, object] = {}
     joints: list[Joint] = []
@@ -332,8 +371,10 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
         if j.name in tree:
             parent, child = ("j", "i") if tree[j.name].reversed else ("i", "j")
             fields = {f"s_{parent}", f"C_{parent}"}
-            if spec.body_frames == "global":
+            if spec.body_frames == "global" or design_edits:
                 fields.add(f"C_{child}")
+            if design_edits:  # the joint moves without moving its child body (design position kept)
+                fields.add(f"s_{child}")
             coords.setdefault(j.name, jt.default_coordinates())
         else:
             fields = set(CUT_FIELDS[jt.name])
@@ -361,18 +402,33 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
         raise ModelError(problems)
 
     final = []
+    refs = {}
     for b in bodies:
         r, a = pose[b.name]
-        pts = tuple((k, tuple((a.T @ (np.array(v) - r)).tolist())) for k, v in spec.bodies[b.name].points.items())
+        refs[b.name], found = point_references(b.name, spec.bodies[b.name], file)
+        problems += found
+        declared = dict(spec.bodies[b.name].points)
+        for joint, (body, pair) in pivots.items():
+            if body == b.name:
+                declared.update({f"{joint}.{k}": v for k, v in pair.items()})
+        pts = tuple(
+            (k, tuple((a.T @ (np.array(v) - r)).tolist())) for k, v in declared.items() if not isinstance(v, str)
+        )
         if not all(np.all(np.isfinite(v)) for _, v in pts):
             problems.append(Problem(f"bodies.{b.name}.points", "overflow: the coordinates are too large", file))
         final.append(Body(b.name, b.fixed, b.position, b.orientation, pts))
     if problems:
         raise ModelError(problems)
-    mech = Mechanism(tuple(final), tuple(joints), spec.name, tuple(spec.inputs), couplings)
+    elements, eproblems = build_elements(spec.elements, set(pose), "hardpoints", file, lambda b: pose[b])
+    if eproblems:
+        raise ModelError(eproblems)
+    mech = Mechanism(tuple(final), tuple(joints), spec.name, tuple(spec.inputs), couplings, spec.edits)
     values.update(coefs)
     units = {"length": spec.units.length, "angle": spec.units.angle, "axes": spec.units.axes}
-    return Model(mech, Design(values), as_coordinates(coords), units, file)
+    if spec.units.force is not None:
+        units["force"] = spec.units.force
+    model = Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle))
+    return attach_references(model, refs, file, point_order(spec.bodies))
 
 
 # --- frames -> hardpoints ----------------------------------------------------------------------
@@ -441,9 +497,17 @@ def model_to_hardpoints(model: Model, body_frames: str = "global", keep_coordina
             if not np.array_equal(b.A, np.eye(3)):
                 spec["orientation"] = [_clean(row) for row in b.A]
         if b.points:
-            r, a = kin.r[b.name], kin.A[b.name]
-            spec["points"] = {k: _clean(r + a @ np.array(v)) for k, v in b.points}
+            spec["points"] = {
+                k: v if isinstance(v, str) else _clean(v) for k, v in written_points(model, b, True).items()
+            }
         bodies[b.name] = spec
+    for j in mech.joints:  # pivots are written with their joint
+        if _pivots_of(model, j.name) is not None:
+            for b in (j.body_i, j.body_j):
+                for k in [k for k in bodies[b].get("points", {}) if k.startswith(f"{j.name}.")]:
+                    del bodies[b]["points"][k]
+                if "points" in bodies[b] and not bodies[b]["points"]:
+                    del bodies[b]["points"]
     joints: dict[str, Any] = {}
     kept: set[str] = set()
     tree = set(compile_engine(mech).topology.tree_joints)
@@ -466,11 +530,18 @@ def model_to_hardpoints(model: Model, body_frames: str = "global", keep_coordina
                 idx = list(j.jtype.angle_indices)
                 qf[idx] = np.degrees(qf[idx])
             spec["q"] = [float(x) + 0.0 for x in qf]
+        pair = _pivots_of(model, j.name)
+        if pair is not None:
+            for key in ("point", "axis"):
+                spec.pop(key, None)
+            spec["pivots"] = pair
         if j.jtype.has_length:
             spec["length"] = float(model.design[f"{j.name}.length"])
         joints[j.name] = spec
     units = {"length": model.units.get("length", "m"), "angle": model.units.get("angle", "rad")}
     units["axes"] = model.units.get("axes") or "right-handed"
+    if model.units.get("force"):
+        units["force"] = model.units["force"]
     return {
         "kinprop": 1,
         "name": mech.name,
@@ -481,7 +552,37 @@ def model_to_hardpoints(model: Model, body_frames: str = "global", keep_coordina
         "joints": joints,
         **({"inputs": list(mech.inputs)} if mech.inputs else {}),
         **({"couplings": couplings_to_data(model, _coupled_now(model, kept))} if mech.couplings else {}),
-    }
+        **({"edits": mech.edits} if mech.edits != "design" else {}),
+        **({"elements": elements_to_data(model.elements, "hardpoints", lambda b: (kin.r[b], kin.A[b]))}
+           if model.elements else {}),
+        **({"vehicle": vehicle_to_data(model.vehicle)} if model.vehicle is not None else {}),
+    }  # fmt: skip
+
+
+def pivot_points(model: Model, joint: str) -> tuple[str, dict[str, Array]] | None:
+    """``(fixed body, {name: global point})`` of a joint given by its pivots (the fixed body's
+    named points ``JOINT.NAME``, two of them), or None."""
+    j = model.mechanism.joint(joint)
+    for name in (j.body_i, j.body_j):
+        b = model.mechanism.body(name)
+        pts = {k.split(".", 1)[1]: np.asarray(v, dtype=float) for k, v in b.points if k.startswith(f"{joint}.")}
+        if b.fixed and len(pts) == 2:
+            return name, {k: b.r + b.A @ v for k, v in pts.items()}
+    return None
+
+
+def _pivots_of(model: Model, joint: str) -> dict[str, list[float]] | None:
+    """The pivots to write for a joint, when its axis still runs through them."""
+    found = pivot_points(model, joint)
+    if found is None or model.mechanism.joint(joint).jtype.name not in PIVOT_TYPES:
+        return None
+    f = joint_frames(model)[joint]
+    z = f.R_i @ EZ
+    for p in found[1].values():
+        d = p - f.P_i
+        if np.linalg.norm(d - (d @ z) * z) > 1e-9 * max(1.0, float(np.max(np.abs(p)))):
+            return None
+    return {k: _clean(v) for k, v in found[1].items()}
 
 
 def _coupled_now(model: Model, kept: set[str]) -> dict[str, float]:
@@ -580,6 +681,7 @@ __all__ = [
     "joint_mismatch",
     "model_from_hardpoints",
     "model_to_hardpoints",
+    "pivot_points",
     "rotate_into",
     "rotation_change",
 ]

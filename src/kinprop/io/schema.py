@@ -22,6 +22,11 @@ Vec3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
 Vec4 = Annotated[list[Finite], Field(min_length=4, max_length=4)]
 Mat3 = Annotated[list[Vec3], Field(min_length=3, max_length=3)]
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+#: a named point: coordinates, or a reference to a joint's point (``UBJ``, ``TR.j``;
+#: :mod:`kinprop.model.joint_points`)
+PointValue = Annotated[Vec3 | str, Field(union_mode="left_to_right")]
+#: a wheel body's steering axis by its joints, upper first (``[UBJ, LBJ]``)
+Kingpin = Annotated[list[str], Field(min_length=2, max_length=2)]
 
 #: axis conventions a file may declare (all right-handed; kept as declared, never converted)
 AXES = {
@@ -40,6 +45,8 @@ class Units(Strict):
     length: Literal["m", "mm"]
     angle: Literal["deg", "rad"]
     axes: AxesName | None = None
+    #: the force unit of element stiffness / damping and the wheel rate (a label, e.g. N, kN, lbf)
+    force: Annotated[str, Field(min_length=1, max_length=16)] | None = None
 
 
 class HardpointUnits(Units):
@@ -51,7 +58,9 @@ class BodySpec(Strict):
     position: Vec3 | None = None
     orientation: Mat3 | None = None
     euler_parameters: Vec4 | None = None
-    points: dict[str, Vec3] = Field(default_factory=dict)
+    points: dict[str, PointValue] = Field(default_factory=dict)
+    #: the steering axis by its joints (points ``kingpin_upper``, ``kingpin_lower``)
+    kingpin: Kingpin | None = None
 
 
 class JointSpec(Strict):
@@ -82,6 +91,46 @@ class CouplingSpec(Strict):
     q0: Annotated[list[Finite], Field(min_length=2, max_length=2)] | None = None
 
 
+class ElementSpec(Strict):
+    """A spring, damper or spring-damper between two bodies (:mod:`kinprop.model.elements`).
+    Frame style: ``s_i``, ``s_j`` in the bodies' frames; hardpoint style: ``point_i``,
+    ``point_j`` global at the reference configuration. Numbers in the model's units."""
+
+    type: Literal["spring", "damper", "spring_damper"]
+    bodies: Annotated[list[str], Field(min_length=2, max_length=2)]
+    s_i: Vec3 | None = None
+    s_j: Vec3 | None = None
+    point_i: Vec3 | None = None
+    point_j: Vec3 | None = None
+    #: force per length
+    stiffness: Annotated[float, Field(ge=0, allow_inf_nan=False)] | None = None
+    #: force per (length / second)
+    damping: Annotated[float, Field(ge=0, allow_inf_nan=False)] | None = None
+    free_length: Positive | None = None
+    #: force at the model's configuration (positive: compressed spring pushing the ends apart)
+    preload: Finite | None = None
+
+
+Share = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
+
+
+class VehicleSpec(Strict):
+    """Vehicle parameters of a suspension model (:class:`kinprop.model.elements.Vehicle`)."""
+
+    wheelbase: Positive
+    cg_height: Positive
+    #: share of the braking force on the front axle
+    brake_front: Share = 0.6
+    #: share of the drive force on the front axle
+    drive_front: Share = 0.0
+    #: where the brakes react their torque: on the wheel carrier (outboard) or the chassis (inboard)
+    brakes: Literal["outboard", "inboard"] = "outboard"
+    #: where the drive reacts its torque: on the chassis (inboard, half shafts) or the carrier (outboard)
+    drive: Literal["outboard", "inboard"] = "inboard"
+    #: the axle of the model's corner
+    axle: Literal["front", "rear"] = "front"
+
+
 class ModelFile(Strict):
     kinprop: Literal[1] = 1
     name: str = "mechanism"
@@ -94,6 +143,11 @@ class ModelFile(Strict):
     inputs: list[str] = Field(default_factory=list)
     #: couplings between joint coordinates (one constraint row each)
     couplings: dict[str, CouplingSpec] = Field(default_factory=dict)
+    #: how an edit of a global hardpoint is read (hardpoint files: ``design``)
+    edits: Literal["design", "mechanism"] = "mechanism"
+    #: springs and dampers (``s_i``/``s_j`` in the bodies' frames)
+    elements: dict[str, ElementSpec] = Field(default_factory=dict)
+    vehicle: VehicleSpec | None = None
 
 
 class HardpointBodySpec(Strict):
@@ -103,7 +157,9 @@ class HardpointBodySpec(Strict):
     fixed: bool = False
     position: Vec3 | None = None
     orientation: Mat3 | None = None
-    points: dict[str, Vec3] = Field(default_factory=dict)
+    points: dict[str, PointValue] = Field(default_factory=dict)
+    #: the steering axis by its joints (points ``kingpin_upper``, ``kingpin_lower``)
+    kingpin: Kingpin | None = None
 
 
 class HardpointJointSpec(Strict):
@@ -119,6 +175,9 @@ class HardpointJointSpec(Strict):
     point_i: Vec3 | None = None
     point_j: Vec3 | None = None
     length: Positive | None = None
+    #: a revolute to a fixed body by its two pivots (instead of point and axis):
+    #: ``{front: [x, y, z], rear: [x, y, z]}``; the axis runs rear -> front (second -> first)
+    pivots: Annotated[dict[str, Vec3], Field(min_length=2, max_length=2)] | None = None
     #: a tree joint's coordinates at the configuration the hardpoints describe (default zero),
     #: in the declared angle unit; the points and axes then give the joint frame on body i
     q: list[Finite] | None = None
@@ -138,9 +197,16 @@ class HardpointFile(Strict):
     #: body-frame rule: ``global`` (axes parallel to the global axes at the reference) or
     #: ``joint`` (axes of the body's tree-joint frame, the paper's convention)
     body_frames: Literal["global", "joint"] = "global"
+    #: what an edit of a hardpoint keeps: ``design`` (the design position: the other hardpoints
+    #: stay, link lengths are re-derived; hardpoint tools') or ``mechanism`` (the paper's: the
+    #: lengths stay and the mechanism moves); :mod:`kinprop.propagation.hardpoints`
+    edits: Literal["design", "mechanism"] = "design"
     bodies: dict[str, HardpointBodySpec]
     joints: dict[str, HardpointJointSpec]
     #: driven joints (``JOINT`` or ``JOINT.q[k]``): held unless named in a free set
     inputs: list[str] = Field(default_factory=list)
     #: couplings between joint coordinates (one constraint row each)
     couplings: dict[str, CouplingSpec] = Field(default_factory=dict)
+    #: springs and dampers (``point_i``/``point_j`` global at the reference)
+    elements: dict[str, ElementSpec] = Field(default_factory=dict)
+    vehicle: VehicleSpec | None = None

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -25,7 +25,7 @@ from kinprop.engine import Engine, Solution, State, compile
 from kinprop.errors import AddressError, SingularityWarning
 from kinprop.model.model import Model
 from kinprop.propagation.conditioning import SINGULAR_RTOL, conditioning
-from kinprop.propagation.hardpoints import free_addresses, free_weights, resolve_changes
+from kinprop.propagation.hardpoints import free_addresses, free_weights, pivot_updates, resolve_changes
 from kinprop.propagation.poses import body_poses, joint_values
 from kinprop.propagation.summary import summary_html, summary_text
 from kinprop.propagation.units import (
@@ -247,11 +247,36 @@ def propagate(
     minimum-norm step (a larger weight lets a variable move more).
     """
     eng = engine_for(model, engine)
+    sol = solve_changes(eng, model, changes, free, tol=tol, max_iter=max_iter, weights=weights, branch=branch,
+                        units=units)  # fmt: skip
+    prop = propagation_of(eng, model, sol, free)
+    moved_pivots = pivot_updates(eng, changes or {})
+    if moved_pivots:  # the result carries its moved pivots (fixed-body points, not variables)
+        prop = replace(prop, after=with_points(prop.after, moved_pivots))
+    return prop
+
+
+def solve_changes(
+    engine: Engine,
+    model: Model,
+    changes: Mapping[str, object] | None,
+    free: Sequence[str] = ("q",),
+    *,
+    tol: float = 1e-10,
+    max_iter: int = 50,
+    weights: Mapping[str, float] | None = None,
+    branch: bool = True,
+    units: str = "model",
+) -> Solution:
+    """The engine solution of :func:`propagate` (its arguments; ``engine`` compiled from the
+    model's mechanism): changes converted to solver units and global addresses resolved at the
+    model's assembly, then one :meth:`Engine.propagate`."""
+    eng = engine
     start = eng.reference if eng.model is model else eng.state_of(model)
     changes = changes_to_internal(model, changes or {}, eng) if check_units(units) else dict(changes or {})
     changes = resolve_changes(eng, start, changes)
     check_coordinates_movable(eng, start, changes, free_addresses(eng, free))
-    sol = eng.propagate(
+    return eng.propagate(
         changes,
         free_addresses(eng, free),
         start=start,
@@ -260,7 +285,20 @@ def propagate(
         max_iter=max_iter,
         branch=branch,
     )
-    return propagation_of(eng, model, sol, free)
+
+
+def with_points(model: Model, points: Mapping[str, Mapping[str, Array]]) -> Model:
+    """``model`` with named points (body frame) of some bodies replaced or added."""
+    mech = model.mechanism
+    bodies = []
+    for b in mech.bodies:
+        new = points.get(b.name)
+        if new:
+            pts = dict(b.points)
+            pts.update({k: tuple(float(x) for x in v) for k, v in new.items()})
+            b = replace(b, points=tuple(pts.items()))
+        bodies.append(b)
+    return replace(model, mechanism=replace(mech, bodies=tuple(bodies)))
 
 
 def assemble(

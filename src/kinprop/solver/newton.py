@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from kinprop.jit import GELSD, JIT, LAPACK_INT, inlined, kernel, njit, prange
-from kinprop.kinematics.kernels import evaluate, evaluate_inlined, retract, workspace
+from kinprop.kinematics.kernels import VEC_CALLER, W_MAT, W_VEC, evaluate, evaluate_inlined, retract, workspace
 from kinprop.kinematics.tables import V_COMPONENT, V_JOINT, V_KIND, V_SIDE, VAR_C, VAR_Q, VAR_S
 from kinprop.spatial import exp_so3_into, mm_into, mmT_into
 
@@ -479,7 +479,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
     # (given by a batch whose variants share an assembled start)
     sign_ref = start_sign if start_sign != UNKNOWN_SIGN and its0 == 0 else _sign_at(tb, plan, Q, S, C, L, buf)
     sign_start = sign_ref
-    T = ws[6][0]
+    T = ws[W_MAT][0]
     for j in range(nj):
         for side in range(2):
             turn[j, side] = False
@@ -492,7 +492,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
             if turn[j, side]:
                 mmT_into(C1[j, side], C0[j, side], T)
                 log_so3_into(T, W[j, side])
-    w, E = ws[7][5], ws[6][1]
+    w, E = ws[W_VEC][VEC_CALLER], ws[W_MAT][1]  # predictor scratch (evaluate overwrites E)
     t, h = 0.0, 1.0
     subs, its, last, hlen = 0, its0, CONVERGED, its0 + 1
     status, norm = CONVERGED, 0.0
@@ -620,12 +620,13 @@ def follow_batch_threaded(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co,
 
 
 @njit
-def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, row_scale, col_scale, cfg, Qout, out):
+def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, row_scale, col_scale, cfg, Qout, Sout, Cout, Lout,
+                    out):  # fmt: skip
     """Drive the q columns ``set_cols`` through the rows of ``values``, following each step
     from the last good one (a failed step leaves the state at the last good step: the next
-    step restarts from there, on the same branch). ``Qout[s]`` holds the coordinates after
-    step ``s`` (NaN when it failed); ``out[s]`` = (status, iterations, fraction, sub-steps,
-    residual, flags)."""
+    step restarts from there, on the same branch). ``Qout[s]``, ``Sout[s]``, ``Cout[s]``,
+    ``Lout[s]`` hold the state after step ``s`` (NaN when it failed: free design variables
+    move too); ``out[s]`` = (status, iterations, fraction, sub-steps, residual, flags)."""
     buf = buffers(tb, plan, nnz)
     fbuf = follow_buffers(Q, S, C, L)
     hist = np.zeros(0)
@@ -641,10 +642,10 @@ def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, row_scale, col_
         _store(out, s, r)
         if r[0] == CONVERGED:
             sign = r[8]
-            Qout[s] = Q
+            copy_state(Q, S, C, L, Qout[s], Sout[s], Cout[s], Lout[s])
             copy_state(Q, S, C, L, Qg, Sg, Cg, Lg)
         else:
-            Qout[s] = np.nan
+            Qout[s], Sout[s], Cout[s], Lout[s] = np.nan, np.nan, np.nan, np.nan
             copy_state(Qg, Sg, Cg, Lg, Q, S, C, L)
 
 
