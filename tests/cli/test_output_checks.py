@@ -25,12 +25,15 @@ runner = CliRunner()
 
 @pytest.fixture(scope="module")
 def no_kingpin(tmp_path_factory) -> Path:
-    """The hardpoint double wishbone without its kingpin points nor wheel_centre_ref."""
-    data = yaml.safe_load((EXAMPLES / "double_wishbone_hardpoints.yaml").read_text())
-    for name in ("kingpin_upper", "kingpin_lower"):
-        del data["bodies"]["upright"]["points"][name]
-    del data["bodies"]["chassis"]["points"]
+    """The imported Chrono MultiLink (no steering axis: no two ball joints on the upright),
+    without its reference wheel centre (the issue's reproduction)."""
     path = tmp_path_factory.mktemp("nk") / "no_kingpin.yaml"
+    r = CliRunner().invoke(app, ["import", str(EXAMPLES / "chrono" / "MultiLink.json"), "-o", str(path)])
+    assert r.exit_code == 0, r.output
+    data = yaml.safe_load(path.read_text())
+    for body in data["bodies"].values():
+        for name in [k for k in body.get("points", {}) if "wheel_centre_ref" in k]:
+            del body["points"][name]
     path.write_text(yaml.safe_dump(data, sort_keys=False))
     return path
 
@@ -38,10 +41,10 @@ def no_kingpin(tmp_path_factory) -> Path:
 @pytest.mark.parametrize(
     ("command", "metric", "needs"),
     [
-        (["sweep", "--drive", "LCA=-4:4:3"], "kpi", "kingpin_upper"),
-        (["sweep", "--drive", "LCA=-4:4:3"], "wheel_centre_dz", "wheel_centre_ref"),
-        (["propagate", "--target", "{m}=1", "--free", "hardpoint:UBJ"], "kpi", "kingpin_upper"),
-        (["sensitivity", "--wrt", "UBJ.s_i", "--of", "{m}"], "kpi", "kingpin_upper"),
+        (["sweep", "--drive", "UA=-4:4:3"], "kpi", "kingpin_upper"),
+        (["sweep", "--drive", "UA=-4:4:3"], "wheel_centre_dz", "wheel_centre_ref"),
+        (["propagate", "--target", "{m}=1", "--free", "hardpoint:TIEROD.i"], "kpi", "kingpin_upper"),
+        (["sensitivity", "--wrt", "TIEROD.s_i", "--of", "{m}"], "kpi", "kingpin_upper"),
     ],
 )
 def test_missing_metric_is_invalid_input(no_kingpin, command, metric, needs):
@@ -56,7 +59,7 @@ def test_missing_metric_is_invalid_input(no_kingpin, command, metric, needs):
 def test_computable_columns_are_filled(no_kingpin):
     r = runner.invoke(
         app,
-        ["sweep", str(no_kingpin), "--drive", "LCA=-4:4:3", "--out", "camber", "--out", "toe",
+        ["sweep", str(no_kingpin), "--drive", "UA=-4:4:3", "--out", "camber", "--out", "toe",
          "--out", "point:upright.wheel_centre", "--out", "point:upright.spin_axis", "--json"],
     )  # fmt: skip
     assert r.exit_code == 0, r.output

@@ -512,8 +512,9 @@ def _units_text(node: Node) -> dict[str, str] | None:
     for ch in node:
         if ch.tag == "text" and ch.get("name") == "kinprop.units":
             pairs = [p.partition("=") for p in (ch.get("data") or "").split()]
-            units = {k: v for k, _, v in pairs if k in _UNIT_VALUES and v in _UNIT_VALUES[k]}
-            return units if len(units) == len(pairs) and {"length", "angle"} <= set(units) else None
+            units = {k: v for k, _, v in pairs if k and v}
+            known = all(v in _UNIT_VALUES[k] for k, v in units.items() if k in _UNIT_VALUES)
+            return units if known and {"length", "angle"} <= set(units) else None
     return None
 
 

@@ -407,19 +407,29 @@ def absurd_lengths(spec: Any, file: str) -> list[Problem]:
     The scale is the median size of the file's non-zero positions, points and lengths (a
     single absurd number cannot inflate it, as it would the largest); the limit is
     ``ABSURD * max(1, scale)``, the rule ``--set`` applies (:meth:`kinprop.engine.Engine.set`).
-    Checked before anything is computed from the numbers, so nothing overflows.
+    Checked before anything is computed from the numbers, so nothing overflows. Values that
+    are not numbers (a point given by reference) are left to the other checks.
     """
     found: list[tuple[str, float]] = []
+
+    def add(loc: str, v: Any) -> None:
+        if isinstance(v, dict):
+            for k, x in v.items():
+                add(f"{loc}.{k}", x)
+            return
+        vals = v if isinstance(v, (list, tuple)) else [v]
+        if vals and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in vals):
+            found.append((loc, float(np.max(np.abs(np.asarray(vals, dtype=float))))))
+
     for name, b in spec.bodies.items():
-        if b.position is not None:
-            found.append((f"bodies.{name}.position", float(np.max(np.abs(b.position)))))
-        for k, v in b.points.items():
-            found.append((f"bodies.{name}.points.{k}", float(np.max(np.abs(v)))))
+        add(f"bodies.{name}.position", getattr(b, "position", None))
+        for k, v in (getattr(b, "points", None) or {}).items():
+            add(f"bodies.{name}.points.{k}", v)
     for name, j in spec.joints.items():
-        for f in ("s_i", "s_j", "point", "point_i", "point_j", "length"):
+        for f in ("s_i", "s_j", "point", "point_i", "point_j", "length", "pivots"):
             v = getattr(j, f, None)
             if v is not None:
-                found.append((f"joints.{name}.{f}", float(np.max(np.abs(v)))))
+                add(f"joints.{name}.{f}", v)
     sizes = [v for _, v in found if v > 0]
     if not sizes:
         return []
