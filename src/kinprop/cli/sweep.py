@@ -247,9 +247,7 @@ def sweep_cmd(
     df = res.frame
     label_units(res, base)
     if as_json:
-        print_json(
-            sweep_json(res, base, output, plot) | {"baseline_file": None if base_output is None else str(base_output)}
-        )
+        print_json(sweep_json(res, base, output, plot) | ({"baseline_file": str(base_output)} if base_output else {}))
     if not quiet:
         terminal = out.is_terminal  # a pipe gets every row and every varying column
         shown = _shown_columns(res, outputs, 10 if terminal else None)
