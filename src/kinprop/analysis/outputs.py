@@ -35,6 +35,7 @@ from kinprop.analysis.metrics import (
     wheel_first_order,
     wheel_metrics,
 )
+from kinprop.analysis.statics import is_load_output, load_value
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
@@ -70,7 +71,10 @@ def expand_outputs(model: Model, names: Sequence[str], engine: Engine | None = N
     out: list[str] = []
     for name in names:
         name = name.strip()
-        if name.startswith("distance:"):
+        if is_load_output(name):
+            load_value(model, name, {}, engine)  # the joint, element, input and load case exist
+            out.append(name)
+        elif name.startswith("distance:"):
             ctx = OutputContext.of(model, engine=engine)
             for end in _distance_ends(name):
                 ctx.point(end)  # both ends exist
@@ -136,6 +140,8 @@ def _parse_variable(engine: Engine, name: str) -> Address:
 
 
 def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, float]]) -> float:
+    if is_load_output(name):
+        return load_value(ctx.model, name, metric_cache, ctx.engine, ctx.reference)
     if name.startswith("distance:"):
         a, b = _distance_ends(name)
         return float(np.linalg.norm(ctx.point(a) - ctx.point(b)))

@@ -79,6 +79,11 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "smallest change of the --free design variables meeting the targets.",
     ),
     "sweep": ("kinprop.cli.sweep", "Drive joint coordinates over a range; each step is solved from the previous one."),
+    "loads": (
+        "kinprop.cli.loads",
+        "Joint reactions, member forces (tension positive), spring and damper forces (positive pushing apart) "
+        "and the efforts that hold the inputs, at the model's assembled pose.",
+    ),
     "import": ("kinprop.cli.importer", "Read another tool's mechanism file and write it as a kinprop model file."),
     "serve": (
         "kinprop.cli.serve",

@@ -43,30 +43,18 @@ from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.couplings import build_couplings, couplings_to_data
 from kinprop.io.elements import build_elements, build_vehicle, elements_to_data, vehicle_to_data
 from kinprop.io.loader import EULER_TOL, absurd_lengths, build_or_report
+from kinprop.io.loads import build_loads, loads_to_data
 from kinprop.io.points import attach_references, point_order, point_references, written_points
 from kinprop.io.schema import HardpointFile, HardpointJointSpec
-from kinprop.joints import joint_type
+from kinprop.joints import REGISTRY, joint_type
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates, parse_address
 from kinprop.model.mechanism import validate_couplings, validate_structure
 from kinprop.spatial import EY, EZ, Array, is_rotation, log_so3
 from kinprop.topology import WORLD, build_topology
 
-#: hardpoint keys per joint type: (required, optional)
+#: hardpoint keys per joint type: (required, optional) (each type's ``hardpoint_keys``)
 KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "revolute": (("point", "axis"), ()),
-    "translational": (("point", "axis"), ()),
-    "cylindrical": (("point", "axis"), ()),
-    "universal": (("point", "axis_i", "axis_j"), ()),
-    "spherical": (("point",), ()),
-    "spherical-point": (("point",), ()),
-    "fixed": (("point",), ()),
-    "free": ((), ("point",)),
-    "spherical-translational": (("point", "axis"), ()),
-    "revolute-spherical": (("point_i", "axis", "point_j"), ("length",)),
-    "translational-distance": (("point_i", "axis", "point_j"), ("length",)),
-    "distance": (("point_i", "point_j"), ("length",)),
-    "dot-1": (("axis_i", "axis_j"), ()),
-    "dot-2": (("point_i", "axis", "point_j"), ()),
+    name: jt.hardpoint_keys for name, jt in REGISTRY.items() if jt.hardpoint_keys is not None
 }
 
 #: what each hardpoint key means, for messages and docs
@@ -80,22 +68,8 @@ KEY_MEANING = {
     "length": "the link length (default: the distance between point_i and point_j)",
 }
 
-#: design fields a cut joint defines: those its constraints use
-CUT_FIELDS: dict[str, tuple[str, ...]] = {
-    "revolute": ("s_i", "s_j", "C_i", "C_j"),
-    "translational": ("s_i", "s_j", "C_i", "C_j"),
-    "cylindrical": ("s_i", "s_j", "C_i", "C_j"),
-    "universal": ("s_i", "s_j", "C_i", "C_j"),
-    "fixed": ("s_i", "s_j", "C_i", "C_j"),
-    "spherical": ("s_i", "s_j"),
-    "spherical-point": ("s_i", "s_j"),
-    "spherical-translational": ("s_i", "s_j", "C_j"),
-    "revolute-spherical": ("s_i", "s_j", "C_i", "length"),
-    "translational-distance": ("s_i", "s_j", "C_i", "length"),
-    "distance": ("s_i", "s_j", "length"),
-    "dot-1": ("C_i", "C_j"),
-    "dot-2": ("s_i", "s_j", "C_i"),
-}
+#: design fields a cut joint defines: those its constraints use (each type's ``cut_fields``)
+CUT_FIELDS: dict[str, tuple[str, ...]] = {name: jt.cut_fields for name, jt in REGISTRY.items() if jt.cut}
 
 #: joint types that may be given by two pivots (their axis runs from the second to the first)
 PIVOT_TYPES = ("revolute", "cylindrical")
@@ -420,14 +394,17 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
     if problems:
         raise ModelError(problems)
     elements, eproblems = build_elements(spec.elements, set(pose), "hardpoints", file, lambda b: pose[b])
-    if eproblems:
-        raise ModelError(eproblems)
+    loads, lproblems = build_loads(spec.loads, {b.name: [n for n, _ in b.points] for b in final}, "hardpoints", file,
+                                   lambda b: pose[b])  # fmt: skip
+    if eproblems or lproblems:
+        raise ModelError(eproblems + lproblems)
     mech = Mechanism(tuple(final), tuple(joints), spec.name, tuple(spec.inputs), couplings, spec.edits)
     values.update(coefs)
     units = {"length": spec.units.length, "angle": spec.units.angle, "axes": spec.units.axes}
     if spec.units.force is not None:
         units["force"] = spec.units.force
-    model = Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle))
+    model = Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle),
+                  loads)  # fmt: skip
     return attach_references(model, refs, file, point_order(spec.bodies))
 
 
@@ -556,6 +533,8 @@ def model_to_hardpoints(model: Model, body_frames: str = "global", keep_coordina
         **({"elements": elements_to_data(model.elements, "hardpoints", lambda b: (kin.r[b], kin.A[b]))}
            if model.elements else {}),
         **({"vehicle": vehicle_to_data(model.vehicle)} if model.vehicle is not None else {}),
+        **({"loads": loads_to_data(model.loads, "hardpoints", lambda b: (kin.r[b], kin.A[b]))}
+           if model.loads is not None else {}),
     }  # fmt: skip
 
 

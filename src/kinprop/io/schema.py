@@ -131,6 +131,43 @@ class VehicleSpec(Strict):
     axle: Literal["front", "rear"] = "front"
 
 
+class PointLoadSpec(Strict):
+    """A force and a couple on a body point (:class:`kinprop.model.loads.PointLoad`): ``point`` a
+    named point of the body, or coordinates (frame style: the body's frame; hardpoint style:
+    global at the reference configuration). Force unit ``units.force``, moments force x length."""
+
+    body: str
+    point: str | Vec3
+    force: Vec3 | None = None
+    moment: Vec3 | None = None
+    #: components in the global axes or in the body's axes
+    axes: Literal["global", "body"] = "global"
+
+
+class MassSpec(Strict):
+    """A body's weight (force at 1 g, ``units.force``) at its centre of mass (named point or coordinates)."""
+
+    weight: Annotated[float, Field(ge=0, allow_inf_nan=False)]
+    cm: str | Vec3
+
+
+class LoadCaseSpec(Strict):
+    """One named load case (:class:`kinprop.model.loads.LoadCase`)."""
+
+    forces: list[PointLoadSpec] = Field(default_factory=list)
+    #: contact-patch force of a wheel body, ``[Fx, Fy, Fz]`` in ISO 8855 axes (Fz > 0: vertical load)
+    wheels: dict[str, Vec3] = Field(default_factory=dict)
+    #: gravity in multiples of g (``[0, 0, -1]``: 1 g down in a z-up model); weights from ``masses``
+    gravity: Vec3 | None = None
+
+
+class LoadsSpec(Strict):
+    """The ``loads:`` section: body masses and named load cases (:mod:`kinprop.io.loads`)."""
+
+    masses: dict[str, MassSpec] = Field(default_factory=dict)
+    cases: dict[str, LoadCaseSpec] = Field(default_factory=dict)
+
+
 class ModelFile(Strict):
     kinprop: Literal[1] = 1
     name: str = "mechanism"
@@ -148,6 +185,8 @@ class ModelFile(Strict):
     #: springs and dampers (``s_i``/``s_j`` in the bodies' frames)
     elements: dict[str, ElementSpec] = Field(default_factory=dict)
     vehicle: VehicleSpec | None = None
+    #: applied loads: body masses and named load cases
+    loads: LoadsSpec | None = None
 
 
 class HardpointBodySpec(Strict):
@@ -210,3 +249,5 @@ class HardpointFile(Strict):
     #: springs and dampers (``point_i``/``point_j`` global at the reference)
     elements: dict[str, ElementSpec] = Field(default_factory=dict)
     vehicle: VehicleSpec | None = None
+    #: applied loads: body masses and named load cases
+    loads: LoadsSpec | None = None

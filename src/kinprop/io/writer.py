@@ -18,6 +18,7 @@ from kinprop.io.couplings import couplings_to_data
 from kinprop.io.elements import elements_to_data, vehicle_to_data
 from kinprop.io.hardpoints import model_to_hardpoints
 from kinprop.io.loader import parse_text
+from kinprop.io.loads import loads_to_data
 from kinprop.io.points import written_points
 from kinprop.model import Model
 
@@ -92,6 +93,7 @@ def model_to_data(model: Model) -> dict[str, Any]:
         **({"edits": mech.edits} if mech.edits != "mechanism" else {}),
         **({"elements": elements_to_data(model.elements, "frames")} if model.elements else {}),
         **({"vehicle": vehicle_to_data(model.vehicle)} if model.vehicle is not None else {}),
+        **({"loads": loads_to_data(model.loads, "frames")} if model.loads is not None else {}),
     }
 
 
