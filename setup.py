@@ -11,6 +11,8 @@ from setuptools import setup
 from setuptools.command.build_py import build_py
 
 ROOT = Path(__file__).resolve().parent
+#: what an example is: models, scripts, other tools' files (examples/chrono, examples/mjcf) and their notes
+SUFFIXES = (".yaml", ".yml", ".json", ".xml", ".py", ".md")
 
 
 class BuildWithExamples(build_py):
@@ -20,9 +22,11 @@ class BuildWithExamples(build_py):
             return
         target = Path(self.build_lib) / "kinprop" / "examples"
         target.mkdir(parents=True, exist_ok=True)
-        for src in sorted((ROOT / "examples").iterdir()):
-            if src.suffix in (".yaml", ".yml", ".json", ".py") and src.is_file():
-                self.copy_file(str(src), str(target / src.name))
+        for src in sorted((ROOT / "examples").rglob("*")):
+            if src.suffix in SUFFIXES and src.is_file():
+                dest = target / src.relative_to(ROOT / "examples")
+                dest.parent.mkdir(parents=True, exist_ok=True)
+                self.copy_file(str(src), str(dest))
 
 
 setup(cmdclass={"build_py": BuildWithExamples})

@@ -3,7 +3,7 @@ by moving two hardpoints (the upper ball joint and the tie rod's inner point), t
 before/after camber and toe curves from an ordinary sweep of each design.
 
 Run from the repository root: ``python examples/double_wishbone_targets.py [OUT.png]``
-(default docs/img/double_wishbone_targets.png). docs/guide/targets.md explains it.
+(default double_wishbone_targets.png in the current directory). docs/guide/targets.md explains it.
 """
 
 from __future__ import annotations
@@ -74,4 +74,4 @@ def main(out: Path) -> None:
 
 if __name__ == "__main__":
     warnings.simplefilter("ignore", SingularityWarning)
-    main(Path(sys.argv[1]) if len(sys.argv) > 1 else HERE.parent / "docs" / "img" / "double_wishbone_targets.png")
+    main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path("double_wishbone_targets.png"))

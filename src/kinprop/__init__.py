@@ -4,8 +4,9 @@ Implements Zou, Abdel-Malek & Wang (1997), "Design Propagation in Mechanical Sys
 Kinematic Analysis", ASME J. Mech. Des. 119(3).
 """
 
-import importlib
-from typing import TYPE_CHECKING, Any
+import importlib as _importlib
+from typing import TYPE_CHECKING as _TYPE_CHECKING
+from typing import Any as _Any
 
 #: public names -> the module that defines them, imported on first use (PEP 562): ``import
 #: kinprop`` stays cheap, and the command line can choose how kernels run (kinprop.jit) first
@@ -48,7 +49,7 @@ _EXPORTS = {
     "SolveResult": "kinprop.solver",
 }
 
-if TYPE_CHECKING:
+if _TYPE_CHECKING:
     from kinprop.analysis import design_sensitivity, evaluate_outputs, mobility, output_sensitivity, sweep
     from kinprop.analysis.motion import Motion, motion
     from kinprop.analysis.statics import Statics, statics
@@ -61,16 +62,17 @@ if TYPE_CHECKING:
     from kinprop.solver import SolveResult
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> _Any:
     if name in _EXPORTS:
-        value = getattr(importlib.import_module(_EXPORTS[name]), name)
+        value = getattr(_importlib.import_module(_EXPORTS[name]), name)
         globals()[name] = value
         return value
     raise AttributeError(f"module 'kinprop' has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
+    """The public names (not the helpers this module imports), and the dunder attributes."""
+    return sorted(set(_EXPORTS) | {n for n in globals() if n.startswith("__")})
 
 
 __version__ = "0.1.0"

@@ -108,7 +108,7 @@ def test_wheel_centre_displacement_reference_point_and_model():
     assert suspension_metrics(moved_no_ref, reference=ref)["wheel_centre_dz"] == pytest.approx(0.05)
     out = evaluate_outputs(moved_no_ref, ["wheel_travel"], reference=ref)
     assert out["wheel_travel"] == pytest.approx(0.05)
-    with pytest.raises(AddressError, match="not available"):
+    with pytest.raises(AddressError, match="needs a reference"):
         evaluate_outputs(moved_no_ref, ["metric:wheel.wheel_centre_dz"])
     assert "metric:wheel.wheel_centre_dz" in metric_names(moved)
 

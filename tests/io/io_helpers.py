@@ -23,13 +23,16 @@ def _numbers(tree: Any, prefix: str = "") -> dict[str, np.ndarray]:
 
 
 def hardpoint_numbers(data: dict[str, Any]) -> dict[str, np.ndarray]:
-    """Every number of a hardpoint file's bodies and joints, keyed by location."""
-    return _numbers({"bodies": data["bodies"], "joints": data["joints"]})
+    """Every point, axis and length of a hardpoint file's bodies and joints, keyed by location
+    (not the coordinates ``q`` of the configuration they describe)."""
+    numbers = _numbers({"bodies": data["bodies"], "joints": data["joints"]})
+    return {k: v for k, v in numbers.items() if not k.endswith(".q")}
 
 
 def hardpoint_difference(a: Model | dict[str, Any], b: Model | dict[str, Any]) -> float:
-    """Largest absolute difference between two models' (or files') hardpoints; same keys required."""
-    na = hardpoint_numbers(a if isinstance(a, dict) else model_to_hardpoints(a))
-    nb = hardpoint_numbers(b if isinstance(b, dict) else model_to_hardpoints(b))
+    """Largest absolute difference between two models' (or files') hardpoints; same keys required.
+    Models are compared at their poses (re-zeroed), files as written."""
+    na = hardpoint_numbers(a if isinstance(a, dict) else model_to_hardpoints(a, keep_coordinates=False))
+    nb = hardpoint_numbers(b if isinstance(b, dict) else model_to_hardpoints(b, keep_coordinates=False))
     assert na.keys() == nb.keys(), set(na) ^ set(nb)
     return max(float(np.max(np.abs(na[k] - nb[k]))) for k in na)

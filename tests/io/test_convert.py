@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 import yaml
 from io_helpers import hardpoint_difference
 from typer.testing import CliRunner
@@ -31,13 +32,15 @@ def test_frames_to_hardpoints_to_frames(tmp_path):
     hp = yaml.safe_load((tmp_path / "hp.yaml").read_text())
     assert hp["style"] == "hardpoints" and hp["body_frames"] == "global"
     assert hp["joints"]["J32"]["type"] == "universal" and set(hp["joints"]["J32"]) >= {"axis_i", "axis_j", "point"}
-    assert hardpoint_difference(hp, load_model(EXAMPLES / "slider_crank_hardpoints.yaml")) < 1e-12
+    example = load_model(EXAMPLES / "slider_crank_hardpoints.yaml")
+    assert hardpoint_difference(load_model(tmp_path / "hp.yaml"), example) < 1e-12
     r = run("convert", tmp_path / "hp.yaml", "--to", "frames", "-o", tmp_path / "frames.json")
     assert r.exit_code == 0, r.output
     data = json.loads((tmp_path / "frames.json").read_text())
-    assert "style" not in data and data["joints"]["J01"]["q"] == [0.0]
-    back = load_model(tmp_path / "frames.json")
     original = load_model(asm)
+    # the input's zero is kept through both conversions (issue 19 item 0)
+    assert "style" not in data and data["joints"]["J01"]["q"] == pytest.approx(np.degrees(original.coordinates["J01"]))
+    back = load_model(tmp_path / "frames.json")
     assert hardpoint_difference(original, back) < 1e-12
     change = {"J12.s_j": [-2.8, 0.2, 0.1]}
     pf = propagate(original, change, ("q", "s"))

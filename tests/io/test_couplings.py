@@ -96,9 +96,10 @@ def test_written_back_in_the_files_units(tmp_path) -> None:
     )
 
 
-def test_hardpoint_style_shifts_the_offsets_to_its_zero_coordinates(tmp_path) -> None:
-    """A hardpoint file's coordinates are zero at the reference: converting at G = 20 deg
-    (O2 = 50 deg) writes q0 = [60 - 50, 0 - 20], and the model moves as before."""
+def test_hardpoint_style_keeps_the_coordinates_or_shifts_the_offsets(tmp_path) -> None:
+    """Converting at G = 20 deg (O2 = 50 deg): both joints sit on the fixed body, so the file
+    keeps their coordinates (``q``) and the offsets q0 = [60, 0]; the model moves as before.
+    Written re-zeroed (``keep_coordinates=False``) the offsets shift to [60 - 50, 0 - 20]."""
     eng = kp.compile(kp.load_model(GEARED))
     at20 = eng.propagate({"G.q": 20 * D}, free=["q"])
     assert at20.converged
@@ -107,13 +108,23 @@ def test_hardpoint_style_shifts_the_offsets_to_its_zero_coordinates(tmp_path) ->
     hp = tmp_path / "g_hp.yaml"
     r = runner.invoke(app, ["convert", str(assembled), "--to", "hardpoints", "-o", str(hp)])
     assert r.exit_code == 0, r.output
-    written = yaml.safe_load(hp.read_text())["couplings"]["DRIVE"]
-    np.testing.assert_allclose(written["q0"], [10, -20], atol=1e-9)
-    model = kp.load_model(hp)
-    h = kp.compile(model)
-    sol = h.propagate({"G.q": 10 * D}, free=["q"])  # G at 30 deg overall
+    data = yaml.safe_load(hp.read_text())
+    np.testing.assert_allclose(data["couplings"]["DRIVE"].get("q0", [0, 0]), [60, 0], atol=1e-9)
+    np.testing.assert_allclose(data["joints"]["G"]["q"], [20], atol=1e-9)
+    h = kp.compile(kp.load_model(hp))
+    sol = h.propagate({"G.q": 30 * D}, free=["q"])
     ref = eng.propagate({"G.q": 30 * D}, free=["q"])
     assert sol.converged and ref.converged
+    assert float(sol.value("O2.q")[0]) == pytest.approx(float(ref.value("O2.q")[0]), abs=1e-12)
+    assert float(sol.value("O4.q")[0]) == pytest.approx(float(ref.value("O4.q")[0]), abs=1e-12)
+
+    from kinprop.io.hardpoints import model_from_hardpoints, model_to_hardpoints
+
+    rezeroed = model_to_hardpoints(kp.load_model(assembled), keep_coordinates=False)
+    np.testing.assert_allclose(rezeroed["couplings"]["DRIVE"]["q0"], [10, -20], atol=1e-9)
+    h = kp.compile(model_from_hardpoints(rezeroed))
+    sol = h.propagate({"G.q": 10 * D}, free=["q"])  # G at 30 deg overall
+    assert sol.converged
     assert float(sol.value("O2.q")[0]) == pytest.approx(float(ref.value("O2.q")[0]) - 50 * D, abs=1e-12)
     assert float(sol.value("O4.q")[0]) == pytest.approx(float(ref.value("O4.q")[0]) - float(at20.value("O4.q")[0]),
                                                         abs=1e-12)  # fmt: skip

@@ -271,7 +271,7 @@ def test_hardpoint_keys_per_joint_type(tmp_path):
 def test_frame_keys_in_a_hardpoint_file_and_back(tmp_path):
     hp = example("mcpherson_hardpoints.yaml")
     hp["joints"]["ST"]["s_i"] = [0, 0, 0]
-    assert_reported(tmp_path, hp, [("joints.ST.s_i", "unknown key (s_i, s_j, C_i, C_j and q belong in a frame-style")])
+    assert_reported(tmp_path, hp, [("joints.ST.s_i", "unknown key (s_i, s_j, C_i and C_j belong in a frame-style")])
     data = example("mcpherson.yaml")
     data["joints"]["ST"]["point"] = [0, 0, 0]
     assert_reported(tmp_path, data, [("joints.ST.point", "unknown key (hardpoint keys need 'style: hardpoints'")])
@@ -305,7 +305,7 @@ def test_every_problem_at_once(tmp_path):
 
 
 def test_syntax_and_file_problems(tmp_path):
-    assert_reported(tmp_path, "kinprop: 1\nbodies: {a\n", [("syntax", "while parsing")])
+    assert_reported(tmp_path, "kinprop: 1\nbodies: {a\n", [("line 3, column 1", "YAML syntax: while parsing")])
     assert_reported(tmp_path, "- 1\n- 2\n", [("model", "expected a mapping at the top level, found list")])
     assert_reported(tmp_path, "", [("model", "found NoneType")])
     path = tmp_path / "latin1.yaml"

@@ -64,8 +64,12 @@ def test_installed_package_is_the_wheel(installed, tmp_path) -> None:
     assert p.returncode == 0, p.stderr
     module, examples = p.stdout.split()
     assert Path(module).is_relative_to(site) and Path(examples) == site / "kinprop" / "examples"
-    shipped = sorted(x.name for x in (site / "kinprop" / "examples").iterdir() if x.is_file())
-    assert shipped == sorted(x.name for x in (ROOT / "examples").iterdir() if x.suffix in (".yaml", ".py"))
+    shipped_dir = site / "kinprop" / "examples"
+    shipped = sorted(x.relative_to(shipped_dir).as_posix() for x in shipped_dir.rglob("*")
+                     if x.is_file() and "__pycache__" not in x.parts)  # fmt: skip
+    want = sorted(x.relative_to(ROOT / "examples").as_posix() for x in (ROOT / "examples").rglob("*")
+                  if x.is_file() and x.suffix in (".yaml", ".py", ".json", ".xml", ".md"))  # fmt: skip
+    assert shipped == want and "chrono/DoubleWishbone.json" in shipped and "mjcf/robotiq_2f85_kinematic.xml" in shipped
 
 
 def test_paper_version_and_examples_from_the_wheel(installed, tmp_path) -> None:
@@ -88,3 +92,37 @@ def test_paper_version_and_examples_from_the_wheel(installed, tmp_path) -> None:
     assert p.returncode == 2 and p.stderr.strip() == (
         "error: this command needs pandas, which is not installed: pip install 'kinprop[data]'"
     )
+
+
+def test_readme_and_import_guide_commands_from_the_wheel(installed, tmp_path) -> None:
+    """Issue 19 item 2: after ``kinprop examples --copy examples`` from the wheel, the README's
+    import and the import guide's commands (those without the optional extras) run."""
+    p = _run(installed, "examples", "--copy", "examples", cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    for sub in ("chrono/DoubleWishbone.json", "chrono/MultiLink.json", "mjcf/cassie_left_leg_kinematic.xml"):
+        assert (tmp_path / "examples" / sub).read_bytes() == (ROOT / "examples" / sub).read_bytes()
+    commands = [
+        ["import", "examples/chrono/DoubleWishbone.json", "-o", "dw.yaml"],  # README
+        ["import", "examples/mjcf/robotiq_2f85_kinematic.xml", "-o", "robotiq.yaml"],
+        [
+            "sensitivity",
+            "examples/chrono/DoubleWishbone.json",
+            "--wrt",
+            "UCA_U.s_j",
+            "--wrt",
+            "TIEROD.s_j",
+            "--of",
+            "camber",
+            "--of",
+            "toe",
+            "--free",
+            "UCA.q",
+            "--free",
+            "LCA_U.q",
+        ],
+        ["check", "dw.yaml", "--assemble"],
+    ]
+    for args in commands:
+        p = _run(installed, *args, cwd=tmp_path)
+        assert p.returncode == 0, (args, p.stderr[-3000:])
+    assert (tmp_path / "dw.yaml").is_file() and (tmp_path / "robotiq.yaml").is_file()

@@ -151,6 +151,19 @@ def available_metrics(
     return out
 
 
+#: what a wheel needs for each metric beyond wheel_centre and spin_axis (for messages)
+METRIC_NEEDS = {
+    "caster": "a steering axis: named points kingpin_upper and kingpin_lower (or a WheelSpec steering_axis)",
+    "kpi": "a steering axis: named points kingpin_upper and kingpin_lower (or a WheelSpec steering_axis)",
+    "scrub_radius": "a steering axis (kingpin_upper, kingpin_lower) and a contact_patch point on the wheel",
+    "trail": "a steering axis (kingpin_upper, kingpin_lower) and a contact_patch point on the wheel",
+    **dict.fromkeys(
+        ("wheel_centre_dx", "wheel_centre_dy", "wheel_centre_dz"),
+        "a reference: a fixed-body point WHEEL.wheel_centre_ref (or wheel_centre_ref with one wheel)",
+    ),
+}
+
+
 def metric_names(model: Model, first_order: bool = False) -> list[str]:
     """``metric:WHEEL.NAME`` for every wheel body and every position-level metric it supports
     (the default outputs of sweeps and studies); ``first_order``: the first-order ones too
@@ -388,6 +401,7 @@ def is_angle_valued(metric: str) -> bool:
 
 __all__ = [
     "METRICS",
+    "METRIC_NEEDS",
     "POSITION_METRICS",
     "WheelSpec",
     "camber_toe",

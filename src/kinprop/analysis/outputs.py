@@ -27,6 +27,7 @@ import numpy as np
 
 from kinprop.analysis.context import HARD, POINT, OutputContext, pivot_point
 from kinprop.analysis.metrics import (
+    METRIC_NEEDS,
     WheelSpec,
     is_first_order,
     metric_names,
@@ -158,8 +159,11 @@ def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, flo
             metric_cache[key] = wheel_first_order(ctx, wheel) if first else wheel_metrics(ctx, wheel)
         values = metric_cache[key]
         if metric not in values:
-            available = ", ".join(values)
-            raise AddressError(f"metric {metric!r} is not available for wheel {wheel!r}; available: {available}")
+            needs = METRIC_NEEDS.get(metric, "more named points").replace("WHEEL", wheel)
+            raise AddressError(
+                f"output {name!r}: metric {metric!r} of wheel {wheel!r} needs {needs}; "
+                f"this model gives: {', '.join(values)}"
+            )
         return float(values[metric])
     addr = _parse_variable(ctx.engine, name)
     model = ctx.model
@@ -207,7 +211,13 @@ def output_function(
     wheels: Mapping[str, WheelSpec] | None = None,
     engine: Engine | None = None,
 ) -> tuple[Callable[[Model], Array], list[str]]:
-    """``(f, expanded)``: ``f(model) -> array`` of the expanded outputs (names checked once)."""
+    """``(f, expanded)``: ``f(model) -> array`` of the expanded outputs.
+
+    Checked once, here: every output is evaluated at ``model`` (whether an output exists
+    does not depend on the pose), so one that the model cannot give (a metric without the
+    points it needs) raises :class:`AddressError` naming it and what is missing, before any
+    solve, instead of a blank column later.
+    """
     eng = engine if engine is not None else compile_engine(model.mechanism)
     expanded = expand_outputs(model, names, eng)
 
@@ -216,6 +226,10 @@ def output_function(
         cache: dict[str, dict[str, float]] = {}
         return np.array([_scalar(ctx, n, cache) for n in expanded])
 
+    ctx0 = OutputContext.of(model, reference, wheels, eng)
+    cache0: dict[str, dict[str, float]] = {}
+    for n in expanded:
+        _scalar(ctx0, n, cache0)
     return f, expanded
 
 

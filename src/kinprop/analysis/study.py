@@ -135,6 +135,9 @@ class StudySpec:
     #: factor's plan values are in the stored units and divided by it before solving
     #: (:func:`model_unit_scale`: the model's units)
     scale: dict[str, float] = field(default_factory=dict)
+    #: the factors as the user gave them when ``addresses`` were derived from them (global
+    #: hardpoints ``hardpoint:J.i[z]`` -> the ``s'`` components they set); stored as columns too
+    factors: list[str] | None = None
 
 
 # --- model transport (Design holds read-only mapping proxies, which do not pickle) ---------------
@@ -366,6 +369,7 @@ def run_study(
     scale: Mapping[str, float] | None = None,
     units: str = "model",
     compiled: Engine | None = None,
+    given: tuple[Sequence[str], Array] | None = None,
 ) -> pd.DataFrame:
     """Run a design study and return one row per variant (see the module docstring).
 
@@ -380,7 +384,10 @@ def run_study(
     ``units="solver"``: ``sets`` and the plan in solver units, rows as computed (radians, metric
     angles in degrees). ``scale`` (column -> factor from solver units to the stored units)
     overrides the default of ``units``. ``compiled``: the engine of ``model``'s mechanism, when
-    the caller has one (else the study compiles once).
+    the caller has one (else the study compiles once). ``given``: with a ``plan`` derived from factors
+    sampled by ``method``/``samples``/``seed`` (global hardpoints), those factors' addresses
+    and values (N, k): stored beside the plan's columns in every part, and in the manifest
+    with the method and seed that sampled them.
     Raises :class:`AddressError` / :class:`ValueError` for invalid input.
     """
     model_units = check_units(units)
@@ -396,7 +403,8 @@ def run_study(
         addrs = list(addresses or [])
         if values.shape[1] != len(addrs):
             raise AddressError(f"plan has {values.shape[1]} columns for {len(addrs)} addresses")
-        method, samples, seed = "plan", values.shape[0], None
+        if given is None:
+            method, samples, seed = "plan", values.shape[0], None
     if chunk_size < 1:
         raise AddressError("--chunk-size must be >= 1")
     if engine not in ("auto", "fast", "reference"):
@@ -434,6 +442,7 @@ def run_study(
         model_hash=_model_hash(model),
         engine=engine,
         scale=dict(scale or {}),
+        factors=list(given[0]) if given is not None else None,
     )
     n_chunks = -(-len(values) // chunk_size)
     done: set[int] = set()
@@ -462,6 +471,10 @@ def run_study(
     frames: dict[int, pd.DataFrame] = {}
 
     def store(c: int, frame: pd.DataFrame) -> None:
+        if given is not None:  # the factors as given, beside the variant
+            rows = frame["variant"].to_numpy()
+            for k, name in enumerate(given[0]):
+                frame.insert(1 + k, name, np.asarray(given[1], dtype=float)[rows, k])
         if directory is not None:
             _write_part(directory, c, frame)
         else:

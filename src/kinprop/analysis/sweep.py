@@ -45,7 +45,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from kinprop.analysis.metrics import metric_names
-from kinprop.analysis.outputs import output_function
+from kinprop.analysis.outputs import evaluate_outputs, expand_outputs, output_function
 from kinprop.analysis.units import derivative_scale, unit_of
 from kinprop.engine import Engine, Solution, State, Status
 from kinprop.engine import compile as compile_engine
@@ -204,6 +204,26 @@ def coordinate_columns(model: Model, engine: Engine | None = None) -> list[tuple
     return out
 
 
+def _each_output(
+    model: Model, names: list[str], expanded: list[str], scale: Array, engine: Any, note: str
+) -> dict[str, Any]:
+    """The outputs one by one (NaN for those that fail here), and a message naming the failures."""
+    values: dict[str, Any] = {}
+    failed = []
+    wanted = set(expanded)
+    for name in names:
+        for e in expand_outputs(model, [name]):
+            if e not in wanted:
+                continue
+            try:
+                v = evaluate_outputs(model, [e], units="solver", engine=engine)[e]
+                values[e] = float(v) * float(scale[expanded.index(e)])
+            except Exception as exc:
+                failed.append(f"{e}: {exc}")
+    values["message"] = f"{note}; outputs: {'; '.join(failed)}" if failed else note
+    return values
+
+
 def default_outputs(model: Model) -> list[str]:
     """Named points of every body, plus the suspension metrics of wheel bodies if any."""
     names = [f"point:{b.name}.{p}" for b in model.mechanism.bodies for p, _ in b.points]
@@ -278,18 +298,33 @@ class ParquetSink:
         self.schema = pa.schema(fields)
         self.row_group_size = max(1, int(row_group_size))
         self._rows: list[Mapping[str, Any]] = []
-        self._writer = pq.ParquetWriter(str(self.partial), self.schema)
+        #: (file size before, rows) of the group being written: an interrupt can land after
+        #: ``write_table`` returned and before the rows are dropped; the file has then grown
+        #: past the mark and those rows are not written again (no duplicate, none lost)
+        self._mark: tuple[int, int] | None = None
+        self._file = pa.OSFile(str(self.partial), "wb")
+        self._writer = pq.ParquetWriter(self._file, self.schema)
 
     def write(self, row: Mapping[str, Any]) -> None:
         self._rows.append(dict(row))
         if len(self._rows) >= self.row_group_size:
             self.flush()
 
+    def _settle(self) -> None:
+        """Drop the rows of a group the file already holds (see ``_mark``)."""
+        if self._mark is not None:
+            size, n = self._mark
+            if self._file.tell() > size:
+                del self._rows[:n]
+            self._mark = None
+
     def flush(self) -> None:
+        self._settle()
         if self._rows:
             table = self._pa.Table.from_pylist(self._rows, schema=self.schema)
+            self._mark = (self._file.tell(), len(self._rows))
             self._writer.write_table(table)
-            self._rows = []
+            self._settle()
 
     def close(self) -> None:
         if self._writer is not None:
@@ -298,6 +333,7 @@ class ParquetSink:
             finally:
                 self._writer.close()
                 self._writer = None
+                self._file.close()
                 os.replace(self.partial, self.path)
 
 
@@ -455,8 +491,8 @@ def sweep(
                 row.update(
                     zip(expanded, (float(values[i]) * s for i, s in zip(keep, out_scale, strict=True)), strict=True)
                 )
-            except Exception as exc:  # an output that cannot be evaluated here
-                row["message"] = f"{message}; outputs: {exc}"
+            except Exception:  # one output that cannot be evaluated here: never blank the others
+                row.update(_each_output(good, names, expanded, out_scale, engine, message))
         rows.append(row)
         if sink is not None:
             sink.write(row)

@@ -471,11 +471,31 @@ class TargetPropagation:
         return {f"{j.name}.{'ij'[s]}": (P0[n, s].copy(), P1[n, s].copy())
                 for n, j in enumerate(self.engine.mechanism.joints) for s in (0, 1)}  # fmt: skip
 
+    def design_position_moves(self) -> dict[str, tuple[Array, Array]]:
+        """The moved hardpoints at the design position (:attr:`propagation`: the model's own
+        coordinates, before and after the change), global (before, after), model length unit:
+        the joints whose attachment ``s'`` changed, nothing else. A joint whose two sides meet
+        is listed once by its name, else by side (``J.i``, ``J.j``)."""
+        eng, prop = self.engine, self.propagation
+        changed = {(k[:-4], "ij".index(k[-1])) for k in self.result.design_change if k.endswith((".s_i", ".s_j"))}
+        _, _, P0, _ = eng.poses(eng.state_of(prop.before))
+        _, _, P1, _ = eng.poses(eng.state_of(prop.after))
+        tiny = 1e-9 * max(1.0, eng.length_scale or 1.0)
+        out: dict[str, tuple[Array, Array]] = {}
+        for n, j in enumerate(eng.mechanism.joints):
+            moved = [s for s in (0, 1) if (j.name, s) in changed and np.linalg.norm(P1[n, s] - P0[n, s]) > tiny]
+            if not moved:
+                continue
+            one = all(np.linalg.norm(P[n, 0] - P[n, 1]) <= tiny for P in (P0, P1))
+            for s in (0,) if one else moved:
+                out[j.name if one else f"{j.name}.{'ij'[s]}"] = (P0[n, s].copy(), P1[n, s].copy())
+        return out
+
     def hardpoint_moves(self) -> dict[str, Array]:
         """Global displacement of every changed joint attachment (``J.i``/``J.j`` -> [dx, dy, dz],
         model length unit): ``A (s'_after - s'_before)`` with the body's orientation ``A`` at the
-        first configuration before the change (where the designer moves the point)."""
-        st = self.result.before[0]
+        design position (the model's own coordinates, where the designer moves the point)."""
+        st = self.engine.state_of(self.model)
         out: dict[str, Array] = {}
         for key, d in self.result.design_change.items():
             joint, _, fld = key.partition(".")

@@ -38,6 +38,8 @@ if TYPE_CHECKING:
     from kinprop.model import Model
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_INVALID, EXIT_INTERRUPTED = 0, 1, 2, 130
+#: the exit status after SIGTERM (128 + 15, the shell's convention)
+EXIT_TERMINATED = 143
 
 #: optional modules -> the extra that installs them (``pip install 'kinprop[EXTRA]'``)
 EXTRAS = {
@@ -166,7 +168,7 @@ class _Group(TyperGroup):
             if not isinstance(exc, typer.Abort) and not is_interrupt(exc):
                 raise
             err.print("interrupted")
-            sys.exit(EXIT_INTERRUPTED)
+            sys.exit(interrupt_status(exc))
         finally:
             if previous is not None:
                 signal.signal(signal.SIGTERM, previous)
@@ -185,8 +187,23 @@ def is_interrupt(exc: BaseException | None) -> bool:
     return False
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, routed to the interrupt paths; the command then exits 143, not 130."""
+
+
+def interrupt_status(exc: BaseException | None) -> int:
+    """Exit status of an interrupt: 143 after SIGTERM, 130 after Ctrl-C (also when the
+    signal reached us wrapped, see :func:`is_interrupt`)."""
+    seen = 0
+    while exc is not None and seen < 20:
+        if isinstance(exc, Terminated):
+            return EXIT_TERMINATED
+        exc, seen = exc.__cause__ or exc.__context__, seen + 1
+    return EXIT_INTERRUPTED
+
+
 def _raise_interrupt(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt
+    raise Terminated
 
 
 def _sigterm_as_interrupt() -> Any:
@@ -361,12 +378,24 @@ def _load_model_cli(path: Path) -> Model:
     except OSError:
         size = 0
     if size < PROGRESS_BYTES or not err.is_terminal:
-        return load_model(path)
-    with err.status(f"loading {path} ({size / 1e6:.1f} MB): parsing, validating, building the tree"):
         model = load_model(path)
-    mech = model.mechanism
-    err.print(f"loaded {path}: {len(mech.bodies)} bodies, {len(mech.joints)} joints", soft_wrap=True)
+    else:
+        with err.status(f"loading {path} ({size / 1e6:.1f} MB): parsing, validating, building the tree"):
+            model = load_model(path)
+        mech = model.mechanism
+        err.print(f"loaded {path}: {len(mech.bodies)} bodies, {len(mech.joints)} joints", soft_wrap=True)
+    warn_scales(model, path)
     return model
+
+
+def warn_scales(model: Model, source: object) -> None:
+    """One ``warning:`` line per number implausible in the declared unit (:mod:`kinprop.io.scales`)."""
+    from rich.markup import escape
+
+    from kinprop.io.scales import scale_warnings
+
+    for line in scale_warnings(model):
+        err.print(escape(f"warning: {source}: {line}"), soft_wrap=True)
 
 
 def json_safe(obj: Any) -> Any:

@@ -9,13 +9,12 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-import yaml
 
 from kinprop.cli.app import app, err, handles_user_errors, load_model_cli, out
 from kinprop.cli.checks import check_outputs, check_suffix
 from kinprop.io import model_to_data
 from kinprop.io.hardpoints import joint_mismatch, model_to_hardpoints
-from kinprop.io.writer import atomic_write
+from kinprop.io.writer import atomic_write, yaml_text
 
 #: a cut joint whose two sides are farther apart than this is reported as not assembled
 MISMATCH_TOL = 1e-9
@@ -36,7 +35,7 @@ def dump_text(data: dict[str, Any], path: Path | None) -> str:
     """JSON for ``*.json``, else YAML (leaf lists inline), floats at full precision."""
     if path is not None and path.suffix == ".json":
         return json.dumps(data, indent=2) + "\n"
-    return yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=120)
+    return yaml_text(data, width=120)
 
 
 @app.command()

@@ -15,13 +15,19 @@ from kinprop.resources import examples_dir
 
 
 def _summary(path: Path) -> str:
-    """The first comment line of an example file."""
+    """The first comment line of an example file (another tool's file: which tool)."""
+    if path.suffix in (".json", ".xml"):
+        return f"{'Project Chrono suspension' if path.suffix == '.json' else 'MuJoCo MJCF'} (kinprop import)"
     for line in path.read_text(encoding="utf-8").splitlines():
         if line.startswith("#"):
             return line.lstrip("# ").strip()
         if line.strip():
             break
     return ""
+
+
+#: the files ``kinprop examples`` lists and copies (setup.py ships the same)
+EXAMPLE_SUFFIXES = (".yaml", ".yml", ".json", ".xml", ".py", ".md")
 
 
 @app.command(name="examples")
@@ -37,21 +43,26 @@ def examples_cmd(
     ``kinprop examples --copy examples`` first.
     """
     src = examples_dir()
-    files = sorted(p for p in src.iterdir() if p.suffix in (".yaml", ".py"))
+    # the models and scripts, and other tools' files in examples/chrono and examples/mjcf
+    files = sorted(
+        p for p in src.rglob("*") if p.is_file() and p.suffix in EXAMPLE_SUFFIXES and "__pycache__" not in p.parts
+    )
     if copy is None:
         t = Table(title=f"example models in {src}", title_justify="left")
         t.add_column("file")
         t.add_column("what")
         for p in files:
-            t.add_row(p.name, _summary(p))
+            t.add_row(p.relative_to(src).as_posix(), _summary(p))
         out.print(t)
         return
     if copy.exists() and not copy.is_dir():
         raise AddressError(f"--copy {str(copy)!r}: exists and is not a directory")
-    clash = [p.name for p in files if (copy / p.name).exists()]
+    clash = [p.relative_to(src).as_posix() for p in files if (copy / p.relative_to(src)).exists()]
     if clash:
         raise AddressError(f"--copy {str(copy)!r}: would overwrite {', '.join(clash)}; choose an empty directory")
     copy.mkdir(parents=True, exist_ok=True)
     for p in files:
-        shutil.copy2(p, copy / p.name)
+        dest = copy / p.relative_to(src)
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(p, dest)
     out.print(f"copied {len(files)} example files to {copy}")

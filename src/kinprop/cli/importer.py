@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -9,11 +10,29 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 
-from kinprop.cli.app import app, err, fail, handles_user_errors, out
+from kinprop.cli.app import app, err, fail, handles_user_errors, out, warn_scales
 from kinprop.cli.convert import dump_text
 from kinprop.io import model_to_data
 from kinprop.io.writer import atomic_write
 from kinprop.topology import build_topology
+
+
+def _rounded(data: object) -> object:
+    """Floats at 15 significant digits of their vector's largest component: the importers'
+    unit and frame arithmetic leaves noise in the last digit (-0.04000000000000001) that the
+    source file never had."""
+    if isinstance(data, float):
+        return float(f"{data:.15g}") + 0.0
+    if isinstance(data, dict):
+        return {k: _rounded(v) for k, v in data.items()}
+    if isinstance(data, list):
+        if data and all(isinstance(v, float) for v in data):
+            scale = max(abs(v) for v in data)
+            if scale > 0 and math.isfinite(scale):
+                places = max(0, 14 - math.floor(math.log10(scale)))
+                return [float(f"{v:.{places}f}") + 0.0 for v in data]
+        return [_rounded(v) for v in data]
+    return data
 
 
 @app.command(name="import")
@@ -28,7 +47,9 @@ def import_cmd(
     ] = None,
     tire_radius: Annotated[
         float | None,
-        typer.Option("--tire-radius", help="Chrono: loaded tyre radius (m), adds the contact patch for scrub/trail"),
+        typer.Option(
+            "--tire-radius", help="Chrono: loaded tyre radius in metres (Chrono's unit), adds the contact patch"
+        ),
     ] = None,
 ) -> None:
     """Read another tool's mechanism file and write it as a kinprop model file.
@@ -67,7 +88,8 @@ def import_cmd(
         fail(f"{source}: expected an MJCF (.xml) or Project Chrono suspension (.json) file, found {suffix or 'none'!r}")
     for note in notes:
         err.print(escape(f"note: {source}: {note}"), soft_wrap=True)
-    text = dump_text(file_data, output)
+    warn_scales(model, source)
+    text = dump_text(_rounded(file_data), output)
     if output is None:
         sys.stdout.write(text)
         return

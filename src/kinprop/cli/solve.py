@@ -106,6 +106,7 @@ def report(
     csv: Path | None = None,
     plot: Path | None = None,
     source: Path | None = None,
+    quiet: bool = False,
 ) -> None:
     r = prop.result
     written = []
@@ -124,9 +125,12 @@ def report(
     if as_json:
         print_json(propagation_json(prop))
     else:
-        out.print(comparison_table(prop, title))
-        out.print(f"free: {' '.join(prop.free)}   rank {r.rank} of {r.n_equations} equations, {r.n_free} free columns")
-        out.print(f"||Phi|| history: {'  '.join(f'{x:.6g}' for x in r.residual_history)}")
+        if not quiet:  # -q: the outcome line, notes and files only
+            out.print(comparison_table(prop, title))
+            out.print(
+                f"free: {' '.join(prop.free)}   rank {r.rank} of {r.n_equations} equations, {r.n_free} free columns"
+            )
+            out.print(f"||Phi|| history: {'  '.join(f'{x:.6g}' for x in r.residual_history)}")
         out.print(r.message, style="green" if r.converged else "red")
         for note in prop.notes:
             out.print(f"note: {note}", style="yellow")
@@ -184,6 +188,7 @@ def propagate_cmd(
         list[str] | None,
         typer.Option("--target", help="OUTPUT[@COND]=VALUE[UNIT], e.g. metric:camber@travel=50mm=-1.5deg"),
     ] = None,
+    quiet: Annotated[bool, typer.Option("-q", "--quiet", help="print only the outcome line (no table)")] = False,
 ) -> None:
     """Change design variables and re-assemble, moving only the free variables; with
     --target, find the smallest change of the --free design variables meeting the targets."""
@@ -216,4 +221,4 @@ def propagate_cmd(
         output=output,
         as_json=as_json,
     )
-    report(prop, f"propagate {model}", output, as_json, csv, plot, source=model)
+    report(prop, f"propagate {model}", output, as_json, csv, plot, source=model, quiet=quiet)

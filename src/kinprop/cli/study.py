@@ -1,7 +1,7 @@
 """``kinprop study`` (design of experiments of propagations) and ``kinprop tolerance``.
 
 Exit codes: 0 every variant converged, 1 some variants failed (recorded in the output),
-2 invalid input, 130 interrupted (finished chunks are kept; ``--resume`` completes the study).
+2 invalid input, 130 interrupted (143 after SIGTERM) (finished chunks are kept; ``--resume`` completes the study).
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from kinprop.cli.app import (
     app,
     err,
     handles_user_errors,
+    interrupt_status,
     is_interrupt,
     load_model_cli,
     out,
@@ -39,7 +40,6 @@ Free = Annotated[
     list[str] | None,
     typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l coef) or addresses; default q"),
 ]
-EXIT_INTERRUPTED = 130
 Sets = Annotated[
     list[str] | None, typer.Option("--set", metavar="ADDRESS=VALUE", help="ADDRESS=VALUE applied to every variant")
 ]
@@ -68,7 +68,8 @@ def study_cmd(
     free: Free = None,
     set_: Sets = None,
     out_names: Annotated[
-        list[str] | None, typer.Option("--output-name", metavar="NAME", help="extra outputs (point:, metric:, ...)")
+        list[str] | None,
+        typer.Option("--output-name", "--out", metavar="NAME", help="extra outputs (point:, metric:, ...)"),
     ] = None,
     tol: Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL")] = 1e-10,
     max_iter: Annotated[int, typer.Option("--max-iter")] = 50,
@@ -128,36 +129,36 @@ def study_cmd(
             outputs=out_names, tol=tol, max_iter=max_iter, chunk_size=chunk_size, output=output, resume=resume,
             scheduler=scheduler, progress=not as_json, plan=plan, addresses=addresses, engine=engine,
             scale=model_unit_scale(m, [f.address for f in factors], out_names, compiled), units="solver",
-            compiled=compiled,
+            compiled=compiled, given=None if plan is None else ([f.address for f in factors], values),
         )  # fmt: skip
-        if plan is not None:  # the global factor values beside the s' columns they set
-            for k, f in enumerate(factors):
-                frame[f.address] = values[frame["variant"].to_numpy(), k]
     except (KeyboardInterrupt, SystemError) as exc:
         if not is_interrupt(exc):
             raise
         err.print(f"interrupted: finished chunks are kept in {output!s}; run again with --resume")
-        raise typer.Exit(EXIT_INTERRUPTED) from None
+        raise typer.Exit(interrupt_status(exc)) from None
     n_failed = int((~frame["converged"]).sum()) if len(frame) else 0
     if as_json:
         print_json({"variants": len(frame), "failed": n_failed, "output": str(output)})
     else:
         out.print(f"{len(frame)} variants, {n_failed} failed; wrote {output!s}/ (read with pandas.read_parquet)")
         if len(frame):
-            out.print(_summary(frame, [f.address for f in factors]))
+            out.print(_summary(frame, [f.address for f in factors], out_names or []))
     if n_failed:
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
-def _summary(frame, inputs: list[str]) -> Table:
+def _summary(frame, inputs: list[str], outputs: list[str], limit: int = 12) -> Table:
+    """min/mean/max of the converged variants: the factors, the requested outputs (all of
+    them), iterations and residual, then up to ``limit`` other columns, each once."""
     t = Table(title="study summary (converged variants)", title_justify="left")
     for c in ("column", "min", "mean", "max"):
         t.add_column(c, justify="left" if c == "column" else "right")
     ok = frame[frame["converged"]]
     skip = {"variant", "converged", "status"}
-    for c in [*inputs, "iterations", "residual"] + [c for c in frame.columns if c not in skip and c not in inputs][
-        2:14
-    ]:
+    asked = [c for o in outputs for c in frame.columns if c == o or c.startswith(f"{o}[")]
+    head = [*inputs, *asked, "iterations", "residual"]
+    rest = [c for c in frame.columns if c not in skip and c not in head][:limit]
+    for c in dict.fromkeys(head + rest):
         if c in ok and len(ok):
             col = ok[c].astype(float)
             t.add_row(c, f"{col.min():.6g}", f"{col.mean():.6g}", f"{col.max():.6g}")

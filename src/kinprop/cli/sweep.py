@@ -1,7 +1,7 @@
 """``kinprop sweep``: drive joint coordinates over a range, one re-assembly per step.
 
 Exit codes: 0 every step converged, 1 some step failed (recorded, the sweep went on),
-2 invalid input, 130 interrupted (rows already computed are in the output file).
+2 invalid input, 130 interrupted (143 after SIGTERM) (rows already computed are in the output file).
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from kinprop.cli.app import (
     app,
     err,
     handles_user_errors,
+    interrupt_status,
     is_interrupt,
     load_model_cli,
     out,
@@ -82,6 +83,11 @@ def _shown_columns(res, requested: list[str] | None, limit: int | None = 10) -> 
     return head + (varying if limit is None else varying[: max(0, limit - len(head))])
 
 
+def baseline_path(output: Path) -> Path:
+    """Where ``--baseline -o NAME.csv`` writes the baseline's rows: ``NAME.baseline.csv``."""
+    return output.with_name(f"{output.stem}.baseline{output.suffix}")
+
+
 def _plot_before_after(base, res, path: Path, x: str | None, title: str) -> None:
     """The swept outputs against ``x``: before (the design without --set) and after, or one sweep."""
     from kinprop.plot.curves import plot_curves
@@ -127,7 +133,8 @@ def sweep_cmd(
         typer.Option(
             "--drive",
             metavar="JOINT=START:STOP:STEPS",
-            help="JOINT=START:STOP:STEPS (model units; repeat to drive together)",
+            help="JOINT=START:STOP:STEPS (STEPS+1 values), JOINT=v1,v2,... or JOINT=@FILE.csv[:COL] (a CSV "
+            "column, by name or 0-based index); model units; repeat to drive together",
         ),
     ],
     set_: Annotated[
@@ -152,7 +159,10 @@ def sweep_cmd(
     continuation: Annotated[bool, typer.Option("--continuation", help="retry a failed step by continuation")] = False,
     baseline: Annotated[
         bool,
-        typer.Option("--baseline", help="also sweep the design without --set; --plot draws before and after together"),
+        typer.Option(
+            "--baseline",
+            help="also sweep the design without --set; --plot draws both, -o NAME.csv also writes NAME.baseline.csv",
+        ),
     ] = False,
     x: Annotated[
         str | None, typer.Option("--x", help="abscissa of the --plot curves (an output, e.g. wheel_centre_dz)")
@@ -167,7 +177,8 @@ def sweep_cmd(
     check_int("--max-iter", max_iter, 1, MAX_ITER)
     check_suffix("-o", output, (".csv", ".parquet", ".pq"))
     check_suffix("--plot", plot, (".png", ".pdf", ".svg"))
-    check_outputs([model], [("-o", output), ("--plot", plot)])
+    base_output = baseline_path(output) if baseline and output is not None else None
+    check_outputs([model], [("-o", output), ("-o (baseline)", base_output), ("--plot", plot)])
     given = parse_assignments("--set", set_)
     check_set_not_free(given, free)
     if baseline and not given:
@@ -226,16 +237,17 @@ def sweep_cmd(
                 raise
             where = f"; rows computed so far are in {output}" if output is not None else ""
             err.print(f"interrupted after {done} of {n} steps ({failed} failed){where}")
-            raise typer.Exit(130) from None
+            raise typer.Exit(interrupt_status(exc)) from None
     base = None
     if baseline:
         base = sweep(
-            m, drives, free=tuple(free or ["q"]), outputs=outputs, tol=tol, max_iter=max_iter, continuation=continuation
-        )
+            m, drives, free=tuple(free or ["q"]), outputs=outputs, tol=tol, max_iter=max_iter,
+            continuation=continuation, output=base_output,
+        )  # fmt: skip
     df = res.frame
     label_units(res, base)
     if as_json:
-        print_json(sweep_json(res, base, output, plot))
+        print_json(sweep_json(res, base, output, plot) | ({"baseline_file": str(base_output)} if base_output else {}))
     if not quiet:
         terminal = out.is_terminal  # a pipe gets every row and every varying column
         shown = _shown_columns(res, outputs, 10 if terminal else None)
@@ -253,7 +265,10 @@ def sweep_cmd(
         why = str(first["message"])
         say(f"first failure at step {int(first['step'])} ({label} = {first[label]:g}): {why}", style="red")
     if output is not None:
-        say(f"wrote {output}")
+        say(
+            f"wrote {output}"
+            + (f" (with the --set changes) and {base_output} (the baseline, without)" if base_output else "")
+        )
     if plot is not None:
         if base is None and x is None:
             plot_sweep(res, plot, title=f"sweep {model.name}")

@@ -16,11 +16,12 @@ import numpy as np
 import typer
 from rich.markup import escape
 from rich.table import Table
+from rich.text import Text
 
 from kinprop.analysis.targets import TargetPropagation, propagate_targets
 from kinprop.cli.app import EXIT_NOT_CONVERGED, err, out, print_json
-from kinprop.io import dump_model
 from kinprop.io.results import propagation_json
+from kinprop.io.writer import dump_model_like
 from kinprop.model import Model
 from kinprop.propagation import Propagation
 
@@ -34,6 +35,8 @@ def targets_json(tp: TargetPropagation) -> dict[str, Any]:
     obj = propagation_json(tp.propagation)
     r = tp.result
     obj.update(
+        # the run's status: the targets', not the design-position re-assembly's
+        status=obj["status"] if r.status == "met" else r.status,
         targets_status=r.status,
         targets_message=r.message,
         targets=tp.table(),
@@ -41,6 +44,9 @@ def targets_json(tp: TargetPropagation) -> dict[str, Any]:
         configurations=list(tp.configuration_names),
         design_change={k: np.asarray(v, float).tolist() for k, v in r.design_change.items()},
         hardpoint_moves={k: np.asarray(v, float).tolist() for k, v in tp.hardpoint_moves().items()},
+        design_position_moves={
+            k: {"before": a.tolist(), "after": b.tolist()} for k, (a, b) in tp.design_position_moves().items()
+        },
         joint_positions={
             name: {j: {"before": a.tolist(), "after": b.tolist()} for j, (a, b) in moved_joints(tp, k).items()}
             for k, name in enumerate(tp.configuration_names)
@@ -85,7 +91,7 @@ def run_targets(
     tp = propagate_targets(model, targets, [f for f in free if f != "q"], changes=changes, weights=weights,
                            max_iter=max_iter, units="solver")  # fmt: skip
     r = tp.result
-    for dest, write in [(output, lambda p, where: dump_model(p.after, where)), *writers]:
+    for dest, write in [(output, lambda p, where: dump_model_like(p.after, where, path)), *writers]:
         if dest is None:
             continue
         if r.status == "met":
@@ -97,14 +103,16 @@ def run_targets(
     else:
         out.print(targets_table(tp, f"propagate {path} to targets"))
         unit = model.units.get("length", "")
-        where = tp.configuration_names[0]
-        for k, (a, b) in moved_joints(tp, 0).items():
+        moves = tp.design_position_moves() if r.status in ("met", "compromise") else {}
+        if moves:
+            out.print(f"joints moved at the design position (global, {unit}):")
+        for k, (a, b) in moves.items():
             pa, pb = (", ".join(f"{x:.6g}" for x in v) for v in (a, b))
-            out.print(escape(f"{k} at {where}: [{pa}] -> [{pb}] {unit} (moved {np.linalg.norm(b - a):.6g})"))
+            out.print(escape(f"  {k}: [{pa}] -> [{pb}] (moved {np.linalg.norm(b - a):.6g})"))
         for k, d in r.design_change.items():
             if not k.split(".")[1].startswith("s_"):
                 out.print(f"{k} changes by {np.asarray(d).round(9).tolist()}")
-        out.print(("[green]" if r.status == "met" else "[red]") + escape(r.message))
+        out.print(Text(r.message, style="green" if r.status == "met" else "red"))
         if r.status == "met":
             for dest in [output, *(p for p, _ in writers)]:
                 if dest is not None:

@@ -175,7 +175,8 @@ def message(status: Status, iterations: int, residual: float, tol: float, reques
     if status is Status.STEP_LIMIT:
         return (f"sub-step cap reached ({substeps} sub-steps, at {fraction:.6g} of the change): "
                 "the change is too large or too close to a singular configuration to follow")  # fmt: skip
-    return f"not converged after {iterations} iterations: ||Phi|| = {residual:.3g} >= {bound}"
+    steps = f" in all, over {substeps} sub-steps of at most max_iter each" if substeps > 1 else ""
+    return f"not converged after {iterations} iterations{steps}: ||Phi|| = {residual:.3g} >= {bound}"
 
 
 @dataclass(frozen=True, eq=False)
@@ -487,7 +488,7 @@ class Engine:
         if t.group not in ("C", "coef") and np.max(np.abs(val)) > bound:
             raise AddressError(
                 f"{address!r}: {float(np.max(np.abs(val))):.3g} is beyond {ABSURD:g} times the model's length scale "
-                f"({bound:.3g}); no mechanism assembles there"
+                f"(L = {self.length_scale or 1.0:.3g}; the limit is {bound:.3g}); no mechanism assembles there"
             )
         if t.group == "q":
             state.Q[t.start + (t.index or 0) : t.start + (t.index or 0) + (1 if t.index is not None else t.size)] = val

@@ -141,6 +141,8 @@ class MjcfDocument:
     couplings: list[Coupling]
     keyframes: dict[str, Array]
     notes: list[str] = field(default_factory=list)
+    #: declared units kinprop wrote (``<custom><text name="kinprop.units">``); default m, rad
+    units: dict[str, str] = field(default_factory=dict)
 
     @property
     def joints(self) -> list[MjcfJoint]:
@@ -460,6 +462,7 @@ def read_mjcf_text(text: str, file: str = "<mjcf>") -> MjcfDocument:
     _check_free(r)
     equalities = [n for n in root if n.tag == "equality"]
     keyframes: dict[str, Array] = {}
+    units: dict[str, str] | None = None
     for node in root:
         tag = node.tag
         if tag in ("compiler", "default", "worldbody", "equality"):
@@ -474,13 +477,17 @@ def read_mjcf_text(text: str, file: str = "<mjcf>") -> MjcfDocument:
                     v = r.numbers(key, "qpos", tuple(range(1, 100000)), q)
                     if v is not None:
                         keyframes[key.get("name") or f"key{k}"] = v
+        elif tag == "custom" and _units_text(node) is not None:
+            units = _units_text(node)
+            if len(list(node)) > 1:
+                r.ignored[f"<{tag}> ({IGNORED_SECTIONS[tag]})"] += 1
         elif tag in IGNORED_SECTIONS:
             r.ignored[f"<{tag}> ({IGNORED_SECTIONS[tag]})"] += 1
         elif tag in UNSUPPORTED:
             r.problem(node, UNSUPPORTED[tag])
         else:
             r.problem(node, f"unknown element <{tag}> in <mujoco>")
-    doc = MjcfDocument(file, root.get("model") or Path(file).stem, r.bodies, [], {}, [], keyframes)
+    doc = MjcfDocument(file, root.get("model") or Path(file).stem, r.bodies, [], {}, [], keyframes, units=units or {})
     if not r.problems:
         _equalities(r, doc, equalities)
     nq = doc.nq
@@ -493,6 +500,22 @@ def read_mjcf_text(text: str, file: str = "<mjcf>") -> MjcfDocument:
         raise ModelError(r.problems)
     doc.notes = [f"ignored {n} x {what}: only the kinematics are read" for what, n in r.ignored.items() if n]
     return doc
+
+
+#: the units kinprop's exporter records, and the values each may take
+_UNIT_VALUES = {"length": ("m", "mm"), "angle": ("rad", "deg"), "axes": ("ISO8855", "SAE", "right-handed")}
+
+
+def _units_text(node: Node) -> dict[str, str] | None:
+    """The units of a ``<custom><text name="kinprop.units" data="length=mm angle=deg ...">``
+    (:func:`kinprop.imports.mjcf_export.model_to_mjcf`); None when absent or not understood."""
+    for ch in node:
+        if ch.tag == "text" and ch.get("name") == "kinprop.units":
+            pairs = [p.partition("=") for p in (ch.get("data") or "").split()]
+            units = {k: v for k, _, v in pairs if k and v}
+            known = all(v in _UNIT_VALUES[k] for k, v in units.items() if k in _UNIT_VALUES)
+            return units if known and {"length", "angle"} <= set(units) else None
+    return None
 
 
 def _equalities(r: _Reader, doc: MjcfDocument, sections: list[Node]) -> None:
@@ -696,7 +719,7 @@ def document_to_model(doc: MjcfDocument, keyframe: str | None = None) -> Model:
         mech = Mechanism(tuple(bodies), tuple(joints), doc.name, couplings=couplings)
     except ModelError as exc:
         raise ModelError(exc.problems, doc.file) from None
-    units = {"length": "m", "angle": "rad"}
+    units = dict(doc.units) or {"length": "m", "angle": "rad"}
     return Model(mech, Design(values), as_coordinates(coords), units, doc.file)
 
 

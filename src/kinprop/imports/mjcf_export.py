@@ -55,6 +55,10 @@ def _vec(v: Array) -> str:
     return " ".join(_num(x) for x in np.asarray(v, dtype=float).ravel())
 
 
+#: name of the ``<custom><text>`` element that carries the model's declared units
+UNITS_TEXT = "kinprop.units"
+
+
 def _unit(v: Array) -> Array:
     return np.asarray(v, dtype=float) / np.linalg.norm(v)
 
@@ -128,6 +132,9 @@ def model_to_mjcf(model: Model) -> tuple[str, list[str]]:
 
     root = ET.Element("mujoco", model=mech.name)
     ET.SubElement(root, "compiler", angle="radian")
+    # the declared units, read back by kinprop's importer (MuJoCo keeps custom text as data)
+    units = " ".join(f"{k}={v}" for k, v in model.units.items() if v)
+    ET.SubElement(ET.SubElement(root, "custom"), "text", name=UNITS_TEXT, data=units)
     worldbody = ET.SubElement(root, "worldbody")
     equality = ET.Element("equality")
     elements: dict[str, ET.Element] = {}

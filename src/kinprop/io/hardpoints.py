@@ -19,7 +19,9 @@ derives the frame-style model from it:
   parent side's ``s'`` and ``C`` (and, with global body frames, the child side's ``C``; the
   child side's ``s'`` is zero); a cut joint defines the ``s'`` and ``C`` its constraints use
   (:data:`CUT_FIELDS`) and its ``length`` (given, or derived from the two points).
-* **Coordinates** are zero at the reference (identity Euler parameters).
+* **Coordinates** are zero at the reference (identity Euler parameters), unless a tree joint
+  gives ``q``: its keys then describe joint frame i, and frame j is placed from it by the
+  joint at ``q`` (``A''(q)``, ``d''(q)``), so the file describes the configuration at ``q``.
 
 Named body points are given globally at the reference and stored in the body frame.
 Lengths stay in the file's unit; the axis convention (:data:`kinprop.io.schema.AXES`) is
@@ -40,7 +42,7 @@ from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.couplings import build_couplings, couplings_to_data
 from kinprop.io.elements import build_elements, build_vehicle, elements_to_data, vehicle_to_data
-from kinprop.io.loader import build_or_report
+from kinprop.io.loader import EULER_TOL, absurd_lengths, build_or_report
 from kinprop.io.loads import build_loads, loads_to_data
 from kinprop.io.points import attach_references, point_order, point_references, written_points
 from kinprop.io.schema import HardpointFile, HardpointJointSpec
@@ -202,14 +204,38 @@ def _reference(jtype: str, spec: HardpointJointSpec) -> _Reference:
     return _Reference(p_i, rot, p_j, rot)
 
 
+def file_coordinates(jt: Any, values: list[float], deg: bool) -> tuple[Array, str]:
+    """A tree joint's coordinates from a file (angles in the declared unit) in solver units,
+    and a problem ("" when none): the count, and Euler parameters with ``p.p = 1``."""
+    q = np.array(values, dtype=float)
+    if len(q) != jt.n_coordinates:
+        return q, f"expected {jt.n_coordinates} coordinates for a tree {jt.name} joint, found {len(q)}"
+    if jt.euler is not None:
+        p = q[jt.euler]
+        if abs(p @ p - 1) > EULER_TOL:
+            return q, f"expected Euler parameters with p.p = 1, found p.p = {p @ p:.6g}"
+    if deg and jt.angle_indices:
+        idx = list(jt.angle_indices)
+        q[idx] = np.radians(q[idx])
+    return q, ""
+
+
+def _placed(ref: _Reference, jt: Any, q: Array) -> _Reference:
+    """The reference with frame j placed from frame i by the joint at ``q`` (eq. 24's A'', d'')."""
+    a, d = jt.placement(q)
+    return _Reference(ref.p_i, ref.r_i, ref.p_i + ref.r_i @ d, ref.r_i @ a)
+
+
 def model_from_hardpoints(data: Any, file: str = "<data>") -> Model:
     """Validate hardpoint-style file data and build the frame-style Model (coordinates zero)."""
     return build_or_report(data, HardpointFile, build_from_hardpoints, file)
 
 
 def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
-    """Derive body frames, s', C, lengths and zero coordinates (module docstring)."""
-    problems: list[Problem] = []
+    """Derive body frames, s', C, lengths and the coordinates (module docstring)."""
+    problems: list[Problem] = absurd_lengths(spec, file)
+    if problems:
+        raise ModelError(problems)
     bodies: list[Body] = []
     pose: dict[str, tuple[Array, Array]] = {}
     for name, b in spec.bodies.items():
@@ -263,7 +289,10 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
                     refs[name] = _reference(jt.name, j)
         fields = frozenset({"length"}) if jt is not None and jt.has_length else frozenset()
         provisional.append(Joint(name, j.type, j.bodies[0], j.bodies[1], fields, j.cut))
-    problems += [Problem(p.location, p.message, file) for p in validate_structure(tuple(bodies), tuple(provisional))]
+    problems += [
+        Problem(p.location, p.message, file)
+        for p in validate_structure(tuple(bodies), tuple(provisional), tuple(spec.inputs))
+    ]
     couplings, coefs, cproblems = build_couplings(
         spec.couplings, {j.name: j for j in provisional}, spec.units.angle == "deg", file
     )
@@ -282,16 +311,34 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
     if problems:
         raise ModelError(problems)
 
+    # coordinates at the described configuration: frame j follows from frame i (module docstring)
+    tree = {t.joint: t for t in topo.tree}
+    coords: dict[str, Array] = {}
+    deg = spec.units.angle == "deg"
+    for name, j in spec.joints.items():
+        if j.q is None:
+            continue
+        if name not in tree:
+            problems.append(Problem(f"joints.{name}.q", "only tree joints take coordinates (this joint is cut)", file))
+            continue
+        q, problem = file_coordinates(joint_type(j.type), j.q, deg)
+        if problem:
+            problems.append(Problem(f"joints.{name}.q", problem, file))
+            continue
+        coords[name] = q
+        refs[name] = _placed(refs[name], joint_type(j.type), q)
+    if problems:
+        raise ModelError(problems)
+
     # body frames: fixed as declared; moving at their tree joint's point (module docstring)
     for t in topo.tree:
         ref = refs[t.joint]
-        pose[t.child] = (ref.p_i, ref.r_i if spec.body_frames == "joint" else np.eye(3))
+        point, rot = (ref.p_i, ref.r_i) if t.reversed else (ref.p_j, ref.r_j)
+        pose[t.child] = (point, rot if spec.body_frames == "joint" else np.eye(3))
     design_edits = spec.edits == "design"
 
     values: dict[str, object] = {}
     joints: list[Joint] = []
-    coords: dict[str, Array] = {}
-    tree = {t.joint: t for t in topo.tree}
     for j in provisional:
         jt = j.jtype
         ref = refs[j.name]
@@ -302,7 +349,7 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
                 fields.add(f"C_{child}")
             if design_edits:  # the joint moves without moving its child body (design position kept)
                 fields.add(f"s_{child}")
-            coords[j.name] = jt.default_coordinates()
+            coords.setdefault(j.name, jt.default_coordinates())
         else:
             fields = set(CUT_FIELDS[jt.name])
             if jt.n_cut_coordinates:
@@ -404,11 +451,15 @@ def hardpoint_keys(jtype: str, f: JointFrames) -> dict[str, Any]:
     return {"point_i": _clean(f.P_i), "axis": _unit(z_i), "point_j": _clean(f.P_j)}
 
 
-def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, Any]:
+def model_to_hardpoints(model: Model, body_frames: str = "global", keep_coordinates: bool = True) -> dict[str, Any]:
     """Hardpoint-style file data: joint points and axes at the model's current coordinates.
 
     Exact when the model is assembled; otherwise each joint keeps the point on its first body
-    (see :func:`joint_mismatch`). Lengths are written as the design's values.
+    (see :func:`joint_mismatch`). Lengths are written as the design's values. A tree joint
+    whose frame on body i the loader rebuilds from its keys (e.g. a revolute on a fixed body)
+    keeps its coordinates as ``q``, so a model propagated from the file drives from the same
+    zero; the others (and every joint with ``keep_coordinates=False``) are re-zeroed at the
+    current pose, which is exact all the same.
     """
     mech = model.mechanism
     frames = joint_frames(model)
@@ -435,13 +486,27 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
                 if "points" in bodies[b] and not bodies[b]["points"]:
                     del bodies[b]["points"]
     joints: dict[str, Any] = {}
+    kept: set[str] = set()
+    tree = set(compile_engine(mech).topology.tree_joints)
+    deg = model.units.get("angle") == "deg"
     for j in mech.joints:
         if j.jtype.name not in KEYS:
             raise ModelError([Problem(f"joints.{j.name}.type", f"joint type {j.jtype.name!r} has no hardpoint form")])
         spec = {"type": j.type, "bodies": [j.body_i, j.body_j]}
         if j.cut is not None:
             spec["cut"] = j.cut
-        spec.update(hardpoint_keys(j.jtype.name, frames[j.name]))
+        q = model.coordinates.get(j.name) if keep_coordinates and j.name in tree else None
+        keys = _keys_keeping(j, frames[j.name], q)
+        if keys is None:
+            spec.update(hardpoint_keys(j.jtype.name, frames[j.name]))
+        else:
+            spec.update(keys)
+            kept.add(j.name)
+            qf = np.array(q, dtype=float)
+            if deg and j.jtype.angle_indices:
+                idx = list(j.jtype.angle_indices)
+                qf[idx] = np.degrees(qf[idx])
+            spec["q"] = [float(x) + 0.0 for x in qf]
         pair = _pivots_of(model, j.name)
         if pair is not None:
             for key in ("point", "axis"):
@@ -463,7 +528,7 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
         "bodies": bodies,
         "joints": joints,
         **({"inputs": list(mech.inputs)} if mech.inputs else {}),
-        **({"couplings": couplings_to_data(model, _coupled_now(model))} if mech.couplings else {}),
+        **({"couplings": couplings_to_data(model, _coupled_now(model, kept))} if mech.couplings else {}),
         **({"edits": mech.edits} if mech.edits != "design" else {}),
         **({"elements": elements_to_data(model.elements, "hardpoints", lambda b: (kin.r[b], kin.A[b]))}
            if model.elements else {}),
@@ -499,10 +564,33 @@ def _pivots_of(model: Model, joint: str) -> dict[str, list[float]] | None:
     return {k: _clean(v) for k, v in found[1].items()}
 
 
-def _coupled_now(model: Model) -> dict[str, float]:
-    """Current coordinates of the coupled joints: a hardpoint file's coordinates are zero
-    there, so the couplings' offsets shift by them."""
-    return {n: float(model.coordinates[n][0]) for n in model.mechanism.coupled_joints if n in model.coordinates}
+def _coupled_now(model: Model, kept: set[str]) -> dict[str, float]:
+    """Current coordinates of the coupled joints written without ``q``: the file's coordinates
+    are zero there, so the couplings' offsets shift by them."""
+    mech = model.mechanism
+    return {n: float(model.coordinates[n][0]) for n in mech.coupled_joints if n in model.coordinates and n not in kept}
+
+
+def _keys_keeping(joint: Joint, f: JointFrames, q: Array | None) -> dict[str, Any] | None:
+    """Hardpoint keys that describe joint frame i, so that the joint keeps its coordinates
+    ``q`` (written as ``q``); None when the loader would not rebuild frame i from the keys
+    (its ``x''`` is not the one :func:`axis_frame` picks), so the joint is written re-zeroed.
+
+    Zero coordinates need no ``q``; the pose is exact either way, only the zero differs.
+    """
+    jt = joint.jtype
+    if q is None or jt.n_coordinates == 0 or np.array_equal(q, jt.default_coordinates()):
+        return None
+    frame_i = JointFrames(f.P_i, f.R_i, f.P_i, f.R_i)
+    keys = hardpoint_keys(jt.name, frame_i)
+    spec = HardpointJointSpec(type=joint.type, bodies=[joint.body_i, joint.body_j], **keys)
+    ref = _placed(_reference(jt.name, spec), jt, np.asarray(q, dtype=float))
+    scale = max(1.0, float(np.max(np.abs(f.P_i))))
+    if np.max(np.abs(ref.r_i - f.R_i)) > 1e-12 or np.max(np.abs(ref.r_j - f.R_j)) > 1e-12:
+        return None
+    if np.max(np.abs(ref.p_j - f.P_j)) > 1e-12 * scale:
+        return None
+    return keys
 
 
 def joint_mismatch(model: Model) -> dict[str, float]:

@@ -17,6 +17,7 @@ import numpy as np
 import yaml
 from pydantic import BaseModel, ValidationError
 
+from kinprop.engine.engine import ABSURD
 from kinprop.errors import ModelError, Problem
 from kinprop.io.couplings import build_couplings
 from kinprop.io.elements import build_elements, build_vehicle
@@ -108,6 +109,11 @@ def parse_document(text: str, file: str) -> tuple[Any, list[Problem]]:
                 data = None if node is None else loader.construct_document(node)
             finally:
                 loader.dispose()
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else "syntax"
+        what = " ".join(x for x in (exc.context, exc.problem) if x)
+        raise ModelError([Problem(where, f"YAML syntax: {what}", file)]) from None
     except (yaml.YAMLError, json.JSONDecodeError) as exc:
         raise ModelError([Problem("syntax", " ".join(str(exc).split()), file)]) from None
     except RecursionError:
@@ -163,8 +169,8 @@ def _message(e: Any) -> str:
     if kind == "extra_forbidden":
         if loc and loc[-1] in ("point", "axis", "axis_i", "axis_j", "point_i", "point_j"):
             return "unknown key (hardpoint keys need 'style: hardpoints' at the top level)"
-        if loc and loc[-1] in ("s_i", "s_j", "C_i", "C_j", "q", "euler_parameters"):
-            return "unknown key (s_i, s_j, C_i, C_j and q belong in a frame-style file)"
+        if loc and loc[-1] in ("s_i", "s_j", "C_i", "C_j", "euler_parameters"):
+            return "unknown key (s_i, s_j, C_i and C_j belong in a frame-style file)"
         return "unknown key"
     if kind in ("model_type", "dict_type", "model_attributes_type"):
         return f"expected a mapping, found {type(found).__name__}"
@@ -305,7 +311,9 @@ def _body(name: str, b: Any, file: str, problems: list[Problem]) -> Body:
 
 def build_model(spec: ModelFile, file: str) -> Model:
     """Build a frame-style Model from a validated file; semantic problems are collected."""
-    problems: list[Problem] = []
+    problems: list[Problem] = absurd_lengths(spec, file)
+    if problems:
+        raise ModelError(problems)
     deg = spec.units.angle == "deg"
     bodies = [_body(name, b, file, problems) for name, b in spec.bodies.items()]
     refs = {}
@@ -330,7 +338,10 @@ def build_model(spec: ModelFile, file: str) -> Model:
         if j.length is not None:
             values[f"{name}.length"] = float(j.length)
         joints.append(Joint(name, j.type, j.bodies[0], j.bodies[1], fields, j.cut))
-    problems += [Problem(p.location, p.message, file) for p in validate_structure(tuple(bodies), tuple(joints))]
+    problems += [
+        Problem(p.location, p.message, file)
+        for p in validate_structure(tuple(bodies), tuple(joints), tuple(spec.inputs))
+    ]
     couplings, coefs, cproblems = build_couplings(spec.couplings, {j.name: j for j in joints}, deg, file)
     values.update(coefs)
     problems += cproblems
@@ -392,6 +403,48 @@ def build_model(spec: ModelFile, file: str) -> Model:
     model = Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle),
                   loads)  # fmt: skip
     return attach_references(model, refs, file, point_order(spec.bodies))
+
+
+def absurd_lengths(spec: Any, file: str) -> list[Problem]:
+    """Lengths in a file beyond ``ABSURD`` times its length scale, one problem each.
+
+    The scale is the median size of the file's non-zero positions, points and lengths (a
+    single absurd number cannot inflate it, as it would the largest); the limit is
+    ``ABSURD * max(1, scale)``, the rule ``--set`` applies (:meth:`kinprop.engine.Engine.set`).
+    Checked before anything is computed from the numbers, so nothing overflows. Values that
+    are not numbers (a point given by reference) are left to the other checks.
+    """
+    found: list[tuple[str, float]] = []
+
+    def add(loc: str, v: Any) -> None:
+        if isinstance(v, dict):
+            for k, x in v.items():
+                add(f"{loc}.{k}", x)
+            return
+        vals = v if isinstance(v, (list, tuple)) else [v]
+        if vals and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in vals):
+            found.append((loc, float(np.max(np.abs(np.asarray(vals, dtype=float))))))
+
+    for name, b in spec.bodies.items():
+        add(f"bodies.{name}.position", getattr(b, "position", None))
+        for k, v in (getattr(b, "points", None) or {}).items():
+            add(f"bodies.{name}.points.{k}", v)
+    for name, j in spec.joints.items():
+        for f in ("s_i", "s_j", "point", "point_i", "point_j", "length", "pivots"):
+            v = getattr(j, f, None)
+            if v is not None:
+                add(f"joints.{name}.{f}", v)
+    sizes = [v for _, v in found if v > 0]
+    if not sizes:
+        return []
+    scale = float(np.median(sizes))
+    bound = ABSURD * max(1.0, scale)
+    why = f"times the model's length scale (L = {scale:.3g}, the median size of its lengths; the limit is {bound:.3g})"
+    return [
+        Problem(loc, f"{v:.3g} is beyond {ABSURD:g} {why}; no mechanism assembles there", file)
+        for loc, v in found
+        if v > bound
+    ]
 
 
 def known_joint_types() -> list[str]:

@@ -7,7 +7,7 @@ declared angle unit.
 
 Hardpoint style (``style: hardpoints``): global joint points and axes at a reference
 (assembled) configuration, from which :mod:`kinprop.io.hardpoints` derives body frames,
-s', C and zero coordinates. Which keys a joint takes depends on its type
+s' and C, and the coordinates there (zero unless a joint gives ``q``). Which keys a joint takes depends on its type
 (:data:`kinprop.io.hardpoints.KEYS`); the schema accepts them all and the builder checks.
 """
 
@@ -217,6 +217,14 @@ class HardpointJointSpec(Strict):
     #: a revolute to a fixed body by its two pivots (instead of point and axis):
     #: ``{front: [x, y, z], rear: [x, y, z]}``; the axis runs rear -> front (second -> first)
     pivots: Annotated[dict[str, Vec3], Field(min_length=2, max_length=2)] | None = None
+    #: a tree joint's coordinates at the configuration the hardpoints describe (default zero),
+    #: in the declared angle unit; the points and axes then give the joint frame on body i
+    q: list[Finite] | None = None
+
+    @field_validator("q", mode="before")
+    @classmethod
+    def _scalar_q(cls, v: object) -> object:
+        return [v] if isinstance(v, (int, float)) and not isinstance(v, bool) else v
 
 
 class HardpointFile(Strict):

@@ -28,7 +28,10 @@ def atomic_write(path: str | Path, data: str | bytes) -> None:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)  # the CLI refuses a missing directory before this
     mode = "wb" if isinstance(data, bytes) else "w"
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    except OSError as exc:  # name the file asked for, not the temporary one
+        raise OSError(exc.errno, f"cannot write here ({exc.strerror})", str(path)) from None
     try:
         with os.fdopen(fd, mode) as fh:
             fh.write(data)
@@ -94,13 +97,22 @@ def model_to_data(model: Model) -> dict[str, Any]:
     }
 
 
+class _PlainDumper(yaml.SafeDumper):
+    """YAML without anchors and aliases (``&id001``): a value shared in memory is written out
+    again where it repeats, as a person would write it."""
+
+    def ignore_aliases(self, data: Any) -> bool:
+        return True
+
+
+def yaml_text(data: Any, width: int = 100) -> str:
+    """YAML of file data: leaf lists inline, keys in order, no anchors, full precision."""
+    return yaml.dump(data, Dumper=_PlainDumper, sort_keys=False, default_flow_style=None, width=width)
+
+
 def dump_model(model: Model, path: str | Path) -> None:
     data = model_to_data(model)
-    text = (
-        json.dumps(data, indent=2)
-        if str(path).endswith(".json")
-        else yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
-    )
+    text = json.dumps(data, indent=2) if str(path).endswith(".json") else yaml_text(data)
     atomic_write(path, text)
 
 
@@ -130,7 +142,7 @@ def model_text(data: dict[str, Any], path: str | Path | None) -> str:
     """File text of model data: JSON for ``*.json``, else YAML (leaf lists inline), full precision."""
     if path is not None and str(path).endswith(".json"):
         return json.dumps(data, indent=2) + "\n"
-    return yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
+    return yaml_text(data)
 
 
 def file_style(path: str | Path) -> tuple[str, str]:

@@ -21,8 +21,8 @@ from functools import cached_property
 
 import numpy as np
 
-from kinprop.engine import Engine, Solution, compile
-from kinprop.errors import SingularityWarning
+from kinprop.engine import Engine, Solution, State, compile
+from kinprop.errors import AddressError, SingularityWarning
 from kinprop.model.model import Model
 from kinprop.propagation.conditioning import SINGULAR_RTOL, conditioning
 from kinprop.propagation.hardpoints import free_addresses, free_weights, pivot_updates, resolve_changes
@@ -170,6 +170,49 @@ def propagation_of(engine: Engine, model: Model, sol: Solution, free: Sequence[s
     return Propagation(model, after, res, dict(sol.changes), tuple(free), ratio, engine)
 
 
+#: a changed coordinate whose first-order motion leaves this relative residual is not independent
+DEPENDENT_RTOL = 1e-6
+
+
+def check_coordinates_movable(engine: Engine, start: State, changes: Mapping[str, object], free: Sequence[str]) -> None:
+    """Refuse a changed coordinate that cannot move while the held declared inputs stay (the
+    other coordinates free, group ``q``): the free columns cannot absorb its motion to first
+    order, ``J_c e`` is not in the range of ``J_free`` (least squares, relative residual above
+    :data:`DEPENDENT_RTOL`). Without this the solver would grind through its sub-steps and
+    report conflicting rows; the message names the held coordinates and how to free them."""
+    targets = [(a, engine.target(a)) for a in changes if "." in a]
+    moved = [(a, t) for a, t in targets if t.group == "q"]
+    if not moved or "q" not in free:  # only the declared inputs' hold is diagnosed here
+        return
+    free_cols = engine.free_columns(free, list(changes))
+    labels = engine.column_labels
+    qcols = [k for k, lab in enumerate(labels) if lab.split("[")[0].endswith(".q")]  # inputs too
+    changed_cols = {t.start + k for _, t in moved for k in ([t.index] if t.index is not None else range(t.size))}
+    held = [c for c in qcols if c not in changed_cols and c not in set(free_cols.tolist())]
+    if not held:
+        return
+    _, J = engine.evaluate(start)
+    Jf = J[:, free_cols]
+    for address, t in moved:
+        cols = [t.start + k for k in ([t.index] if t.index is not None else range(t.size))]
+        for c in cols:
+            b = J[:, c]
+            nb = float(np.linalg.norm(b))
+            if nb == 0.0:
+                continue
+            y = np.linalg.lstsq(Jf, b, rcond=None)[0] if Jf.size else np.zeros(0)
+            r = float(np.linalg.norm(b - Jf @ y)) if Jf.size else nb
+            if r > DEPENDENT_RTOL * nb:
+                names = list(dict.fromkeys(labels[h].split(".q")[0].split("[")[0] for h in held))
+                which = ", ".join(names)
+                raise AddressError(
+                    f"{address}: not independent while {which} {'is' if len(names) == 1 else 'are'} held: the "
+                    f"mechanism cannot move it with {'that coordinate' if len(names) == 1 else 'those'} fixed; "
+                    f"free it (--free q --free {names[0]}.q; Python: free=['q', '{names[0]}.q']) or set "
+                    f"{names[0]}.q instead"
+                )
+
+
 def apply_changes(
     model: Model, changes: Mapping[str, object], engine: Engine | None = None
 ) -> tuple[Model, dict[str, Array], set[str]]:
@@ -232,6 +275,7 @@ def solve_changes(
     start = eng.reference if eng.model is model else eng.state_of(model)
     changes = changes_to_internal(model, changes or {}, eng) if check_units(units) else dict(changes or {})
     changes = resolve_changes(eng, start, changes)
+    check_coordinates_movable(eng, start, changes, free_addresses(eng, free))
     return eng.propagate(
         changes,
         free_addresses(eng, free),

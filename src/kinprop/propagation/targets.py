@@ -326,7 +326,8 @@ def solve_targets(
     if not ok0:
         return TargetResult(Status.NOT_CONVERGED.value, "not assembled: a configuration could not be reached with "
                             "the starting design (its conditions or Phi did not converge)", it0, tuple(rows),
-                            tuple(configurations), tuple(before), tuple(before), vb, vb, float("nan"), {})  # fmt: skip
+                            tuple(configurations), tuple(before), tuple(before), vb, np.full_like(vb, np.nan),
+                            float("nan"), {})  # fmt: skip
     # 2. the design change
     after, it, ok, hist = newton(list(before), with_design=True)
     outs = [np.asarray(c.outputs(s), float) for c, s in zip(configurations, after, strict=True)]

@@ -37,7 +37,6 @@ from kinprop.analysis.mobility import mobility
 from kinprop.analysis.sensitivity import RESIDUAL_WARN
 from kinprop.analysis.sweep import sweep
 from kinprop.errors import AddressError, ModelError, SingularityWarning
-from kinprop.io import dump_model
 from kinprop.io.arguments import parse_assignment, parse_weight
 from kinprop.io.commands import (
     check_json,
@@ -50,6 +49,7 @@ from kinprop.io.commands import (
     sweep_json,
 )
 from kinprop.io.units import changes_to_internal
+from kinprop.io.writer import dump_model_like
 from kinprop.model import Model
 from kinprop.propagation import assemble
 from kinprop.serve.session import Session, Sessions
@@ -323,11 +323,13 @@ def create_app(model: Model, label: str | None = None, *, assemble_first: bool =
 
     @app.get("/api/model.yaml")
     def model_yaml(sid: Sid = None, q: QSid = None) -> Response:
-        """The current model as ``kinprop propagate -o MODEL.yaml`` writes it (full precision)."""
+        """The current model as ``kinprop propagate -o MODEL.yaml`` writes it (full precision, the
+        input file's style)."""
         m = session(sid, q).model
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / "model.yaml"
-            dump_model(m, path)
+            source = model.source if model.source and Path(model.source).is_file() else None
+            dump_model_like(m, path, source)  # a hardpoint-style input comes back hardpoint style
             text = path.read_text(encoding="utf-8")
         return Response(text, media_type="application/yaml", headers=_attachment(f"{stem}.yaml"))
 
