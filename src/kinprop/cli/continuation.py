@@ -86,6 +86,7 @@ def solve_propagation(
     weights: Mapping[str, float] | None,
     continuation: bool | None,
     on_fallback: Callable[[Propagation], None] | None = None,
+    method: str = "least-change",
 ) -> tuple[Propagation, ContinuationResult | None, bool]:
     """Plain Newton, continuation, or Newton with continuation as the fallback (``None``).
 
@@ -96,7 +97,8 @@ def solve_propagation(
     """
     plain: Propagation | None = None
     if continuation is not True:
-        plain = propagate(model, changes, free, tol=tol, max_iter=max_iter, weights=weights, units="solver")
+        plain = propagate(model, changes, free, tol=tol, max_iter=max_iter, weights=weights, units="solver",
+                          method=method)  # fmt: skip
         if plain.converged or continuation is False or not changes:
             return plain, None, True
         if on_fallback is not None:
@@ -134,6 +136,7 @@ def run_propagation(
     continuation: bool | None,
     output: Path | None,
     as_json: bool,
+    method: str = "least-change",
 ) -> Propagation:
     """:func:`solve_propagation` for the CLI: returns the propagation to report. When
     continuation cannot assemble the change either, prints the diagnosis (with ``--json``:
@@ -154,6 +157,7 @@ def run_propagation(
             weights=weights,
             continuation=continuation,
             on_fallback=say_fallback,
+            method=method,
         )
     if res is None:
         return prop
