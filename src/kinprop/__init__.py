@@ -13,6 +13,8 @@ _EXPORTS = {
     "design_sensitivity": "kinprop.analysis",
     "evaluate_outputs": "kinprop.analysis",
     "mobility": "kinprop.analysis",
+    "motion": "kinprop.analysis.motion",
+    "Motion": "kinprop.analysis.motion",
     "output_sensitivity": "kinprop.analysis",
     "sweep": "kinprop.analysis",
     "TargetPropagation": "kinprop.analysis.targets",
@@ -44,6 +46,7 @@ _EXPORTS = {
 
 if TYPE_CHECKING:
     from kinprop.analysis import design_sensitivity, evaluate_outputs, mobility, output_sensitivity, sweep
+    from kinprop.analysis.motion import Motion, motion
     from kinprop.analysis.targets import TargetPropagation, propagate_targets
     from kinprop.engine import BatchSolution, Engine, Solution, State, Status, compile
     from kinprop.errors import AddressError, ConvergenceError, KinpropError, ModelError, SingularityWarning
@@ -79,6 +82,7 @@ __all__ = [
     "Mechanism",
     "Model",
     "ModelError",
+    "Motion",
     "Propagation",
     "SingularityWarning",
     "Solution",
@@ -93,6 +97,7 @@ __all__ = [
     "evaluate_outputs",
     "load_model",
     "mobility",
+    "motion",
     "output_sensitivity",
     "propagate",
     "propagate_continuation",

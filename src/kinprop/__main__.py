@@ -18,7 +18,10 @@ BATCH_COMMANDS = frozenset({"sweep", "study", "tolerance", "serve"})
 
 def main() -> None:
     command = next((a for a in sys.argv[1:] if not a.startswith("-")), "")
-    if "KINPROP_JIT" not in os.environ:
+    # ``kinprop``, ``--help``, ``--version`` and ``COMMAND --help`` run no kernel: they import
+    # neither numba nor the library (kinprop.cli loads a command's module when it runs)
+    answers_only = not command or "--help" in sys.argv[1:]
+    if "KINPROP_JIT" not in os.environ and not answers_only:
         os.environ["KINPROP_JIT"] = "on" if command in BATCH_COMMANDS else "auto"
         from kinprop.cli.warmup import announce
 

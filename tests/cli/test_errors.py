@@ -66,7 +66,7 @@ def test_json_has_no_nan_or_infinity(examples) -> None:
     p = run_kinprop("propagate", examples / "fourbar.yaml", "--set", "O2.q=70", "--free", "l", "--json")
     assert p.returncode == 1, p.stderr
     obj = _strict(p.stdout)
-    assert obj["status"] == "not_converged"
+    assert obj["status"] == "no_free"
     assert obj["continuation"]["singularity_ratio"] is None
     for args in (
         ["propagate", examples / "double_wishbone.yaml", "--set", "TR.length=5000", "--json"],

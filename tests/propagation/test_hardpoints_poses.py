@@ -175,7 +175,7 @@ def test_sensitivity_per_global_millimetre_matches_re_solved_differences():
     conversion, against central differences of full propagations of the global hardpoint."""
     import pandas as pd
 
-    from kinprop.cli.sensitivity import sensitivities
+    from kinprop.io.commands import sensitivities
 
     m = solved(EXAMPLES / "double_wishbone.yaml")
     sens = sensitivities(

@@ -75,7 +75,7 @@ def test_failed_change_is_reported_and_not_applied(make_client, examples: Path) 
         assert obj[key] == cli_obj[key], key
     for key in ("status", "fraction", "message", "conflict"):
         assert obj["continuation"][key] == cli_obj["continuation"][key], key
-    assert obj["status"] == "not_converged" and "cannot be assembled" in obj["continuation"]["message"]
+    assert obj["status"] == "infeasible" and "cannot be assembled" in obj["continuation"]["message"]
     assert r.headers["x-kinprop-applied"] == "false"
     assert c.get("/api/model.yaml").text == before
     assert c.get("/api/state").json()["history"] == {"undo": 0, "redo": 0}

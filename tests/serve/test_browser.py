@@ -137,7 +137,7 @@ def test_workbench_in_chromium(live_server, examples: Path, tmp_path: Path) -> N
             text = error.inner_text()
             assert "not applied" in text and "cannot be assembled beyond" in text
             failed = api(page, "/api/results.json")
-            assert failed["status"] == "not_converged"
+            assert failed["status"] == "infeasible"
             assert failed["continuation"]["message"] in text  # the CLI's diagnosis, verbatim
             assert page.input_value('#design input[data-address="TR.length"]') == "386.5371"
             assert "failed" in page.locator("#status").get_attribute("class")

@@ -5,21 +5,28 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from kinprop.engine import Engine, Kinematics
+from kinprop.engine import Engine, Kinematics, State
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.spatial import Array
 
-if TYPE_CHECKING:
-    from kinprop.analysis.metrics import WheelSpec
-
 POINT = re.compile(r"^point:(?P<body>[^.\s\[\]]+)\.(?P<name>[^\s\[\]]+?)(\[(?P<c>[xyz012])\])?$")
 HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[ij])(\[(?P<c>[xyz012])\])?$")
+
+
+@dataclass(frozen=True)
+class WheelSpec:
+    """Per-call metric parameters of one wheel: the steering axis as two point specs
+    (``hardpoint:JOINT.i|j`` or ``point:BODY.NAME``), upper first
+    (:mod:`kinprop.analysis.metrics`)."""
+
+    steering_axis: tuple[str, str] | None = None
+    #: the coordinate driven in bump for the first-order metrics (default: the first declared input)
+    travel_input: str | None = None
 
 
 @dataclass
@@ -30,6 +37,10 @@ class OutputContext:
     kin: Kinematics
     reference: Model | None = None
     wheels: Mapping[str, WheelSpec] | None = None
+    #: the engine the kinematics came from and its packed state (reused for the reference
+    #: configuration and the velocity analysis of first-order metrics)
+    engine: Engine | None = None
+    state: State | None = None
 
     @classmethod
     def of(
@@ -39,9 +50,11 @@ class OutputContext:
         wheels: Mapping[str, WheelSpec] | None = None,
         engine: Engine | None = None,
     ) -> OutputContext:
-        """Forward kinematics of ``model`` at its current state."""
-        eng = engine or compile_engine(model.mechanism)
-        return cls(model, eng.kinematics(model.design, model.coordinates), reference, wheels)
+        """Forward kinematics of ``model`` at its current state (``engine``: compiled from its
+        mechanism; None only at a public boundary, which then compiles once)."""
+        eng = engine if engine is not None else compile_engine(model.mechanism)
+        st = eng.state_of(model)
+        return cls(model, eng.kinematics(st), reference, wheels, eng, st)
 
     def body_point(self, body: str, point: str) -> Array:
         """Global position of the named point ``point`` of ``body``."""

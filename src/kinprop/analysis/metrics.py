@@ -41,28 +41,31 @@ steering axis can also be given per call as two point specs (``hardpoint:JOINT.i
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from kinprop.analysis.context import OutputContext
+from kinprop.analysis.context import OutputContext, WheelSpec
+from kinprop.analysis.firstorder import (
+    FIRST_ORDER,
+    GAIN_METRICS,
+    MOTION_RATIO,
+    first_order_metrics,
+    first_order_names,
+    first_order_unit,
+)
+from kinprop.analysis.motion import point_of
+from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.spatial import EZ, Array
 
 ANGLE_METRICS = ("camber", "toe", "caster", "kpi")
 LENGTH_METRICS = ("scrub_radius", "trail", "wheel_centre_dx", "wheel_centre_dy", "wheel_centre_dz")
-METRICS = ANGLE_METRICS + LENGTH_METRICS
+METRICS = ANGLE_METRICS + LENGTH_METRICS + FIRST_ORDER
+#: position-level metrics (:func:`wheel_metrics`); the others are first-order (velocity analysis)
+POSITION_METRICS = ANGLE_METRICS + LENGTH_METRICS
 #: accepted long names
 METRIC_ALIASES = {"kingpin_inclination": "kpi", "scrub": "scrub_radius", "wheel_travel": "wheel_centre_dz"}
-
-
-@dataclass(frozen=True)
-class WheelSpec:
-    """Per-call metric parameters of one wheel: the steering axis as two point specs
-    (``hardpoint:JOINT.i|j`` or ``point:BODY.NAME``), upper first."""
-
-    steering_axis: tuple[str, str] | None = None
 
 
 # --- closed-form geometry (vectors in vehicle axes) -----------------------------------------
@@ -139,6 +142,9 @@ def available_metrics(
             out += ["scrub_radius", "trail"]
     if has_reference or _find_point(model, wheel, "wheel_centre_ref", on_wheel=False):
         out += ["wheel_centre_dx", "wheel_centre_dy", "wheel_centre_dz"]
+    contact = "contact_patch" in dict(model.mechanism.body(wheel).points)
+    ref = has_reference or _find_point(model, wheel, "contact_patch_ref", on_wheel=False) is not None
+    out += first_order_names(model, contact, steer, ref)
     return out
 
 
@@ -166,9 +172,68 @@ def resolve_metric(model: Model, name: str) -> tuple[str, str]:
             )
         wheel = wheels[0]
     metric = METRIC_ALIASES.get(metric, metric)
+    if metric.startswith(f"{MOTION_RATIO}:"):
+        element = metric.split(":", 1)[1]
+        known = [e.name for e in model.elements]
+        if element not in known:
+            raise AddressError(f"output {name!r}: unknown element {element!r}; elements: {', '.join(known) or 'none'}")
+        return wheel, metric
     if metric not in METRICS:
-        raise AddressError(f"output {name!r}: unknown metric {metric!r}; metrics: {', '.join(METRICS)}")
+        raise AddressError(f"output {name!r}: unknown metric {metric!r}; metrics: {', '.join(METRICS)}, "
+                           f"{MOTION_RATIO}:ELEMENT")  # fmt: skip
     return wheel, metric
+
+
+def is_first_order(metric: str) -> bool:
+    """A metric from the velocity analysis (a gain, a centre, anti, motion ratio, wheel rate)."""
+    return metric in FIRST_ORDER or metric.startswith(f"{MOTION_RATIO}:")
+
+
+def _radius(model: Model, wheel: str) -> float | None:
+    """The loaded radius: the ``contact_patch`` point's distance from the spin axis."""
+    pts = dict(model.mechanism.body(wheel).points)
+    if "contact_patch" not in pts:
+        return None
+    v = np.asarray(pts["contact_patch"], dtype=float) - np.asarray(pts["wheel_centre"], dtype=float)
+    a_B = np.asarray(pts["spin_axis"], dtype=float) - np.asarray(pts["wheel_centre"], dtype=float)
+    a_B /= np.linalg.norm(a_B)
+    return float(np.linalg.norm(v - (v @ a_B) * a_B))
+
+
+def _contact_of(ctx: OutputContext, wheel: str, radius: float) -> Array:
+    centre = ctx.body_point(wheel, "wheel_centre")
+    return contact_point(centre, ctx.body_point(wheel, "spin_axis") - centre, radius)
+
+
+def wheel_first_order(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:
+    """Every first-order metric the wheel supports at the context's state
+    (:mod:`kinprop.analysis.firstorder`; gains in degrees per length unit)."""
+    model = ctx.model
+    spec = spec if spec is not None else ctx.wheels.get(wheel) if ctx.wheels else None
+    engine = ctx.engine or compile_engine(model.mechanism)
+    b = engine.body_index[wheel]
+    points: dict[str, tuple[int, Array]] = {
+        "centre": (b, ctx.body_point(wheel, "wheel_centre")),
+        "spin": (b, ctx.body_point(wheel, "spin_axis")),
+    }
+    if spec is not None and spec.steering_axis is not None:
+        points["upper"], points["lower"] = (point_of(ctx, engine, s) for s in spec.steering_axis)
+    else:
+        found = [_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
+        if found[0] is not None and found[1] is not None:
+            for key, (body, name) in zip(("upper", "lower"), found, strict=True):  # type: ignore[misc]
+                points[key] = (engine.body_index[body], ctx.body_point(body, name))
+    radius = _radius(model, wheel)
+    ref = None
+    if radius is not None:
+        if ctx.reference is not None:
+            ref = _contact_of(OutputContext.of(ctx.reference, engine=engine), wheel, radius)
+        else:
+            found_ref = _find_point(model, wheel, "contact_patch_ref", on_wheel=False)
+            if found_ref is not None:
+                ref = ctx.body_point(*found_ref)
+    travel = spec.travel_input if spec is not None else None
+    return first_order_metrics(ctx, engine, wheel, {}, points, radius, ref, travel)
 
 
 def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:
@@ -200,7 +265,7 @@ def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None)
             out["scrub_radius"], out["trail"] = ground_offsets(upper, lower, contact, axis)
     ref = None
     if ctx.reference is not None:
-        ref = OutputContext.of(ctx.reference).body_point(wheel, "wheel_centre")
+        ref = OutputContext.of(ctx.reference, engine=ctx.engine).body_point(wheel, "wheel_centre")
     else:
         found_ref = _find_point(model, wheel, "wheel_centre_ref", on_wheel=False)
         if found_ref is not None:
@@ -225,21 +290,39 @@ def suspension_metrics(
     return wheel_metrics(OutputContext.of(model, reference), wheel, spec)
 
 
-def metric_unit(metric: str, length_unit: str = "m") -> str:
-    """``deg`` for angle metrics, the model's length unit otherwise."""
-    return "deg" if METRIC_ALIASES.get(metric, metric) in ANGLE_METRICS else length_unit
+def metric_unit(metric: str, length_unit: str = "m", angle_unit: str = "deg", force_unit: str | None = None) -> str:
+    """Unit of a metric: ``angle_unit`` for angles (computed in ``deg``), ``angle/length`` for
+    gains, ``%`` for anti metrics, ``""`` for ratios, ``force/length`` for the wheel rate, the
+    length unit otherwise."""
+    metric = METRIC_ALIASES.get(metric, metric)
+    if metric in ANGLE_METRICS:
+        return angle_unit
+    if is_first_order(metric):
+        units = {"length": length_unit, "angle": angle_unit} | ({"force": force_unit} if force_unit else {})
+        return first_order_unit(metric, units)
+    return length_unit
+
+
+def is_angle_valued(metric: str) -> bool:
+    """Computed in degrees (an angle or a gain in degrees per length): scaled to the model's angle unit."""
+    metric = METRIC_ALIASES.get(metric, metric)
+    return metric in ANGLE_METRICS or metric in GAIN_METRICS
 
 
 __all__ = [
     "METRICS",
+    "POSITION_METRICS",
     "WheelSpec",
     "camber_toe",
     "contact_point",
     "ground_offsets",
+    "is_angle_valued",
+    "is_first_order",
     "metric_names",
     "metric_unit",
     "steering_angles",
     "suspension_metrics",
     "wheel_bodies",
+    "wheel_first_order",
     "wheel_metrics",
 ]

@@ -26,7 +26,14 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 
 from kinprop.analysis.context import HARD, POINT, OutputContext
-from kinprop.analysis.metrics import WheelSpec, metric_names, resolve_metric, wheel_metrics
+from kinprop.analysis.metrics import (
+    WheelSpec,
+    is_first_order,
+    metric_names,
+    resolve_metric,
+    wheel_first_order,
+    wheel_metrics,
+)
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
@@ -55,13 +62,15 @@ def _vector_name(base: str, n: int, letters: bool) -> list[str]:
     return [f"{base}[{_XYZ[k] if letters else k}]" for k in range(n)]
 
 
-def expand_outputs(model: Model, names: Sequence[str]) -> list[str]:
-    """Scalar output names: vector names are expanded into their components (validated)."""
+def expand_outputs(model: Model, names: Sequence[str], engine: Engine | None = None) -> list[str]:
+    """Scalar output names: vector names are expanded into their components (validated);
+    ``engine``: compiled from the model's mechanism (None: compiled here, once)."""
+    engine = engine if engine is not None else compile_engine(model.mechanism)
     out: list[str] = []
     for name in names:
         name = name.strip()
         if name.startswith("distance:"):
-            ctx = OutputContext.of(model)
+            ctx = OutputContext.of(model, engine=engine)
             for end in _distance_ends(name):
                 ctx.point(end)  # both ends exist
             out.append(name)
@@ -77,8 +86,8 @@ def expand_outputs(model: Model, names: Sequence[str]) -> list[str]:
             resolve_metric(model, name)  # a wheel body and a known metric
             out.append(name)
         else:
-            addr = _parse_variable(model, name)
-            size = _variable_size(model, addr.key)
+            addr = _parse_variable(engine, name)
+            size = engine.layout[addr.key].size
             out += [name] if addr.index is not None or size == 1 else _vector_name(name, size, False)
     return out
 
@@ -101,7 +110,7 @@ def _check_point(model: Model, name: str, m: re.Match[str]) -> None:
         )
 
 
-def _parse_variable(model: Model, name: str) -> Address:
+def _parse_variable(engine: Engine, name: str) -> Address:
     try:
         addr = parse_address(name)
     except AddressError:
@@ -111,17 +120,13 @@ def _parse_variable(model: Model, name: str) -> Address:
         ) from None
     if addr.field in ("C_i", "C_j"):
         raise AddressError(f"output {name!r}: orientations are not scalar outputs; use points or metrics")
-    layout = compile_engine(model.mechanism).layout
+    layout = engine.layout
     if addr.key not in layout:
         known = ", ".join(v.key for v in layout.variables if v.group != "C")
         raise AddressError(f"output {name!r} is not a variable of this model; known: {known}")
     if addr.index is not None and addr.index >= layout[addr.key].size:
         raise AddressError(f"output {name!r}: index out of range for a variable of size {layout[addr.key].size}")
     return addr
-
-
-def _variable_size(model: Model, key: str) -> int:
-    return compile_engine(model.mechanism).layout[key].size
 
 
 def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, float]]) -> float:
@@ -136,14 +141,16 @@ def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, flo
         return float(ctx.hardpoint(m.group("joint"), m.group("side"))[AXES[m.group("c")]])
     if name.startswith("metric:") or "." not in name:
         wheel, metric = resolve_metric(ctx.model, name)
-        if wheel not in metric_cache:
-            metric_cache[wheel] = wheel_metrics(ctx, wheel)
-        values = metric_cache[wheel]
+        first = is_first_order(metric)
+        key = f"{wheel}\x00first" if first else wheel
+        if key not in metric_cache:
+            metric_cache[key] = wheel_first_order(ctx, wheel) if first else wheel_metrics(ctx, wheel)
+        values = metric_cache[key]
         if metric not in values:
             available = ", ".join(values)
             raise AddressError(f"metric {metric!r} is not available for wheel {wheel!r}; available: {available}")
         return float(values[metric])
-    addr = _parse_variable(ctx.model, name)
+    addr = _parse_variable(ctx.engine, name)
     model = ctx.model
     if addr.field == "q":
         v = np.atleast_1d(np.asarray(model.coordinates[addr.joint], dtype=float))
@@ -172,10 +179,10 @@ def evaluate_outputs(
     Raises :class:`AddressError` for unknown names.
     """
     to_model = check_units(units)
-    eng = engine or compile_engine(model.mechanism)
+    eng = engine if engine is not None else compile_engine(model.mechanism)
     ctx = OutputContext.of(model, reference, wheels, eng)
     cache: dict[str, dict[str, float]] = {}
-    values = {n: _scalar(ctx, n, cache) for n in expand_outputs(model, names)}
+    values = {n: _scalar(ctx, n, cache) for n in expand_outputs(model, names, eng)}
     if to_model:
         values = {n: v * derivative_scale(model, n, eng) for n, v in values.items()}
     return values
@@ -190,8 +197,8 @@ def output_function(
     engine: Engine | None = None,
 ) -> tuple[Callable[[Model], Array], list[str]]:
     """``(f, expanded)``: ``f(model) -> array`` of the expanded outputs (names checked once)."""
-    expanded = expand_outputs(model, names)
-    eng = engine or compile_engine(model.mechanism)
+    eng = engine if engine is not None else compile_engine(model.mechanism)
+    expanded = expand_outputs(model, names, eng)
 
     def f(m: Model) -> Array:
         ctx = OutputContext.of(m, reference, wheels, eng)
@@ -201,11 +208,11 @@ def output_function(
     return f, expanded
 
 
-def output_names(model: Model) -> list[str]:
+def output_names(model: Model, engine: Engine | None = None) -> list[str]:
     """Every scalar output the model defines: coordinates, design variables (not C), named
     points, joint hardpoints and the suspension metrics of its wheel bodies."""
     mech = model.mechanism
-    layout = compile_engine(mech).layout
+    layout = (engine if engine is not None else compile_engine(mech)).layout
     names: list[str] = []
     for v in layout.variables:
         if v.group == "C":

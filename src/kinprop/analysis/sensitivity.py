@@ -27,6 +27,7 @@ from kinprop.analysis.outputs import output_function
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
 from kinprop.model import Model
+from kinprop.propagation.hardpoints import free_addresses, free_weights, global_columns, is_global
 from kinprop.propagation.propagate import engine_for
 from kinprop.propagation.sensitivity import Sensitivity, design_sensitivity, weight_vector
 from kinprop.propagation.units import check_units
@@ -63,7 +64,9 @@ def output_sensitivity_matrix(
     units: str = "model",
 ) -> tuple[Array, list[str], list[str], float]:
     """``(D, output names, design column labels, ||Phi||)`` of :func:`output_sensitivity`,
-    as plain arrays and lists (no pandas)."""
+    as plain arrays and lists (no pandas). ``wrt``, ``free`` and ``weights`` take every address
+    a propagation takes: ``hardpoint:J.i`` / ``hardpoint:J.i[z]`` columns are per global length
+    unit (:func:`kinprop.propagation.hardpoints.global_columns`)."""
     model_units = check_units(units)
     engine = engine_for(model, engine)
     state = engine.state_of(model)
@@ -74,7 +77,10 @@ def output_sensitivity_matrix(
             RuntimeWarning,
             stacklevel=3,
         )
-    sens = design_sensitivity(model, wrt, free, weights, engine=engine, units="solver")
+    # global hardpoints: wrt their s' columns, then each global component combines them (exact)
+    design, combos = global_columns(engine, state, wrt)
+    free, weights = free_addresses(engine, free), free_weights(engine, weights)
+    sens = design_sensitivity(model, design, free, weights, engine=engine, units="solver")
     f, names = output_function(model, of, reference=reference, wheels=wheels, engine=engine)
     D = np.zeros((len(names), sens.wrt_columns.size))
     for k, col in enumerate(sens.wrt_columns):
@@ -85,11 +91,22 @@ def output_sensitivity_matrix(
         plus = engine.model_of(engine.retract(state, h * direction), model)
         minus = engine.model_of(engine.retract(state, -h * direction), model)
         D[:, k] = (f(plus) - f(minus)) / (2.0 * h)
+    columns = list(sens.columns)
+    if combos:
+        index = {c: k for k, c in enumerate(columns)}
+        plain = [w for w in wrt if not is_global(w.split("[")[0])]
+        keep = (
+            [c for c in columns if c in {engine.column_labels[int(i)] for i in engine.columns(plain)}] if plain else []
+        )
+        cols = [D[:, index[c]] for c in keep] + [
+            sum(coef * D[:, index[c]] for c, coef in combos[label].items()) for label in combos
+        ]
+        D, columns = (np.column_stack(cols) if cols else np.zeros((len(names), 0))), keep + list(combos)
     if model_units and D.size:
         so = np.array([derivative_scale(model, n, engine) for n in names])
-        si = np.array([derivative_scale(model, c, engine) for c in sens.columns])
+        si = np.array([derivative_scale(model, c, engine) for c in columns])
         D = D * so[:, None] / si[None, :]
-    return D, list(names), list(sens.columns), residual
+    return D, list(names), columns, residual
 
 
 def output_sensitivity(

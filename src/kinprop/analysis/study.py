@@ -38,6 +38,7 @@ import numpy as np
 from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
 from kinprop.analysis.units import derivative_scale
+from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.kinematics.layout import column_labels
@@ -145,11 +146,14 @@ def _model_payload(model: Model) -> dict[str, Any]:
         "design": {k: np.array(v) for k, v in model.design.items()},
         "coordinates": {k: np.array(v) for k, v in model.coordinates.items()},
         "units": dict(model.units),
+        "elements": model.elements,
+        "vehicle": model.vehicle,
     }
 
 
 def _model_from_payload(p: Mapping[str, Any]) -> Model:
-    return Model(p["mechanism"], Design(p["design"]), as_coordinates(p["coordinates"]), p["units"])
+    return Model(p["mechanism"], Design(p["design"]), as_coordinates(p["coordinates"]), p["units"],
+                 elements=p.get("elements", ()), vehicle=p.get("vehicle"))  # fmt: skip
 
 
 def _model_hash(model: Model) -> str:
@@ -196,10 +200,10 @@ def _default_outputs(model: Model) -> list[str]:
         return []
 
 
-def _outputs_for(model: Model, names: list[str]) -> dict[str, float]:
+def _outputs_for(engine: Engine, model: Model, names: list[str]) -> dict[str, float]:
     if not names:
         return {}
-    return evaluate_outputs(model, names, units="solver")
+    return evaluate_outputs(model, names, units="solver", engine=engine)
 
 
 def _pandas():
@@ -208,39 +212,46 @@ def _pandas():
     return pandas
 
 
-def model_unit_scale(model: Model, addresses: Sequence[str], outputs: Sequence[str] | None = None) -> dict[str, float]:
+def model_unit_scale(
+    model: Model, addresses: Sequence[str], outputs: Sequence[str] | None = None, engine: Engine | None = None
+) -> dict[str, float]:
     """Column -> factor from solver units to the model's units, for the varied ``addresses``,
     every coordinate column and the metric ``outputs`` (default: the wheel metrics): ``180/pi``
     for angles of a degree model, ``pi/180`` for metric angles of a radian model; columns
     already in the model's units are left out."""
-    engine = compile_engine(model.mechanism)
+    engine = engine if engine is not None else compile_engine(model.mechanism)
     labels = column_labels(engine.layout)
     names = list(outputs) if outputs is not None else _default_outputs(model)
     qlabels = [lab for lab in labels if parse_address(lab).field == "q"]
-    cols = [*addresses, *qlabels, *(expand_outputs(model, names) if names else [])]
+    cols = [*addresses, *qlabels, *(expand_outputs(model, names, engine) if names else [])]
     scale = {c: derivative_scale(model, c, engine) for c in dict.fromkeys(cols)}
     return {k: v for k, v in scale.items() if v != 1.0}
 
 
-def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, start: int) -> pd.DataFrame:
-    """Rows of variants ``start .. start + len(values) - 1`` (runs on a Dask worker too)."""
-    model = _model_from_payload(payload)
-    asm = compile_engine(model.mechanism)
-    labels = column_labels(asm.layout)
-    qcols = [v for v in asm.layout.variables if v.group == "q"]
+def evaluate_payload(payload: Mapping[str, Any], spec: StudySpec, values: Array, start: int) -> pd.DataFrame:
+    """:func:`evaluate_chunk` on a Dask worker: the model travels as a payload and is compiled
+    there (once per chunk: a worker holds no engine of ours)."""
+    return evaluate_chunk(compile_engine(_model_from_payload(payload)), spec, values, start)
+
+
+def evaluate_chunk(eng: Engine, spec: StudySpec, values: Array, start: int) -> pd.DataFrame:
+    """Rows of variants ``start .. start + len(values) - 1`` with the study's engine (compiled
+    once from the base model: ``eng.model``)."""
+    model = eng.model
+    labels = column_labels(eng.layout)
+    qcols = [v for v in eng.layout.variables if v.group == "q"]
     nq = sum(v.size for v in qcols)
     n = values.shape[0]
     points = _point_specs(model)
     point_cols = {f"{name}[{ax}]" for _, _, name in points for ax in "xyz"}
     out_names = spec.outputs if spec.outputs is not None else _default_outputs(model)
     if out_names:
-        out_names = [x for x in expand_outputs(model, out_names) if x not in point_cols]
+        out_names = [x for x in expand_outputs(model, out_names, eng) if x not in point_cols]
     rows: dict[str, Any] = {"variant": np.arange(start, start + n, dtype=np.int64)}
     for k, a in enumerate(spec.addresses):
         rows[a] = values[:, k]
     # the plan is in the stored units (e.g. degrees); the solver takes solver units (radians)
     solver_values = values / np.array([spec.scale.get(a, 1.0) for a in spec.addresses])[None, :]
-    eng = compile_engine(model)
     base = eng.reference
     if spec.sets:
         base, _, _ = eng.apply(base, spec.sets)
@@ -271,7 +282,7 @@ def evaluate_chunk(payload: Mapping[str, Any], spec: StudySpec, values: Array, s
     P[~conv] = np.nan
     for i in range(n):
         if out_names and states[i] is not None and conv[i]:
-            vals = _outputs_for(model.with_state(*states[i]), out_names)
+            vals = _outputs_for(eng, model.with_state(*states[i]), out_names)
             for key, v in vals.items():
                 outs.setdefault(key, np.full(n, np.nan))[i] = v
     rows["converged"] = conv
@@ -337,6 +348,7 @@ def run_study(
     engine: str = "auto",
     scale: Mapping[str, float] | None = None,
     units: str = "model",
+    compiled: Engine | None = None,
 ) -> pd.DataFrame:
     """Run a design study and return one row per variant (see the module docstring).
 
@@ -350,12 +362,14 @@ def run_study(
     and every stored input, coordinate and metric is too (:func:`model_unit_scale`);
     ``units="solver"``: ``sets`` and the plan in solver units, rows as computed (radians, metric
     angles in degrees). ``scale`` (column -> factor from solver units to the stored units)
-    overrides the default of ``units``.
+    overrides the default of ``units``. ``compiled``: the engine of ``model``'s mechanism, when
+    the caller has one (else the study compiles once).
     Raises :class:`AddressError` / :class:`ValueError` for invalid input.
     """
     model_units = check_units(units)
+    eng0 = compiled.rebased(model) if compiled is not None else compile_engine(model)
     if model_units:
-        sets = changes_to_internal(model, sets or {}, compile_engine(model.mechanism))
+        sets = changes_to_internal(model, sets or {}, eng0)
     if plan is None:
         factors = list(factors or [])
         values = sample_plan(factors, method, samples, seed)
@@ -371,20 +385,20 @@ def run_study(
     if engine not in ("auto", "fast", "reference"):
         raise AddressError(f"engine {engine!r}: expected auto, fast or reference")
     # validate every address once (component, group, existence) with the reference code path
+    lay = eng0.layout
     for a in addrs:
         addr = parse_address(a)
-        lay = compile_engine(model.mechanism).layout
         if addr.key in lay and lay[addr.key].group == "C":
             raise AddressError(f"--vary {a!r}: orientations cannot be varied component by component")
         if addr.key in lay and lay[addr.key].size > 1 and addr.index is None:
             raise AddressError(f"--vary {a!r}: give a component, e.g. {a}[0]")
-    base, _, _ = apply_changes(model, dict(sets or {}))
+    base, _, _ = apply_changes(model, dict(sets or {}), eng0)
     if len(values):
-        apply_changes(base, {a: values[0, k] for k, a in enumerate(addrs)})
+        apply_changes(base, {a: values[0, k] for k, a in enumerate(addrs)}, eng0)
     if outputs:  # unknown output names fail here, before any directory is created
-        expand_outputs(base, list(outputs))
+        expand_outputs(base, list(outputs), eng0)
     if scale is None and model_units:
-        scale = model_unit_scale(model, addrs, outputs)
+        scale = model_unit_scale(model, addrs, outputs, eng0)
     spec = StudySpec(
         addresses=addrs,
         free=list(free),
@@ -423,6 +437,7 @@ def run_study(
         tmp.write_text(json.dumps(asdict(spec), indent=1))
         os.replace(tmp, directory / MANIFEST)
     payload = _model_payload(base)
+    eng = eng0.rebased(_model_from_payload(payload))  # the study's one engine, at its base
     todo = [c for c in range(n_chunks) if c not in done]
     frames: dict[int, pd.DataFrame] = {}
 
@@ -441,7 +456,7 @@ def run_study(
     try:
         if client is None:
             for c in todo:
-                store(c, evaluate_chunk(payload, spec, chunk(c), c * chunk_size))
+                store(c, evaluate_chunk(eng, spec, chunk(c), c * chunk_size))
                 bar.advance(len(chunk(c)))
         else:
             _run_dask(client, payload, spec, todo, chunk, chunk_size, store, bar)
@@ -474,7 +489,7 @@ def _run_dask(client: Any, payload: Any, spec: StudySpec, todo: list[int], chunk
     from distributed import as_completed
 
     data = client.scatter(payload, broadcast=True)
-    futures = {client.submit(evaluate_chunk, data, spec, chunk(c), c * chunk_size, pure=False): c for c in todo}
+    futures = {client.submit(evaluate_payload, data, spec, chunk(c), c * chunk_size, pure=False): c for c in todo}
     for fut in as_completed(futures):
         c = futures[fut]
         store(c, fut.result())
@@ -506,4 +521,13 @@ def _progress(enabled: bool, total: int, completed: int) -> _Bar:
     return _Bar(enabled, total, completed)
 
 
-__all__ = ["Factor", "StudySpec", "evaluate_chunk", "parse_vary", "read_study", "run_study", "sample_plan"]
+__all__ = [
+    "Factor",
+    "StudySpec",
+    "evaluate_chunk",
+    "evaluate_payload",
+    "parse_vary",
+    "read_study",
+    "run_study",
+    "sample_plan",
+]

@@ -13,8 +13,11 @@ last good one); step 0 goes from the model's state (assembled first from its est
 it is not) to the start values, with the ``--set`` changes, the same way. With
 ``continuation`` a failed step is diagnosed (the constraints in conflict are named).
 
-Each step gives one row: ``step``, the drive values, ``status`` (``converged`` /
-``failed``), ``iterations``, ``residual_norm``, ``sv_ratio`` (unit-independent
+Step 0 is one engine solve (:meth:`kinprop.Engine.propagate`); the later steps run in the
+engine's compiled sequence (:meth:`kinprop.Engine.solve_sequence`), in chunks of
+:data:`SEQUENCE_CHUNK` steps. Each step gives one row: ``step``, the drive values, ``status``
+(:class:`kinprop.Status`: ``converged``, ``infeasible``, ``not_converged``, ...),
+``iterations``, ``residual_norm`` (the scaled ``||Phi||``, docs/units.md), ``sv_ratio`` (unit-independent
 smallest/largest singular value of the free-variable Jacobian,
 :mod:`kinprop.propagation.conditioning`; ``near_singular`` when below ``SINGULAR_RTOL``),
 every joint coordinate, the outputs (named points ``point:BODY.NAME[x]``, suspension metrics, or any name
@@ -33,9 +36,8 @@ import csv
 import math
 import os
 import re
-import warnings
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from html import escape
 from pathlib import Path
 from typing import Any, Protocol
@@ -45,16 +47,14 @@ import numpy as np
 from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import output_function
 from kinprop.analysis.units import derivative_scale, unit_of
-from kinprop.engine import Engine
+from kinprop.engine import Engine, Solution, State, Status
 from kinprop.engine import compile as compile_engine
-from kinprop.errors import AddressError, SingularityWarning
+from kinprop.errors import AddressError
 from kinprop.model import Model
-from kinprop.propagation.continuation import propagate_continuation
-from kinprop.propagation.propagate import (
-    SINGULAR_RTOL,
-    Propagation,
-    propagate,
-)
+from kinprop.propagation.conditioning import SINGULAR_RTOL, conditioning
+from kinprop.propagation.continuation import continuation_of
+from kinprop.propagation.hardpoints import free_addresses
+from kinprop.propagation.propagate import solve_changes
 from kinprop.propagation.units import changes_to_internal, check_units, from_solver_units, to_solver_units
 from kinprop.spatial import Array
 
@@ -64,6 +64,8 @@ _DRIVE = re.compile(r"^(?P<joint>[^\s=\[\].]+)(\.q)?(\[(?P<index>\d+)\])?=(?P<ra
 MAX_STEPS = 10_000_000
 #: rows a sweep result's notebook table shows
 SUMMARY_ROWS = 8
+#: steps per call of the engine's compiled sequence (rows reach the sink after each)
+SEQUENCE_CHUNK = 64
 #: columns before the coordinates and outputs
 META = ("step", "status", "iterations", "residual_norm", "sv_ratio", "near_singular")
 
@@ -88,9 +90,8 @@ class Drive:
         return f"{self.joint}.q[{self.index}]"
 
 
-def _coordinate_info(model: Model, joint: str) -> tuple[int, tuple[int, ...]]:
+def _coordinate_info(asm: Engine, model: Model, joint: str) -> tuple[int, tuple[int, ...]]:
     """(number of coordinates, indices that are angles in model units) of a joint."""
-    asm = compile_engine(model.mechanism)
     if joint not in model.mechanism.joint_names:
         raise AddressError(f"--drive: unknown joint {joint!r}; joints are {', '.join(model.mechanism.joint_names)}")
     key = f"{joint}.q"
@@ -162,7 +163,7 @@ def _is_number(text: str) -> bool:
     return True
 
 
-def parse_drive(model: Model, text: str) -> Drive:
+def parse_drive(model: Model, text: str, engine: Engine | None = None) -> Drive:
     """``JOINT=VALUES`` (also ``JOINT[k]=...``, ``JOINT.q[k]=...``) -> :class:`Drive`; VALUES
     is ``START:STOP:STEPS``, a list ``v1,v2,...`` or a CSV column ``@FILE.csv[:COLUMN]``, in
     the model's units. Angles in a list or a CSV column are unwrapped along the sequence (a
@@ -171,7 +172,7 @@ def parse_drive(model: Model, text: str) -> Drive:
     if not m:
         raise AddressError(f"--drive {text!r}: expected JOINT=START:STOP:STEPS (e.g. O2=0:360:360)")
     joint = m.group("joint")
-    size, angles = _coordinate_info(model, joint)
+    size, angles = _coordinate_info(engine if engine is not None else compile_engine(model.mechanism), model, joint)
     index = int(m.group("index") or 0)
     if m.group("index") is None and size != 1:
         raise AddressError(f"--drive {text!r}: joint {joint!r} has {size} coordinates; say which, e.g. {joint}[0]=...")
@@ -192,12 +193,12 @@ def _angle_indices(model: Model, joint: str) -> tuple[int, ...]:
     return tuple(model.mechanism.joint(joint).jtype.angle_indices)
 
 
-def coordinate_columns(model: Model) -> list[tuple[str, str, int, bool]]:
+def coordinate_columns(model: Model, engine: Engine | None = None) -> list[tuple[str, str, int, bool]]:
     """``(column, joint, index, is_angle_in_degrees)`` for every coordinate of the layout."""
-    asm = compile_engine(model.mechanism)
+    asm = engine if engine is not None else compile_engine(model.mechanism)
     out = []
     for v in asm.layout.group("q"):
-        _, angles = _coordinate_info(model, v.joint)
+        _, angles = _coordinate_info(asm, model, v.joint)
         for k in range(v.size):
             out.append((v.key if v.size == 1 else f"{v.key}[{k}]", v.joint, k, k in angles))
     return out
@@ -378,13 +379,15 @@ def sweep(
     :func:`default_outputs`). ``output``: a ``.csv`` / ``.parquet`` path or a :class:`Sink`;
     it receives each row as it is computed and is closed at the end, also on an exception
     (KeyboardInterrupt). ``on_step(k, n, row)`` is called after
-    each row (progress). Step 0 goes from the model's (assembled) estimates to the start values
-    by continuation (:mod:`kinprop.propagation.continuation`); later steps are plain Newton
-    propagations, with continuation as a fallback for a failed step when ``continuation``.
+    each row (progress). Step 0 goes from the model's (assembled) estimates to the start values;
+    later steps run in the engine's compiled sequence. Every step follows its change on the
+    last good step's branch; with ``continuation`` a failed step's message is its diagnosis
+    (:func:`kinprop.propagation.continuation.diagnose`).
     """
     import pandas as pd
 
-    dr = tuple(parse_drive(model, d) if isinstance(d, str) else d for d in drives)
+    engine = compile_engine(model)
+    dr = tuple(parse_drive(model, d, engine) if isinstance(d, str) else d for d in drives)
     if not dr:
         raise AddressError("a sweep needs at least one --drive")
     n = {d.values.size for d in dr}
@@ -397,10 +400,9 @@ def sweep(
     if any(c.startswith(tuple(f"{d.joint}.q" for d in dr)) for c in (changes or {})):
         raise AddressError("--set: a driven coordinate cannot also be set")
     names = list(default_outputs(model) if outputs is None else outputs)
-    engine = compile_engine(model.mechanism)
     changes = changes_to_internal(model, changes or {}, engine) if check_units(units) else dict(changes or {})
     fout, expanded = output_function(model, names, engine=engine)
-    coord_cols = coordinate_columns(model)
+    coord_cols = coordinate_columns(model, engine)
     drive_cols = [d.label for d in dr]
     # unit factors, once (io.units' conversions are linear): model -> solver for the drives,
     # solver -> model for the coordinate columns
@@ -419,46 +421,76 @@ def sweep(
         if isinstance(output, (str, Path))
         else output
     )
+    free_set = free_addresses(engine, free)
+    drive_values = np.column_stack([d.values * (f if d.angle else 1.0) for d, f in zip(dr, to_solver, strict=True)])
+
+    def emit(k: int, status: Status, iterations: int, residual: float, message: str, state: State | None) -> None:
+        nonlocal good
+        row: dict[str, Any] = dict.fromkeys(columns, float("nan"))
+        row.update({"step": k, **{d.label: float(d.values[k]) for d in dr}})
+        converged = status is Status.CONVERGED and state is not None
+        ratio = float("nan")
+        if converged:
+            _, J = engine.evaluate(state)
+            ratio = conditioning(engine.row_blocks, J[:, cols]) if cols.size else float("nan")
+        row.update(
+            {
+                "status": status.value,
+                "iterations": int(iterations),
+                "residual_norm": float(residual),
+                "sv_ratio": ratio,
+                "near_singular": bool(converged and ratio < SINGULAR_RTOL),
+                "message": message,
+            }
+        )
+        if converged:
+            good = engine.model_of(state, model)
+            for col, joint, idx, deg in coord_cols:
+                if col in drive_cols:
+                    continue  # the driven value exactly as given (not degrees -> radians -> degrees)
+                val = float(np.atleast_1d(good.coordinates[joint])[idx])
+                row[col] = val * to_model[col] if deg else val
+            try:
+                values = fout(good)
+                row.update(
+                    zip(expanded, (float(values[i]) * s for i, s in zip(keep, out_scale, strict=True)), strict=True)
+                )
+            except Exception as exc:  # an output that cannot be evaluated here
+                row["message"] = f"{message}; outputs: {exc}"
+        rows.append(row)
+        if sink is not None:
+            sink.write(row)
+        if on_step is not None:
+            on_step(k, n_steps, row)
+
     try:
-        for k in range(n_steps):
-            step_changes: dict[str, object] = dict(changes or {}) if k == 0 else {}
-            for d, f in zip(dr, to_solver, strict=True):  # one component each: the other coordinates may follow
-                v = d.values[k]
-                step_changes[d.address] = v * f if d.angle else v
-            prop, note = _solve_step(engine, good, step_changes, free, tol, max_iter, continuation)
-            r = prop.result
-            row: dict[str, Any] = dict.fromkeys(columns, float("nan"))
-            row.update({"step": k, **{d.label: float(d.values[k]) for d in dr}})
-            ratio = prop.singularity_ratio
-            row.update(
-                {
-                    "status": "converged" if r.converged else "failed",
-                    "iterations": int(r.iterations),
-                    "residual_norm": float(r.residual_norm),
-                    "sv_ratio": ratio,
-                    "near_singular": bool(r.converged and ratio < SINGULAR_RTOL),
-                    "message": note or r.message,
-                }
-            )
-            if r.converged:
-                good = prop.after
-                for col, joint, idx, deg in coord_cols:
-                    if col in drive_cols:
-                        continue  # the driven value exactly as given (not degrees -> radians -> degrees)
-                    val = float(np.atleast_1d(good.coordinates[joint])[idx])
-                    row[col] = val * to_model[col] if deg else val
-                try:
-                    values = fout(good)
-                    row.update(
-                        zip(expanded, (float(values[i]) * s for i, s in zip(keep, out_scale, strict=True)), strict=True)
-                    )
-                except Exception as exc:  # an output that cannot be evaluated here
-                    row["message"] = f"{r.message}; outputs: {exc}"
-            rows.append(row)
-            if sink is not None:
-                sink.write(row)
-            if on_step is not None:
-                on_step(k, n_steps, row)
+        # step 0: from the model's state (assembled first when it is not) to the start values
+        first = dict(changes or {}) | {d.address: float(v) for d, v in zip(dr, drive_values[0], strict=True)}
+        sol = solve_changes(engine, model, first, free, tol=tol, max_iter=max_iter, units="solver")
+        cols = sol.free if sol.free.size else engine.free_columns(free_set, [d.address for d in dr])
+        note = _diagnosis(model, sol, free) if continuation and not sol.converged else "; ".join(sol.notes)
+        emit(0, sol.status, sol.iterations, sol.residual, note or sol.message, sol.state if sol.converged else None)
+        start = sol.state if sol.converged else engine.state_of(model)
+        addresses = [d.address for d in dr]
+        # later steps: the engine's compiled sequence, each from the last good step on its branch,
+        # in chunks so that finished rows reach the sink (and survive an interrupt)
+        for k0 in range(1, n_steps, SEQUENCE_CHUNK):
+            k1 = min(n_steps, k0 + SEQUENCE_CHUNK)
+            _, seq = engine.solve_sequence(start, addresses, drive_values[k0:k1], cols, tol=tol, max_iter=max_iter)
+            for i in range(k1 - k0):
+                st = seq.state[i]
+                status = seq.status(i)
+                if status is Status.CONVERGED:
+                    start = st.copy()
+                    note = "; ".join(seq.notes(i))
+                elif continuation:  # the failed step once more from the last good one, to diagnose it
+                    step = {a: float(v) for a, v in zip(addresses, drive_values[k0 + i], strict=True)}
+                    failed = engine.propagate(step, cols, start=start, tol=tol, max_iter=max_iter)
+                    note = _diagnosis(model, failed, free) if not failed.converged else ""
+                else:
+                    note = ""
+                emit(k0 + i, status, seq.iterations[i], seq.residual[i], note or seq.message(i),
+                     st if status is Status.CONVERGED else None)  # fmt: skip
     finally:
         if sink is not None:
             sink.close()
@@ -473,30 +505,10 @@ def sweep(
     return SweepResult(frame, dr, expanded, good)
 
 
-def _solve_step(
-    engine: Engine,
-    good: Model,
-    changes: Mapping[str, object],
-    free: Sequence[str],
-    tol: float,
-    max_iter: int,
-    diagnose: bool,
-) -> tuple[Propagation, str]:
-    """One step, followed on the branch of ``good``; with ``diagnose``, a failed step is
-    retried by :func:`~kinprop.propagation.continuation.propagate_continuation`, whose message
-    names the constraints in conflict. Returns the propagation and a note (or ``""``)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", SingularityWarning)
-        prop = propagate(good, changes, free, tol=tol, max_iter=max_iter, engine=engine, units="solver")
-    if prop.converged or not diagnose:
-        return prop, "; ".join(prop.notes)
-    cont = propagate_continuation(
-        good, changes, free, tol=tol, max_iter=min(max_iter, 20), min_step=1e-4, engine=engine, units="solver"
-    )
-    if cont.converged:
-        return cont.propagation, f"continuation: {cont.message}"
-    failed = replace(cont.propagation.result, converged=False, message=cont.message)
-    return replace(cont.propagation, result=failed), f"continuation: {cont.message}"
+def _diagnosis(model: Model, sol: Solution, free: Sequence[str]) -> str:
+    """``continuation: ...``: the diagnosis of a failed step (no further solve:
+    :func:`kinprop.propagation.continuation.diagnose`)."""
+    return f"continuation: {continuation_of(model, sol, free).message}"
 
 
 def plot_sweep(

@@ -167,7 +167,7 @@ def _condition(model: Model, text: str, where: str, value_text: str | None = Non
     return Condition(name, v, held)
 
 
-def parse_target(model: Model, text: str) -> TargetSpec:
+def parse_target(model: Model, text: str, engine: Engine | None = None) -> TargetSpec:
     """Parse one target spec (module docstring); raises :class:`AddressError` with the spec."""
     where = f"--target {text!r}"
     body, sep, value = text.rpartition("=")
@@ -188,7 +188,7 @@ def parse_target(model: Model, text: str) -> TargetSpec:
     out = out.strip()
     out = _travel(model, where) if out == "travel" else _metric_name(model, out)
     if not out.startswith("joint:"):
-        names = expand_outputs(model, [out])
+        names = expand_outputs(model, [out], engine)
         if names != [out]:
             raise AddressError(f"{where}: {out!r} is not a scalar output; name a component, e.g. {names[0]}")
     kind = _kind(model, out)
@@ -490,7 +490,7 @@ def propagate_targets(
     start = eng.state_of(model)
     changes = changes_to_internal(model, changes or {}, eng) if check_units(units) else dict(changes or {})
     st, _, _ = eng.apply(start, resolve_changes(eng, start, changes))
-    specs = tuple(t if isinstance(t, TargetSpec) else parse_target(model, t) for t in targets)
+    specs = tuple(t if isinstance(t, TargetSpec) else parse_target(model, t, eng) for t in targets)
     if not specs:
         raise AddressError("no targets given")
     # configurations keyed by their conditions

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-from kinprop.analysis.metrics import METRIC_ALIASES, METRICS, metric_unit
+from kinprop.analysis.metrics import METRIC_ALIASES, METRICS, is_angle_valued, is_first_order, metric_unit
 from kinprop.engine import Engine
 from kinprop.model import Model
 from kinprop.propagation.units import address_scale, address_unit
@@ -29,10 +29,10 @@ def unit_of(model: Model, name: str, engine: Engine | None = None) -> str:
     the angle unit."""
     if is_metric(name):
         short = name.split(".")[-1]
-        if METRIC_ALIASES.get(short, short) not in METRICS:
+        if METRIC_ALIASES.get(short, short) not in METRICS and not is_first_order(short):
             return ""  # not a quantity (step, status, iterations, ...)
         length, angle = model.units.get("length", "m"), model.units.get("angle", "rad")
-        return angle if metric_unit(short, length) == "deg" else length
+        return metric_unit(short, length, angle, model.units.get("force"))
     return address_unit(model, name, engine)
 
 
@@ -46,7 +46,7 @@ def derivative_scale(model: Model, name: str, engine: Engine | None = None) -> f
     ``d_model = d_solver * derivative_scale(out) / derivative_scale(in)``. ``engine``: one
     compiled from the model's mechanism (else one is compiled per call)."""
     if is_metric(name):
-        angle_metric = unit_of(model, name) == model.units.get("angle", "rad")
+        angle_metric = is_angle_valued(name.split(".")[-1])
         return math.pi / 180.0 if (angle_metric and model.units.get("angle") != "deg") else 1.0
     return address_scale(model, name, engine)
 

@@ -1,18 +1,16 @@
-"""Command-line interface. Each command lives in its own module and registers on ``app``.
+"""Command-line interface. Each command lives in its own module and registers on ``app``;
+``app`` imports a command's module only when that command is used (:data:`COMMANDS`), so
+``kinprop --help`` and ``--version`` do not import the library.
 
 The ``kinprop`` command enters through :mod:`kinprop.__main__`, which chooses how the
-kernels run before this package (and the library) is imported.
+kernels run before any command (and the library) is imported.
 """
 
-from kinprop.cli import check, convert, examples, paper, plot, sensitivity, solve, sweep  # noqa: F401  (registers commands)
-from kinprop.cli import importer as _importer  # noqa: F401  (kinprop import)
-from kinprop.cli import serve as _serve  # noqa: F401  (kinprop serve)
-from kinprop.cli import study as _study  # noqa: F401  (kinprop study, kinprop tolerance)
-from kinprop.cli.app import app
+from kinprop.cli.app import COMMANDS, app, load_commands
 
 
 def main() -> None:
     app(prog_name="kinprop")
 
 
-__all__ = ["app", "main"]
+__all__ = ["COMMANDS", "app", "load_commands", "main"]

@@ -1,6 +1,11 @@
 """The ``kinprop`` command-line application: shared options, loading and exit codes.
 
 Exit codes: 0 success, 1 the solver did not converge, 2 invalid input.
+
+The commands are loaded lazily: this module imports typer and rich only, and a command's
+module (with the library and numba under it) is imported when that command runs or its own
+``--help`` is asked for; ``kinprop --help`` lists :data:`COMMANDS` and ``kinprop --version``
+reads the package metadata (benchmarks/cold_start.py).
 """
 
 from __future__ import annotations
@@ -14,9 +19,8 @@ import threading
 from collections.abc import Callable
 from functools import wraps
 from pathlib import Path
-from typing import Annotated, Any, NoReturn, TypeVar
+from typing import TYPE_CHECKING, Annotated, Any, NoReturn, TypeVar
 
-import numpy as np
 import typer
 from rich.console import Console, ConsoleDimensions
 from rich.table import Table
@@ -29,8 +33,9 @@ except ImportError:  # pragma: no cover - older typer on the real click
     import click  # type: ignore[no-redef]
 
 from kinprop.errors import AddressError, ModelError
-from kinprop.io import load_model
-from kinprop.model import Model
+
+if TYPE_CHECKING:
+    from kinprop.model import Model
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_INVALID, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -45,14 +50,95 @@ EXTRAS = {
 }
 
 
+#: every command, in the order ``kinprop --help`` lists them: the module that defines it (on
+#: ``app``) and its one-line help, the first paragraph of its docstring (tests/cli/test_startup.py
+#: checks both against the commands themselves)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "check": ("kinprop.cli.check", "Mechanism report: structure, loops, counts, mobility and redundant constraints."),
+    "convert": (
+        "kinprop.cli.convert",
+        "Convert a model between frame style (s', C, q) and hardpoint style (global points and axes), or write "
+        "it as a kinematic MuJoCo MJCF file (--to mjcf; at the model's coordinates).",
+    ),
+    "examples": (
+        "kinprop.cli.examples",
+        "List the example models (the paper's mechanisms and more), or copy them to a directory.",
+    ),
+    "paper": ("kinprop.cli.paper", "Reproduce the paper's Table 4 (slider-crank) and Table 1 (McPherson strut)."),
+    "plot": ("kinprop.cli.plot", "Draw a 3D stick figure of a model (PNG or interactive HTML)."),
+    "sensitivity": (
+        "kinprop.cli.sensitivity",
+        "Derivatives of outputs (default: the free variables) with respect to design variables.",
+    ),
+    "assemble": ("kinprop.cli.solve", "Solve for the joint coordinates from the model's estimates."),
+    "propagate": (
+        "kinprop.cli.solve",
+        "Change design variables and re-assemble, moving only the free variables; with --target, find the "
+        "smallest change of the --free design variables meeting the targets.",
+    ),
+    "sweep": ("kinprop.cli.sweep", "Drive joint coordinates over a range; each step is solved from the previous one."),
+    "import": ("kinprop.cli.importer", "Read another tool's mechanism file and write it as a kinprop model file."),
+    "serve": (
+        "kinprop.cli.serve",
+        "Start the design-propagation workbench in the browser (edit, propagate, sweep, undo).",
+    ),
+    "study": (
+        "kinprop.cli.study",
+        "Run a design study: every variant re-assembled, inputs and results streamed to Parquet.",
+    ),
+    "tolerance": (
+        "kinprop.cli.study",
+        "Linearised output standard deviations from design-variable tolerances (sensitivity matrix).",
+    ),
+}
+
+
+def load_commands(names: list[str] | None = None) -> None:
+    """Import the modules of ``names`` (default: every module of :mod:`kinprop.cli`, so a
+    command missing from :data:`COMMANDS` still registers), which register them on ``app``."""
+    if names is not None:
+        for name in names:
+            importlib.import_module(COMMANDS[name][0])
+        return
+    import pkgutil
+
+    import kinprop.cli
+
+    for mod in pkgutil.iter_modules(kinprop.cli.__path__):
+        if mod.name not in ("warmup",):  # run as a script (python -m kinprop.cli.warmup)
+            importlib.import_module(f"kinprop.cli.{mod.name}")
+
+
 class _Group(TyperGroup):
-    """The command group, with usage errors as one ``error:`` line and SIGTERM as Ctrl-C.
+    """The command group, with usage errors as one ``error:`` line and SIGTERM as Ctrl-C,
+    loading each command's module when the command is used.
 
     Click's usage errors (unknown option, bad integer, missing argument) would print a
     boxed, multi-line panel; here they get the same one-line ``error:`` form, exit 2, as
     every other invalid input. SIGTERM (``timeout``, a cancelled CI job) raises
     KeyboardInterrupt, so the interrupt paths (finished rows kept, partial files removed)
     run for it too."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return list(COMMANDS)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        if cmd_name not in self.commands:
+            load_commands([cmd_name] if cmd_name in COMMANDS else None)
+            for info in app.registered_commands:
+                name = info.name or typer.main.get_command_name(info.callback.__name__)  # type: ignore[union-attr]
+                if name == cmd_name:
+                    self.commands[name] = typer.main.get_command_from_info(
+                        info, pretty_exceptions_short=app.pretty_exceptions_short, rich_markup_mode=app.rich_markup_mode
+                    )
+        return self.commands.get(cmd_name)
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        """The command list from :data:`COMMANDS`, without importing any command."""
+        limit = formatter.width - 6 - max(map(len, COMMANDS))
+        rows = [(name, click.utils.make_default_short_help(text, limit)) for name, (_, text) in COMMANDS.items()]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
 
     def main(self, *args: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
         if not standalone_mode:
@@ -247,6 +333,8 @@ def load_model_cli(path: Path) -> Model:
 
     A 20,000-body model takes a few seconds to parse, validate and cut into a tree; a terminal
     user sees what is happening (a pipe or CI log gets nothing extra)."""
+    from kinprop.io import load_model
+
     try:
         size = path.stat().st_size
     except OSError:
@@ -260,27 +348,6 @@ def load_model_cli(path: Path) -> Model:
     return model
 
 
-def parse_assignment(text: str, option: str = "--set") -> tuple[str, np.ndarray]:
-    """``ADDRESS=v1,v2,...`` -> (address, values)."""
-    if "=" not in text:
-        raise AddressError(f"{option} {text!r}: expected ADDRESS=VALUE (e.g. J12.s_j=-2.8,0.2,0.1)")
-    addr, _, value = text.partition("=")
-    try:
-        nums = np.array([float(x) for x in value.replace(";", ",").split(",") if x.strip()], dtype=float)
-    except ValueError:
-        raise AddressError(f"{option} {text!r}: values must be comma-separated numbers") from None
-    if nums.size == 0:
-        raise AddressError(f"{option} {text!r}: no value given")
-    return addr.strip(), nums
-
-
-def parse_weight(text: str) -> tuple[str, float]:
-    addr, nums = parse_assignment(text)
-    if nums.size != 1:
-        raise AddressError(f"--weight {text!r}: expected one number")
-    return addr, float(nums[0])
-
-
 def json_safe(obj: Any) -> Any:
     """``obj`` with every non-finite float (NaN, +-Infinity) replaced by None: strict JSON."""
     if isinstance(obj, float):
@@ -289,10 +356,8 @@ def json_safe(obj: Any) -> Any:
         return {k: json_safe(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
         return [json_safe(v) for v in obj]
-    if isinstance(obj, np.ndarray):
+    if hasattr(obj, "tolist") and type(obj).__module__ == "numpy":  # an array or a numpy scalar
         return json_safe(obj.tolist())
-    if isinstance(obj, np.generic):
-        return json_safe(obj.item())
     return obj
 
 

@@ -8,96 +8,15 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table
 
-from kinprop.analysis.mobility import MobilityReport, mobility, row_names
+from kinprop.analysis.mobility import mobility
 from kinprop.cli.app import EXIT_NOT_CONVERGED, app, fail, handles_user_errors, load_model_cli, out, print_json
-from kinprop.engine import Engine
-from kinprop.engine import compile as compile_engine
-from kinprop.model import Model
+from kinprop.io.commands import ASSEMBLED_TOL, check_json
 from kinprop.propagation import assemble
-
-#: ||Phi|| below which the configuration counts as assembled (the rank is then reliable)
-ASSEMBLED_TOL = 1e-8
 
 CASES = {
     1: "the cut joint's bodies are also joined by a tree joint",
     2: "the loop closes through the junction body",
 }
-
-
-def joint_rows(asm: Engine) -> dict[str, list[str]]:
-    """Constraint-row labels of Phi per joint (cut-joint rows, Euler normalisation rows)."""
-    labels = row_names(asm)
-    rows: dict[str, list[str]] = {}
-    for blk in asm.row_blocks:
-        rows.setdefault(blk.joint, []).extend(labels[blk.rows])
-    return rows
-
-
-def check_json(model: Model, rep: MobilityReport, evaluated_at: str) -> dict[str, Any]:
-    """The report as one JSON object (see ``kinprop check --help``)."""
-    mech = model.mechanism
-    asm = compile_engine(mech)
-    topo = asm.topology
-    tree = set(topo.tree_joints)
-    rows = joint_rows(asm)
-    at_body: dict[str, list[str]] = {b.name: [] for b in mech.bodies}
-    for j in mech.joints:
-        at_body[j.body_i].append(j.name)
-        at_body[j.body_j].append(j.name)
-    return {
-        "model": model.source,
-        "name": mech.name,
-        "units": dict(model.units),
-        "bodies": [
-            {
-                "name": b.name,
-                "fixed": b.fixed,
-                "joints": at_body[b.name],
-                "points": [p for p, _ in b.points],
-            }
-            for b in mech.bodies
-        ],
-        "joints": [
-            {
-                "name": j.name,
-                "type": j.jtype.name,
-                "bodies": [j.body_i, j.body_j],
-                "role": "tree" if j.name in tree else "cut",
-                "n_coordinates": j.jtype.n_coordinates if j.name in tree else j.jtype.n_cut_coordinates,
-                "rows": rows.get(j.name, []),
-            }
-            for j in mech.joints
-        ],
-        "couplings": [
-            {"name": c.name, "joints": [c.joint_a, c.joint_b], "rows": rows.get(c.name, [])} for c in mech.couplings
-        ],
-        "tree_joints": list(topo.tree_joints),
-        "cut_joints": list(topo.cut_joints),
-        "loops": [
-            {
-                "cut_joint": lp.cut_joint,
-                "bodies": [lp.body_i, lp.body_j],
-                "junction": lp.junction,
-                "case": lp.case,
-                "path_i": list(lp.path_i),
-                "path_j": list(lp.path_j),
-            }
-            for lp in topo.loops
-        ],
-        "n_coordinates": rep.n_coordinates,
-        "n_constraints": rep.n_constraints,
-        "rank": rep.rank,
-        "gruebler": rep.gruebler,
-        "mobility": rep.mobility,
-        "redundant": rep.redundant,
-        "redundant_joints": rep.redundant_joints,
-        "dependent": rep.dependent,
-        "singular_values": rep.singular_values,
-        "rtol": rep.rtol,
-        "residual_norm": rep.residual_norm,
-        "assembled": rep.residual_norm < ASSEMBLED_TOL,
-        "evaluated_at": evaluated_at,
-    }
 
 
 def _tables(obj: dict[str, Any]) -> list[Table]:

@@ -12,10 +12,8 @@ import os
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
-import numpy as np
-
 from kinprop.errors import AddressError
-from kinprop.model.design import parse_address
+from kinprop.io.arguments import address_key as _key
 
 #: upper bounds that keep one command's work and memory finite
 MAX_ITER = 100_000
@@ -38,44 +36,6 @@ def check_int(option: str, value: int, low: int, high: int) -> None:
     """``low <= value <= high``."""
     if not low <= value <= high:
         raise AddressError(f"{option} {value}: expected an integer from {low} to {high:,}")
-
-
-def parse_assignments(option: str, texts: Iterable[str] | None) -> dict[str, np.ndarray]:
-    """``ADDRESS=VALUES`` options -> {address: values}; an address given twice is refused."""
-    from kinprop.cli.app import parse_assignment
-
-    out: dict[str, np.ndarray] = {}
-    seen: dict[tuple[str, int | None], str] = {}
-    for text in texts or []:
-        addr, values = parse_assignment(text, option)
-        if not np.all(np.isfinite(values)):
-            raise AddressError(f"{option} {text!r}: values must be finite numbers")
-        key = _key(addr)
-        clash = [t for (k, i), t in seen.items() if k == key[0] and (i is None or key[1] is None or i == key[1])]
-        if clash:
-            raise AddressError(f"{option} {text!r}: {addr} is already given by {option} {clash[0]!r}")
-        seen[key] = text
-        out[addr] = values
-    return out
-
-
-def parse_weights(texts: Iterable[str] | None) -> dict[str, float] | None:
-    """``--weight ADDRESS_OR_GROUP=W`` options: one positive number each, no address twice."""
-    out = {}
-    for addr, values in parse_assignments("--weight", texts).items():
-        if values.size != 1 or not values[0] > 0:
-            found = ", ".join(map(str, values))
-            raise AddressError(f"--weight {addr}: expected one number, and weights must be positive; found {found}")
-        out[addr] = float(values[0])
-    return out or None
-
-
-def _key(address: str) -> tuple[str, int | None]:
-    try:
-        a = parse_address(address)
-    except AddressError:
-        return address, None
-    return a.key, a.index
 
 
 def check_set_not_free(changes: Iterable[str], free: Sequence[str] | None, option: str = "--set") -> None:
@@ -138,6 +98,4 @@ __all__ = [
     "check_set_not_free",
     "check_suffix",
     "check_tol",
-    "parse_assignments",
-    "parse_weights",
 ]

@@ -1,8 +1,10 @@
 """Continuation and singularity warnings for ``kinprop propagate`` / ``assemble``.
 
-``--continuation`` runs :func:`kinprop.propagation.continuation.propagate_continuation`;
-without the flag a plain Newton propagation runs first and continuation is the fallback when
-it fails (``--no-continuation`` turns the fallback off). A change that cannot be assembled
+Every propagation is one engine solve that follows the change on the start's branch
+(:meth:`kinprop.Engine.propagate`). When it fails, the solution is diagnosed
+(:func:`kinprop.propagation.continuation.diagnose`: fraction reached, constraints in
+conflict; ``--no-continuation`` turns the diagnosis off); ``--continuation`` reports the
+sub-steps of a successful one too. A change that cannot be assembled
 prints the largest feasible fraction and the constraints in conflict and exits 1; no model
 is written for it.
 """
@@ -10,20 +12,19 @@ is written for it.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
 
 import typer
 from rich.text import Text
 
 from kinprop.cli.app import EXIT_NOT_CONVERGED, err, out, print_json
 from kinprop.errors import SingularityWarning
-from kinprop.io.results import coordinates_json, design_json, propagation_json
+from kinprop.io.commands import propagate_json, solve_propagation
 from kinprop.model import Model
-from kinprop.propagation import Propagation, propagate
-from kinprop.propagation.continuation import ContinuationResult, propagate_continuation
+from kinprop.propagation import Propagation
+from kinprop.propagation.continuation import ContinuationResult
 
 
 @contextmanager
@@ -49,80 +50,17 @@ def shown_warnings() -> Iterator[None]:
         err.print(Text.assemble(("warning:", "yellow"), f" {kind}{key[1]}"), soft_wrap=True)
 
 
-def continuation_json(res: ContinuationResult) -> dict[str, Any]:
-    return {
-        "status": res.status,
-        "fraction": res.fraction,
-        "message": res.message,
-        "conflict": [{"row": r, "weight": w} for r, w in res.conflict],
-        "residual_rows": [{"row": r, "value": v} for r, v in res.residual_rows],
-        "singularity_ratio": res.singularity_ratio,
-        "sub_steps": [s.__dict__ for s in res.steps],
-        "last_feasible": {"coordinates": coordinates_json(res.after), "design": design_json(res.after)},
-    }
-
-
 def print_continuation(res: ContinuationResult) -> None:
     """One summary line, and on failure the diagnosis: fraction and conflicting rows."""
-    n_ok = sum(s.accepted for s in res.steps)
     if res.converged:
-        out.print(f"continuation: {n_ok} sub-steps ({len(res.steps)} attempts)")
+        out.print(f"continuation: {res.substeps} sub-steps")
         return
     out.print(f"continuation: the change cannot be assembled beyond {res.fraction:.6g} of its size", style="red")
     for r, w in res.conflict:
         out.print(f"  in conflict: {r}  (weight {w:+.3f} in the left singular vector of the smallest singular value)")
     for r, v in res.residual_rows:
-        out.print(f"  residual at the failed attempt: {r} = {v:.3g}")
+        out.print(f"  residual of the full change at the last feasible state: {r} = {v:.3g}")
     out.print(f"  smallest/largest singular value at the last feasible state: {res.singularity_ratio:.3g}")
-
-
-def solve_propagation(
-    model: Model,
-    changes: Mapping[str, object],
-    free: Sequence[str],
-    *,
-    tol: float,
-    max_iter: int,
-    weights: Mapping[str, float] | None,
-    continuation: bool | None,
-    on_fallback: Callable[[Propagation], None] | None = None,
-    method: str = "least-change",
-) -> tuple[Propagation, ContinuationResult | None, bool]:
-    """Plain Newton, continuation, or Newton with continuation as the fallback (``None``).
-
-    Returns ``(prop, res, newton_ran)``: the propagation to report, the continuation result
-    when continuation ran (else None) and whether plain Newton ran first. When ``res`` did
-    not converge, ``prop`` is the failed plain Newton propagation (or continuation's own).
-    ``on_fallback(plain)`` is called when plain Newton failed and continuation starts.
-    """
-    plain: Propagation | None = None
-    if continuation is not True:
-        plain = propagate(model, changes, free, tol=tol, max_iter=max_iter, weights=weights, units="solver",
-                          method=method)  # fmt: skip
-        if plain.converged or continuation is False or not changes:
-            return plain, None, True
-        if on_fallback is not None:
-            on_fallback(plain)
-    res = propagate_continuation(
-        model, changes, free, tol=tol, max_iter=min(max_iter, 20), weights=weights, units="solver"
-    )
-    if res.converged:
-        return res.propagation, res, plain is not None
-    return (plain if plain is not None else res.propagation), res, plain is not None
-
-
-def propagate_json(prop: Propagation, res: ContinuationResult | None = None, newton_ran: bool = True) -> dict[str, Any]:
-    """What ``kinprop propagate --json`` prints for :func:`solve_propagation`'s result: the
-    propagation's JSON, and when continuation failed too, status ``not_converged`` and a
-    ``continuation`` object."""
-    obj = propagation_json(prop)
-    if res is None or res.converged:
-        return obj
-    obj["status"] = "not_converged"
-    if not newton_ran:
-        obj["message"] = res.message
-    obj["continuation"] = continuation_json(res)
-    return obj
 
 
 def run_propagation(
@@ -145,7 +83,7 @@ def run_propagation(
 
     def say_fallback(plain: Propagation) -> None:
         if not as_json:
-            err.print(f"{plain.result.message}; diagnosing by continuation")
+            err.print(f"{plain.result.message}; diagnosing")
 
     with shown_warnings():
         prop, res, newton_ran = solve_propagation(
@@ -176,10 +114,7 @@ def run_propagation(
 
 
 __all__ = [
-    "continuation_json",
     "print_continuation",
-    "propagate_json",
     "run_propagation",
     "shown_warnings",
-    "solve_propagation",
 ]

@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Annotated, Any, NamedTuple
+from typing import Annotated
 
 import numpy as np
 import typer
 from rich.table import Table
 
-from kinprop.analysis.sensitivity import RESIDUAL_WARN, design_sensitivity, output_sensitivity_matrix
+from kinprop.analysis.sensitivity import RESIDUAL_WARN
 from kinprop.cli.app import (
     EXIT_NOT_CONVERGED,
     FreeOption,
@@ -23,14 +22,11 @@ from kinprop.cli.app import (
     out,
     print_json,
 )
-from kinprop.cli.checks import check_tol, parse_weights
+from kinprop.cli.checks import check_tol
 from kinprop.cli.continuation import shown_warnings
-from kinprop.engine import compile as compile_engine
-from kinprop.io.units import derivative_scale, unit_of
-from kinprop.model import Model
+from kinprop.io.arguments import parse_weights
+from kinprop.io.commands import sensitivities, sensitivity_json
 from kinprop.propagation import assemble
-from kinprop.propagation.hardpoints import free_weights, global_columns, is_global
-from kinprop.solver import SolveResult
 
 Json = Annotated[bool, typer.Option("--json", help="print one JSON object instead of a table")]
 
@@ -46,86 +42,6 @@ def sensitivity_table(matrix: np.ndarray, rows: list[str], columns: list[str], t
         cells = [f"{x:.6g}" if abs(x) > 1e-9 * scale else "0" for x in row]
         t.add_row(str(name), *cells)
     return t
-
-
-def _per(model, name: str, engine=None) -> str:
-    """The unit of a design column: a C column is per angle of body-frame rotation."""
-    if ".C_" in name:
-        return model.units.get("angle", "rad")
-    return unit_of(model, name, engine)
-
-
-class Sensitivities(NamedTuple):
-    """d(rows)/d(columns) in the model's units, with the unit of every row and column."""
-
-    matrix: np.ndarray
-    rows: list[str]
-    columns: list[str]
-    units_of: list[str]
-    units_wrt: list[str]
-
-
-def _solver_matrix(
-    assembled: Model, wrt: Sequence[str], of: Sequence[str] | None, free: Sequence[str], weights: Any
-) -> tuple[np.ndarray, list[str], list[str]]:
-    if of:
-        with shown_warnings():
-            matrix, rows, columns, _ = output_sensitivity_matrix(assembled, of, wrt, free, weights, units="solver")
-        return np.asarray(matrix), list(rows), list(columns)
-    sens = design_sensitivity(assembled, wrt, free, weights, units="solver")
-    return np.asarray(sens.matrix), list(sens.rows), list(sens.columns)
-
-
-def sensitivities(
-    assembled: Model,
-    wrt: Sequence[str],
-    of: Sequence[str] | None,
-    free: Sequence[str],
-    weights: Mapping[str, float] | None,
-) -> Sensitivities:
-    """d(outputs)/d(wrt) at an assembled model (without ``of``: of the free variables), in the
-    model's units (docs/units.md); ``hardpoint:J[.i|.j][c]`` columns are per global length unit
-    (:func:`kinprop.propagation.hardpoints.global_columns`)."""
-    engine = compile_engine(assembled)
-    design, combos = global_columns(engine, engine.reference, wrt)
-    matrix, rows, columns = _solver_matrix(assembled, design, of, free, free_weights(engine, weights))
-    if combos:
-        index = {c: k for k, c in enumerate(columns)}
-        plain = {engine.column_labels[int(c)] for c in engine.columns([w for w in wrt if not is_global(w)])}
-        keep = [c for c in columns if c in plain]
-        extra = list(combos)
-        cols = [matrix[:, index[c]] for c in keep] + [
-            sum(coef * matrix[:, index[c]] for c, coef in combos[label].items()) for label in extra
-        ]
-        matrix, columns = np.column_stack(cols) if cols else np.zeros((len(rows), 0)), keep + extra
-    # in the model's units: d(out)/d(in) * scale(out) / scale(in)
-    so = np.array([derivative_scale(assembled, str(name), engine) for name in rows])
-    si = np.array([derivative_scale(assembled, str(name), engine) for name in columns])
-    matrix = matrix * so[:, None] / si[None, :]
-    units_of = [unit_of(assembled, str(name), engine) for name in rows]
-    units_wrt = [_per(assembled, str(name), engine) for name in columns]
-    return Sensitivities(matrix, rows, columns, units_of, units_wrt)
-
-
-def sensitivity_json(
-    model: str, sens: Sensitivities, free: Sequence[str], weights: Mapping[str, float] | None, assembly: SolveResult
-) -> dict[str, Any]:
-    """What ``kinprop sensitivity --json`` prints (``assembly``: the assembly solved first)."""
-    r = assembly
-    return {
-        "model": model,
-        "of": [str(i) for i in sens.rows],
-        "wrt": [str(c) for c in sens.columns],
-        "matrix": np.asarray(sens.matrix).tolist(),
-        "units": {"of": sens.units_of, "wrt": sens.units_wrt, "matrix": "unit of the row per unit of the column"},
-        "free": list(free),
-        "weights": dict(weights) if weights else {},
-        "assembly": {
-            "initial_residual": r.residual_history[0],
-            "residual": r.residual_norm,
-            "iterations": r.iterations,
-        },
-    }
 
 
 @app.command(name="sensitivity")
@@ -174,7 +90,8 @@ def sensitivity_cmd(
             soft_wrap=True,
         )
     assembled = prop.after
-    sens = sensitivities(assembled, wrt, of, free_set, weights)
+    with shown_warnings():
+        sens = sensitivities(assembled, wrt, of, free_set, weights)
     if as_json:
         print_json(sensitivity_json(str(model), sens, free_set, weights, r))
         return

@@ -28,15 +28,15 @@ from kinprop.cli.checks import (
     check_set_not_free,
     check_suffix,
     check_tol,
-    parse_assignments,
-    parse_weights,
 )
 from kinprop.cli.continuation import run_propagation, shown_warnings
 from kinprop.cli.targets import run_targets
 from kinprop.engine import compile as compile_engine
-from kinprop.io.results import comparison_rows, point_rows, propagation_json, variable_rows
+from kinprop.io.arguments import parse_assignments, parse_weights
+from kinprop.io.commands import comparison_csv
+from kinprop.io.results import propagation_json, variable_rows
 from kinprop.io.units import changes_to_internal
-from kinprop.io.writer import atomic_write, csv_text, dump_model_like
+from kinprop.io.writer import atomic_write, dump_model_like
 from kinprop.propagation import Propagation, propagate
 from kinprop.propagation.hardpoints import free_addresses, free_weights, is_global, resolve_changes
 
@@ -79,12 +79,6 @@ def comparison_table(prop: Propagation, title: str) -> Table:
             row["variable"], row["unit"], _fmt(row["before"]), _fmt(row["after"]), f"{row['change']:.3g}", style=style
         )
     return t
-
-
-def comparison_csv(prop: Propagation) -> str:
-    """Before/after rows (:func:`comparison_rows`, then hardpoints and named points) as CSV text:
-    shortest round-trip numbers, ``\\n`` line endings (no pandas needed)."""
-    return csv_text(["variable", "unit", "before", "after", "change", "role"], comparison_rows(prop) + point_rows(prop))
 
 
 def write_csv(prop: Propagation, path: Path) -> None:

@@ -31,9 +31,9 @@ from kinprop.cli.checks import (
     check_outputs,
     check_set_not_free,
     check_tol,
-    parse_assignments,
 )
 from kinprop.errors import AddressError
+from kinprop.io.arguments import parse_assignments
 
 Free = Annotated[
     list[str] | None,

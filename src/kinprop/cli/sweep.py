@@ -6,16 +6,14 @@ Exit codes: 0 every step converged, 1 some step failed (recorded, the sweep went
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
-from kinprop.analysis.sweep import Drive, parse_drive, plot_sweep, sweep
+from kinprop.analysis.sweep import parse_drive, plot_sweep, sweep
 from kinprop.cli.app import (
     EXIT_NOT_CONVERGED,
     FreeOption,
@@ -35,10 +33,10 @@ from kinprop.cli.checks import (
     check_set_not_free,
     check_suffix,
     check_tol,
-    parse_assignments,
 )
-from kinprop.io.units import changes_to_internal, unit_of
-from kinprop.model import Model
+from kinprop.io.arguments import parse_assignments
+from kinprop.io.commands import label_units, sweep_json
+from kinprop.io.units import changes_to_internal
 
 #: show a progress bar from this many steps on
 PROGRESS_FROM = 50
@@ -84,45 +82,6 @@ def _shown_columns(res, requested: list[str] | None, limit: int | None = 10) -> 
     return head + (varying if limit is None else varying[: max(0, limit - len(head))])
 
 
-def _records(frame) -> list[dict]:
-    """Rows as JSON-ready dicts (NaN -> null)."""
-    return [
-        {k: (None if isinstance(v, float) and v != v else v) for k, v in row.items()}
-        for row in frame.to_dict("records")
-    ]
-
-
-def label_units(res, base=None) -> None:
-    """The unit of every value column (model units, docs/units.md) into the frames' attrs."""
-    units = {c: unit_of(res.last, c) for c in res.frame.columns if c not in _NO_UNIT}
-    for r in (res, base):
-        if r is not None:
-            r.frame.attrs["column_units"] = units
-
-
-def sweep_json(res, base, output: Path | None = None, plot: Path | None = None) -> dict:
-    """What ``kinprop sweep --json`` prints: counts, failed steps and every row (and the
-    baseline's rows when ``base`` is given), with the unit of every column."""
-    if "column_units" not in res.frame.attrs:
-        label_units(res, base)
-    df = res.frame
-    ok = df["status"] == "converged"
-    obj = {
-        "steps": len(df),
-        "converged": int(ok.sum()),
-        "failed": [int(k) for k in df.loc[~ok, "step"]],
-        "drives": [d.label for d in res.drives],
-        "outputs": list(res.outputs),
-        "output_file": None if output is None else str(output),
-        "plot_file": None if plot is None else str(plot),
-        "rows": _records(df),
-        "units": {c: u for c, u in df.attrs.get("column_units", {}).items() if u},
-    }
-    if base is not None:
-        obj["baseline_rows"] = _records(base.frame)
-    return obj
-
-
 def _plot_before_after(base, res, path: Path, x: str | None, title: str) -> None:
     """The swept outputs against ``x``: before (the design without --set) and after, or one sweep."""
     from kinprop.plot.curves import plot_curves
@@ -148,16 +107,6 @@ def _plot_before_after(base, res, path: Path, x: str | None, title: str) -> None
     plot_curves(ok, x, ys, units=units, title=title, path=path)
 
 
-def sweep_inputs(
-    m: Model, drive: Sequence[str], set_: Sequence[str], baseline: bool = False
-) -> tuple[list[Drive], dict[str, np.ndarray]]:
-    """The parsed ``--drive`` and ``--set`` options (``--set`` in model units, converted)."""
-    given = parse_assignments("--set", list(set_))
-    if baseline and not given:
-        raise ValueError("--baseline compares with the design before the --set changes: give at least one --set")
-    return [parse_drive(m, d) for d in drive], changes_to_internal(m, given)
-
-
 def _check_x(model, drives, outputs: list[str] | None, x: str) -> None:
     """``--x`` names a column the sweep will have: a drive, a coordinate or an output."""
     from kinprop.analysis.outputs import expand_outputs
@@ -167,10 +116,6 @@ def _check_x(model, drives, outputs: list[str] | None, x: str) -> None:
     columns = [d.label for d in drives] + [c for c, *_ in coordinate_columns(model)] + expand_outputs(model, names)
     if x not in columns:
         raise ValueError(f"--x {x!r}: not a column of this sweep; columns: {', '.join(dict.fromkeys(columns))}")
-
-
-#: sweep columns that are counts, flags or text
-_NO_UNIT = {"step", "status", "iterations", "residual_norm", "sv_ratio", "near_singular", "message"}
 
 
 @app.command(name="sweep")

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from kinprop.constraints.coupling import N_COEF
+from kinprop.engine.motion import MotionState, motion_state
 from kinprop.errors import AddressError
 from kinprop.jit import get_num_threads, set_parallel_chunksize
 from kinprop.kinematics import kernels
@@ -147,6 +148,56 @@ def _scalar_slot(t: Target) -> tuple[str, int, int] | None:
     return None
 
 
+def notes(status: Status, flags: int, substeps: int) -> list[str]:
+    """One line per thing a user should know about a solve (empty: nothing to say)."""
+    out = []
+    if status is Status.CONVERGED and flags & newton.FROM_ESTIMATES and flags & newton.SIGN_FLIP:
+        out.append("ambiguous assembly: det of the free Jacobian changed sign between the estimates and the "
+                   "solution, so it may be another assembly branch than the estimates suggest")  # fmt: skip
+    if status is Status.CONVERGED and flags & newton.SUBDIVIDED:
+        why = " (a full step left the start's branch)" if flags & (newton.JUMPED | newton.SIGN_FLIP) else ""
+        if flags & newton.FLIPPED:
+            why = " (a full step turned a cut joint onto a pose the joint cannot take)"
+        out.append(f"the change was followed in {substeps} sub-steps to stay on the start's branch{why}")
+    if status is Status.CONVERGED and flags & newton.FLIPPED and not flags & newton.SUBDIVIDED:
+        out.append("a cut joint's axes are reversed at the solution (a root of its constraints the joint itself "
+                   "cannot reach: plain Newton, branch=False)")  # fmt: skip
+    return out
+
+
+def message(status: Status, iterations: int, residual: float, tol: float, requested_tol: float, fraction: float = 1.0,
+            substeps: int = 1, flags: int = 0, optimality: float = 0.0) -> str:  # fmt: skip
+    """The one message table of :class:`Status` (every solve, batch row and sweep step says its
+    outcome with it). ``residual`` is the scaled ``||Phi||`` (:attr:`Engine.row_scale`: metres);
+    ``optimality`` the optimality residual (SI; docs/analysis/weights.md), shown when not 0."""
+    bound = (
+        f"{tol:.3g} (round-off floor at this model's length scale; tol {requested_tol:g})"
+        if tol > requested_tol
+        else f"{tol:g}"
+    )
+    if status is Status.CONVERGED:
+        opt = f", optimality {optimality:.3g}" if optimality else ""
+        return f"converged in {iterations} iterations: ||Phi|| = {residual:.3g} < {bound}{opt}"
+    if flags & newton.LEAST_CHANGE_FAILED:
+        return (f"assembled (||Phi|| = {residual:.3g}) but the closest assembly to the start was not reached in "
+                f"{iterations} iterations (optimality {optimality:.3g}); method='paper' returns the iteration's own "
+                "end point")  # fmt: skip
+    if status is Status.INFEASIBLE and flags & newton.FLIPPED and fraction == 0.0:
+        return ("the assembly from the estimates turns a cut joint onto a pose the joint cannot take (its axes "
+                "reversed): better estimates are needed")  # fmt: skip
+    if status is Status.NO_FREE:
+        return "no free variables: nothing can move to satisfy the constraints"
+    if status is Status.DIVERGED:
+        return f"diverged at iteration {iterations}: ||Phi|| = {residual:.3g}"
+    if status is Status.INFEASIBLE:
+        return (f"the change can be followed on the start's branch only to {fraction:.6g} of its size "
+                f"(no assembly beyond, or a singular configuration there); {substeps} sub-steps")  # fmt: skip
+    if status is Status.STEP_LIMIT:
+        return (f"sub-step cap reached ({substeps} sub-steps, at {fraction:.6g} of the change): "
+                "the change is too large or too close to a singular configuration to follow")  # fmt: skip
+    return f"not converged after {iterations} iterations: ||Phi|| = {residual:.3g} >= {bound}"
+
+
 @dataclass(frozen=True, eq=False)
 class Solution:
     """One solve's outcome; the model-level view (design, coordinates) is built on demand."""
@@ -182,19 +233,7 @@ class Solution:
     @property
     def notes(self) -> list[str]:
         """One line per thing a user should know about this solve (empty: nothing to say)."""
-        out = []
-        if self.converged and self.flags & newton.FROM_ESTIMATES and self.flags & newton.SIGN_FLIP:
-            out.append("ambiguous assembly: det of the free Jacobian changed sign between the estimates and the "
-                       "solution, so it may be another assembly branch than the estimates suggest")  # fmt: skip
-        if self.converged and self.subdivided:
-            why = " (a full step left the start's branch)" if self.flags & (newton.JUMPED | newton.SIGN_FLIP) else ""
-            if self.flags & newton.FLIPPED:
-                why = " (a full step turned a cut joint onto a pose the joint cannot take)"
-            out.append(f"the change was followed in {self.substeps} sub-steps to stay on the start's branch{why}")
-        if self.converged and self.flags & newton.FLIPPED and self.substeps == 1 and not self.subdivided:
-            out.append("a cut joint's axes are reversed at the solution (a root of its constraints the joint itself "
-                       "cannot reach: plain Newton, branch=False)")  # fmt: skip
-        return out
+        return notes(self.status, self.flags, self.substeps)
 
     @property
     def converged(self) -> bool:
@@ -202,32 +241,8 @@ class Solution:
 
     @property
     def message(self) -> str:
-        bound = (
-            f"{self.tol:.3g} (round-off floor at this model's length scale; tol {self.requested_tol:g})"
-            if self.tol > self.requested_tol
-            else f"{self.tol:g}"
-        )
-        if self.status is Status.CONVERGED:
-            opt = f", optimality {self.optimality:.3g}" if self.optimality else ""
-            return f"converged in {self.iterations} iterations: ||Phi|| = {self.residual:.3g} < {bound}{opt}"
-        if self.flags & newton.LEAST_CHANGE_FAILED:
-            return (f"assembled (||Phi|| = {self.residual:.3g}) but the closest assembly to the start was not reached "
-                    f"in {self.iterations} iterations (optimality {self.optimality:.3g}); method='paper' returns "
-                    "the iteration's own end point")  # fmt: skip
-        if self.status is Status.NO_FREE:
-            return "no free variables: nothing can move to satisfy the constraints"
-        if self.status is Status.DIVERGED:
-            return f"diverged at iteration {self.iterations}: ||Phi|| = {self.residual:.3g}"
-        if self.status is Status.INFEASIBLE and self.flags & newton.FLIPPED and self.fraction == 0.0:
-            return ("the assembly from the estimates turns a cut joint onto a pose the joint cannot take (its axes "
-                    "reversed): better estimates are needed")  # fmt: skip
-        if self.status is Status.INFEASIBLE:
-            return (f"the change can be followed on the start's branch only to {self.fraction:.6g} of its size "
-                    f"(no assembly beyond, or a singular configuration there); {self.substeps} sub-steps")  # fmt: skip
-        if self.status is Status.STEP_LIMIT:
-            return (f"sub-step cap reached ({self.substeps} sub-steps, at {self.fraction:.6g} of the change): "
-                    "the change is too large or too close to a singular configuration to follow")  # fmt: skip
-        return f"not converged after {self.iterations} iterations: ||Phi|| = {self.residual:.3g} >= {bound}"
+        return message(self.status, self.iterations, self.residual, self.tol, self.requested_tol, self.fraction,
+                       self.substeps, self.flags, self.optimality)  # fmt: skip
 
     @cached_property
     def design(self) -> Design:
@@ -248,7 +263,8 @@ class Solution:
 
 @dataclass(frozen=True)
 class BatchSolution:
-    """Per-variant outcome of a batch: status codes index :class:`Status`."""
+    """Per-variant (or per-step) outcome of a batch, with :class:`Solution`'s field names:
+    ``status_code`` indexes :class:`Status`; ``state`` has a leading batch axis."""
 
     state: State
     status_code: Array
@@ -256,6 +272,9 @@ class BatchSolution:
     residual: Array
     fraction: Array | None = None
     flags: Array | None = None
+    substeps: Array | None = None
+    tol: float = 0.0
+    requested_tol: float = 0.0
     #: per-variant optimality residual (:attr:`Solution.optimality`)
     optimality: Array | None = None
 
@@ -265,6 +284,18 @@ class BatchSolution:
 
     def status(self, k: int) -> Status:
         return STATUSES[int(self.status_code[k])]
+
+    def message(self, k: int) -> str:
+        """Row ``k``'s outcome from the one message table (:func:`message`)."""
+        return message(self.status(k), int(self.iterations[k]), float(self.residual[k]), self.tol, self.requested_tol,
+                       1.0 if self.fraction is None else float(self.fraction[k]),
+                       1 if self.substeps is None else int(self.substeps[k]),
+                       0 if self.flags is None else int(self.flags[k]),
+                       0.0 if self.optimality is None else float(self.optimality[k]))  # fmt: skip
+
+    def notes(self, k: int) -> list[str]:
+        return notes(self.status(k), 0 if self.flags is None else int(self.flags[k]),
+                     1 if self.substeps is None else int(self.substeps[k]))  # fmt: skip
 
 
 class Engine:
@@ -299,6 +330,25 @@ class Engine:
         #: characteristic length L of the compiled model (largest body position, s' or length; at
         #: least 1 m in the model's unit)
         self.length_scale = self._length_scale(self.reference) if reference else None
+
+    def rebased(self, reference: Model) -> Engine:
+        """This engine with another reference model of the same mechanism (a design study's base
+        with its common changes): the compiled structure, tables and plans are shared, not
+        rebuilt; only the reference state and what depends on it (length scale, branch data)
+        are new."""
+        if reference.mechanism is not self.mechanism and reference.mechanism != self.mechanism:
+            raise ValueError("the reference model has another mechanism than the engine")
+        new = object.__new__(Engine)
+        new.__dict__.update(self.__dict__)
+        for key in ("col_scale", "row_scale", "_reference_assembled", "unit", "si_scale"):
+            new.__dict__.pop(key, None)
+        if new.unit != self.unit:  # the plans hold the rows' SI scale
+            new._plans = {}
+        new._reference_signs = {}
+        new.model = reference
+        new.reference = new.pack(reference.design, reference.coordinates).frozen()
+        new.length_scale = new._length_scale(new.reference)
+        return new
 
     def __repr__(self) -> str:
         return (f"<Engine {self.mechanism.name!r}: {len(self.mechanism.bodies)} bodies, {len(self.mechanism.joints)} "
@@ -557,7 +607,7 @@ class Engine:
         (nj, 2, 3), ``R`` (nj, 2, 3, 3) (global origins and axes of frames i and j) of a single state."""
         ws, state = kernels.workspace(self.tables), state.writable()
         kernels.forward_kinematics(self.tables, state.Q, state.S, state.C, ws)
-        return ws[0], ws[1], ws[2], ws[3]
+        return ws[kernels.W_BODY_R], ws[kernels.W_BODY_A], ws[kernels.W_FRAME_P], ws[kernels.W_FRAME_R]
 
     def kinematics(self, design: Design | State, coordinates: Mapping[str, Array] | None = None) -> Kinematics:
         """Body poses and joint frames by name, of a state or of ``(design, coordinates)``."""
@@ -828,14 +878,15 @@ class Engine:
         else:
             newton.follow_batch(*args)
         return BatchSolution(st, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4], out[:, 2],
-                             out[:, 5].astype(np.int64), out[:, 6])  # fmt: skip
+                             out[:, 5].astype(np.int64), out[:, 3].astype(np.int64), cfg.tol, tol,
+                             out[:, 6])  # fmt: skip
 
     def solve_sequence(
         self,
         start: State,
         addresses: Sequence[str],
         values: Array,
-        free: Sequence[str] = ("q",),
+        free: Sequence[str] | Array = ("q",),
         *,
         tol: float = 1e-10,
         max_iter: int = 50,
@@ -845,22 +896,34 @@ class Engine:
         """Drive the coordinate ``addresses`` through the rows of ``values``, each step followed
         from the last good one on the start's branch (a failed step is recorded and the next
         restarts from the last good step). Returns the coordinates of every step (NaN rows where
-        a step failed) and the per-step outcome."""
+        a step failed) and the per-step outcome, whose ``state`` is every step's state (free
+        design variables move too; NaN where a step failed)."""
         targets = [self.target(a) for a in addresses]
         if any(t.group != "q" for t in targets):
             raise AddressError("a sequence drives coordinates (JOINT.q or JOINT.q[k])")
         set_cols = np.array([t.start + (t.index or 0) for t in targets], np.int64)
-        cols = self.columns(free, {t.key for t in targets})
+        cols = free if isinstance(free, np.ndarray) else self.columns(free, {t.key for t in targets})
         plan = self.plan(cols, self.weights_for(cols, None))
         cfg = self.settings(tol, max_iter, branch=branch, state=start, method=method)
         st = start.copy()
         values = np.ascontiguousarray(np.reshape(values, (len(values), len(addresses))), dtype=float)
         n = values.shape[0]
-        Qout, out = np.zeros((n, self.n_coordinates)), np.zeros((n, 7))
+        steps = State(*(np.zeros((n, *getattr(st, a).shape)) for a in "QSCL"))
+        out = np.zeros((n, 7))
         newton.follow_sequence(self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, set_cols, values, self.row_scale,
-                               self.col_scale, cfg, Qout, out)  # fmt: skip
-        return Qout, BatchSolution(st, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4], out[:, 2],
-                                   out[:, 5].astype(np.int64), out[:, 6])  # fmt: skip
+                               self.col_scale, cfg, steps.Q, steps.S, steps.C, steps.L, out)  # fmt: skip
+        return steps.Q, BatchSolution(steps, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4],
+                                      out[:, 2], out[:, 5].astype(np.int64), out[:, 3].astype(np.int64), cfg.tol,
+                                      tol, out[:, 6])  # fmt: skip
+
+    # --- motion: velocities and accelerations (kinprop.engine.motion) ------------------------
+    def motion(
+        self, state: State, rates: Mapping[str, Any], accelerations: Mapping[str, Any] | None = None
+    ) -> MotionState:
+        """Every coordinate's rate (and acceleration) and every body's twist of an assembled
+        ``state`` from the driven coordinates' ``rates`` (``{"O2.q": 1.0}``, solver units);
+        status ``singular`` (NaN rates) when they do not determine the motion."""
+        return motion_state(self, state, rates, accelerations)
 
 
 def compile(model: Model | Mechanism) -> Engine:

@@ -39,6 +39,7 @@ from kinprop.engine import JointFrames
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.couplings import build_couplings, couplings_to_data
+from kinprop.io.elements import build_elements, build_vehicle, elements_to_data, vehicle_to_data
 from kinprop.io.loader import build_or_report
 from kinprop.io.schema import HardpointFile, HardpointJointSpec
 from kinprop.joints import joint_type
@@ -322,10 +323,15 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
         final.append(Body(b.name, b.fixed, b.position, b.orientation, pts))
     if problems:
         raise ModelError(problems)
+    elements, eproblems = build_elements(spec.elements, set(pose), "hardpoints", file, lambda b: pose[b])
+    if eproblems:
+        raise ModelError(eproblems)
     mech = Mechanism(tuple(final), tuple(joints), spec.name, tuple(spec.inputs), couplings)
     values.update(coefs)
     units = {"length": spec.units.length, "angle": spec.units.angle, "axes": spec.units.axes}
-    return Model(mech, Design(values), as_coordinates(coords), units, file)
+    if spec.units.force is not None:
+        units["force"] = spec.units.force
+    return Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle))
 
 
 # --- frames -> hardpoints ----------------------------------------------------------------------
@@ -406,6 +412,8 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
         joints[j.name] = spec
     units = {"length": model.units.get("length", "m"), "angle": model.units.get("angle", "rad")}
     units["axes"] = model.units.get("axes") or "right-handed"
+    if model.units.get("force"):
+        units["force"] = model.units["force"]
     return {
         "kinprop": 1,
         "name": mech.name,
@@ -416,7 +424,10 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
         "joints": joints,
         **({"inputs": list(mech.inputs)} if mech.inputs else {}),
         **({"couplings": couplings_to_data(model, _coupled_now(model))} if mech.couplings else {}),
-    }
+        **({"elements": elements_to_data(model.elements, "hardpoints", lambda b: (kin.r[b], kin.A[b]))}
+           if model.elements else {}),
+        **({"vehicle": vehicle_to_data(model.vehicle)} if model.vehicle is not None else {}),
+    }  # fmt: skip
 
 
 def _coupled_now(model: Model) -> dict[str, float]:

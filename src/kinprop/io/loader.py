@@ -19,6 +19,7 @@ from pydantic import BaseModel, ValidationError
 
 from kinprop.errors import ModelError, Problem
 from kinprop.io.couplings import build_couplings
+from kinprop.io.elements import build_elements, build_vehicle
 from kinprop.io.schema import ModelFile
 from kinprop.joints import REGISTRY, joint_type
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates
@@ -328,6 +329,8 @@ def build_model(spec: ModelFile, file: str) -> Model:
     values.update(coefs)
     problems += cproblems
     problems += [Problem(p.location, p.message, file) for p in validate_couplings(tuple(joints), couplings)]
+    elements, eproblems = build_elements(spec.elements, {b.name for b in bodies}, "frames", file)
+    problems += eproblems
     if problems:
         raise ModelError(problems)
     mech = Mechanism(tuple(bodies), tuple(joints), spec.name, tuple(spec.inputs), couplings)
@@ -376,7 +379,9 @@ def build_model(spec: ModelFile, file: str) -> Model:
     units = {"length": spec.units.length, "angle": spec.units.angle}
     if spec.units.axes is not None:
         units["axes"] = spec.units.axes
-    return Model(mech, Design(values), as_coordinates(coords), units, file)
+    if spec.units.force is not None:
+        units["force"] = spec.units.force
+    return Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle))
 
 
 def known_joint_types() -> list[str]:

@@ -40,6 +40,8 @@ class Units(Strict):
     length: Literal["m", "mm"]
     angle: Literal["deg", "rad"]
     axes: AxesName | None = None
+    #: the force unit of element stiffness / damping and the wheel rate (a label, e.g. N, kN, lbf)
+    force: Annotated[str, Field(min_length=1, max_length=16)] | None = None
 
 
 class HardpointUnits(Units):
@@ -82,6 +84,46 @@ class CouplingSpec(Strict):
     q0: Annotated[list[Finite], Field(min_length=2, max_length=2)] | None = None
 
 
+class ElementSpec(Strict):
+    """A spring, damper or spring-damper between two bodies (:mod:`kinprop.model.elements`).
+    Frame style: ``s_i``, ``s_j`` in the bodies' frames; hardpoint style: ``point_i``,
+    ``point_j`` global at the reference configuration. Numbers in the model's units."""
+
+    type: Literal["spring", "damper", "spring_damper"]
+    bodies: Annotated[list[str], Field(min_length=2, max_length=2)]
+    s_i: Vec3 | None = None
+    s_j: Vec3 | None = None
+    point_i: Vec3 | None = None
+    point_j: Vec3 | None = None
+    #: force per length
+    stiffness: Annotated[float, Field(ge=0, allow_inf_nan=False)] | None = None
+    #: force per (length / second)
+    damping: Annotated[float, Field(ge=0, allow_inf_nan=False)] | None = None
+    free_length: Positive | None = None
+    #: force at the model's configuration (positive: compressed spring pushing the ends apart)
+    preload: Finite | None = None
+
+
+Share = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
+
+
+class VehicleSpec(Strict):
+    """Vehicle parameters of a suspension model (:class:`kinprop.model.elements.Vehicle`)."""
+
+    wheelbase: Positive
+    cg_height: Positive
+    #: share of the braking force on the front axle
+    brake_front: Share = 0.6
+    #: share of the drive force on the front axle
+    drive_front: Share = 0.0
+    #: where the brakes react their torque: on the wheel carrier (outboard) or the chassis (inboard)
+    brakes: Literal["outboard", "inboard"] = "outboard"
+    #: where the drive reacts its torque: on the chassis (inboard, half shafts) or the carrier (outboard)
+    drive: Literal["outboard", "inboard"] = "inboard"
+    #: the axle of the model's corner
+    axle: Literal["front", "rear"] = "front"
+
+
 class ModelFile(Strict):
     kinprop: Literal[1] = 1
     name: str = "mechanism"
@@ -94,6 +136,9 @@ class ModelFile(Strict):
     inputs: list[str] = Field(default_factory=list)
     #: couplings between joint coordinates (one constraint row each)
     couplings: dict[str, CouplingSpec] = Field(default_factory=dict)
+    #: springs and dampers (``s_i``/``s_j`` in the bodies' frames)
+    elements: dict[str, ElementSpec] = Field(default_factory=dict)
+    vehicle: VehicleSpec | None = None
 
 
 class HardpointBodySpec(Strict):
@@ -136,3 +181,6 @@ class HardpointFile(Strict):
     inputs: list[str] = Field(default_factory=list)
     #: couplings between joint coordinates (one constraint row each)
     couplings: dict[str, CouplingSpec] = Field(default_factory=dict)
+    #: springs and dampers (``point_i``/``point_j`` global at the reference)
+    elements: dict[str, ElementSpec] = Field(default_factory=dict)
+    vehicle: VehicleSpec | None = None

@@ -15,6 +15,7 @@ import yaml
 
 from kinprop.engine import compile as compile_engine
 from kinprop.io.couplings import couplings_to_data
+from kinprop.io.elements import elements_to_data, vehicle_to_data
 from kinprop.io.hardpoints import model_to_hardpoints
 from kinprop.io.loader import parse_text
 from kinprop.model import Model
@@ -82,6 +83,8 @@ def model_to_data(model: Model) -> dict[str, Any]:
         "joints": joints,
         **({"inputs": list(mech.inputs)} if mech.inputs else {}),
         **({"couplings": couplings_to_data(model)} if mech.couplings else {}),
+        **({"elements": elements_to_data(model.elements, "frames")} if model.elements else {}),
+        **({"vehicle": vehicle_to_data(model.vehicle)} if model.vehicle is not None else {}),
     }
 
 

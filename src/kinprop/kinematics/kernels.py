@@ -78,12 +78,24 @@ from kinprop.spatial import cross_into, exp_so3_into, mm_into, mmT_into, mv_into
 MAX_CUT_ROWS, MAX_Q = 6, 7
 
 
+#: Workspace slots, ``ws[W_*]`` (see :func:`workspace`): body positions ``r`` (nb, 3) and
+#: orientations ``A`` (nb, 3, 3); global joint frame origins ``P`` (nj, 2, 3) and axes ``R``
+#: (nj, 2, 3, 3); tree twists of the q columns ``Tq`` (nt, 6, MAX_Q) and of the s', C columns
+#: ``Td`` (nt, 4, 6, 3); scratch 3x3 matrices (3, 3, 3) and 3-vectors (8, 3); motion columns
+#: ``dd``, ``H`` (2, 3, MAX_Q); one cut joint's partial rows ``Phi_d``, ``Phi_wi``, ``Phi_wj``
+#: (3, MAX_CUT_ROWS, 3) and ``Phi_l`` (MAX_CUT_ROWS); its arms ``Z_i``, ``Z_j`` (2, MAX_CUT_ROWS, 6).
+W_BODY_R, W_BODY_A, W_FRAME_P, W_FRAME_R, W_TWIST_Q, W_TWIST_D, W_MAT, W_VEC, W_MOTION, W_PARTIAL, W_PHI_L, W_ARM = (
+    range(12)
+)
+#: scratch 3-vectors ``ws[W_VEC][k]``: ``evaluate`` (and what it inlines) and ``retract`` use
+#: ``k < VEC_CALLER``; the ones from ``VEC_CALLER`` on are left to their callers
+VEC_CALLER = 5
+
+
 @njit
 def workspace(tb):
-    """Per-call arrays, allocated once per solve: body poses ``r``, ``A``; joint frames ``P``
-    (nj, 2, 3), ``R`` (nj, 2, 3, 3); tree twists ``Tq`` (nt, 6, 7) and ``Td`` (nt, 4, 6, 3); and
-    scratch: 3x3 matrices, 3-vectors, the motion columns ``dd``, ``H``, one cut joint's partial
-    rows (``Phi_d``, ``Phi_wi``, ``Phi_wj``; ``Phi_l``) and arms ``Z_i``, ``Z_j``."""
+    """Per-call arrays, allocated once per solve, in the slots ``W_*`` (body poses, joint frames,
+    tree twists, scratch)."""
     nb, nj, nt = tb.fixed.shape[0], tb.joint.shape[0], tb.tree.shape[0]
     return (np.zeros((nb, 3)), np.zeros((nb, 3, 3)), np.zeros((nj, 2, 3)), np.zeros((nj, 2, 3, 3)),
             np.zeros((nt, 6, MAX_Q)), np.zeros((nt, 4, 6, 3)), np.zeros((3, 3, 3)), np.zeros((8, 3)),
@@ -94,10 +106,10 @@ def workspace(tb):
 @inlined
 def forward_kinematics(tb, Q, S, C, ws):
     """Body poses ``r``, ``A`` and global joint frames ``P``, ``R`` of every joint (eq. 28), into ``ws``."""
-    r, A, P, R = ws[0], ws[1], ws[2], ws[3]
+    r, A, P, R = ws[W_BODY_R], ws[W_BODY_A], ws[W_FRAME_P], ws[W_FRAME_R]
     joint, tree, cut, fixed, r0, A0 = tb.joint, tb.tree, tb.cut, tb.fixed, tb.r0, tb.A0
-    Ap, App, T1 = ws[6][0], ws[6][1], ws[6][2]
-    dpp, w = ws[7][0], ws[7][1]
+    Ap, App, T1 = ws[W_MAT][0], ws[W_MAT][1], ws[W_MAT][2]
+    dpp, w = ws[W_VEC][0], ws[W_VEC][1]
     for b in range(fixed.shape[0]):
         if fixed[b]:
             for x in range(3):
@@ -148,9 +160,10 @@ def tree_twists(tb, Q, ws, need):
     """B (q columns) and M, N (s', C columns) of every tree joint as global twists (eqs. 34-35),
     into ``ws``; those of variables whose first column ``need`` (see :func:`evaluate`) is 0 are
     skipped."""
-    A, P, R, Tq, Td = ws[1], ws[2], ws[3], ws[4], ws[5]
-    App, dd, H = ws[6][0], ws[8][0], ws[8][1]
-    dpp, v, w, x3 = ws[7][0], ws[7][1], ws[7][2], ws[7][3]
+    A, P, R = ws[W_BODY_A], ws[W_FRAME_P], ws[W_FRAME_R]
+    Tq, Td = ws[W_TWIST_Q], ws[W_TWIST_D]
+    App, dd, H = ws[W_MAT][0], ws[W_MOTION][0], ws[W_MOTION][1]
+    dpp, v, w, x3 = ws[W_VEC][0], ws[W_VEC][1], ws[W_VEC][2], ws[W_VEC][3]
     for t in range(tb.tree.shape[0]):
         j, par, chi = tb.tree[t, T_JOINT], tb.tree[t, T_PARENT], tb.tree[t, T_CHILD]
         q0, nq = tb.joint[j, J_QCOL], tb.joint[j, J_NQ]
@@ -206,12 +219,14 @@ def _evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols):
     :func:`workspace` holds the poses and frames afterwards.
     """
     record = rows.shape[0] > 0
-    A, P, R, Tq, Td = ws[1], ws[2], ws[3], ws[4], ws[5]
+    A, P, R = ws[W_BODY_A], ws[W_FRAME_P], ws[W_FRAME_R]
+    Tq, Td = ws[W_TWIST_Q], ws[W_TWIST_D]
     forward_kinematics(tb, Q, S, C, ws)
     tree_twists(tb, Q, ws, need)
-    Pd, Wi, Wj, Pl = ws[9][0], ws[9][1], ws[9][2], ws[10]
-    Zi, Zj = ws[11][0], ws[11][1]
-    d, Ru, g, x3, Pi = ws[7][0], ws[7][1], ws[7][2], ws[7][3], ws[7][4]
+    Pd, Wi, Wj, Pl = ws[W_PARTIAL][0], ws[W_PARTIAL][1], ws[W_PARTIAL][2], ws[W_PHI_L]
+    Zi, Zj = ws[W_ARM][0], ws[W_ARM][1]
+    vec = ws[W_VEC]
+    d, Ru, g, x3, Pi = vec[0], vec[1], vec[2], vec[3], vec[4]
     k = 0
     for c in range(tb.cut.shape[0]):
         j, row0, m = tb.cut[c, K_JOINT], tb.cut[c, K_ROW0], tb.cut[c, K_NROWS]
@@ -335,7 +350,7 @@ def retract(tb, free, dx, Q, S, C, L, ws):
     """``state (+) dx`` over the ``free`` columns (sorted): additive for q, s', l (Euler
     parameters too, never renormalised); ``C <- exp(tilde(dxi')) C`` for orientations
     (scratch from the workspace ``ws``)."""
-    Cn, E, w = ws[6][0], ws[6][1], ws[7][0]
+    Cn, E, w = ws[W_MAT][0], ws[W_MAT][1], ws[W_VEC][0]
     i, nf = 0, free.shape[0]
     while i < nf:
         c = free[i]
@@ -362,4 +377,25 @@ def retract(tb, free, dx, Q, S, C, L, ws):
         i += 1
 
 
-__all__ = ["VAR_C", "count_entries", "evaluate", "forward_kinematics", "retract", "tree_twists", "workspace"]
+__all__ = [
+    "VAR_C",
+    "VEC_CALLER",
+    "W_ARM",
+    "W_BODY_A",
+    "W_BODY_R",
+    "W_FRAME_P",
+    "W_FRAME_R",
+    "W_MAT",
+    "W_MOTION",
+    "W_PARTIAL",
+    "W_PHI_L",
+    "W_TWIST_D",
+    "W_TWIST_Q",
+    "W_VEC",
+    "count_entries",
+    "evaluate",
+    "forward_kinematics",
+    "retract",
+    "tree_twists",
+    "workspace",
+]

@@ -2,6 +2,7 @@
 
 from kinprop.constraints.coupling import N_COEF
 from kinprop.model.design import GROUPS, Address, Coordinates, Design, as_coordinates, parse_address
+from kinprop.model.elements import Element, Vehicle
 from kinprop.model.mechanism import DESIGN_FIELDS, Body, Coupling, Joint, Mechanism
 from kinprop.model.model import Model
 
@@ -14,9 +15,11 @@ __all__ = [
     "Coordinates",
     "Coupling",
     "Design",
+    "Element",
     "Joint",
     "Mechanism",
     "Model",
+    "Vehicle",
     "as_coordinates",
     "parse_address",
 ]

@@ -6,6 +6,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 from kinprop.model.design import Design, as_coordinates
+from kinprop.model.elements import Element, Vehicle
 from kinprop.model.mechanism import Mechanism
 from kinprop.spatial import Array
 
@@ -20,6 +21,16 @@ class Model:
     #: unit system of the source file, kept for writing it back
     units: Mapping[str, str] = field(default_factory=lambda: {"length": "m", "angle": "rad"})
     source: str | None = None
+    #: force elements (springs, dampers) by declaration order (``elements:``, kinprop.model.elements)
+    elements: tuple[Element, ...] = ()
+    #: vehicle parameters of a suspension model (``vehicle:``), or None
+    vehicle: Vehicle | None = None
+
+    def element(self, name: str) -> Element:
+        for e in self.elements:
+            if e.name == name:
+                return e
+        raise KeyError(f"unknown element {name!r}; elements: {', '.join(e.name for e in self.elements) or 'none'}")
 
     def with_state(self, design: Design, coordinates: Mapping[str, Array]) -> Model:
         return replace(self, design=design, coordinates=as_coordinates(coordinates))

@@ -208,10 +208,32 @@ def propagate(
     point of the paper's generalized-inverse iteration (with ``tol=1e-3``, its tables).
     """
     eng = engine_for(model, engine)
+    sol = solve_changes(eng, model, changes, free, tol=tol, max_iter=max_iter, weights=weights, branch=branch,
+                        units=units, method=method)  # fmt: skip
+    return propagation_of(eng, model, sol, free)
+
+
+def solve_changes(
+    engine: Engine,
+    model: Model,
+    changes: Mapping[str, object] | None,
+    free: Sequence[str] = ("q",),
+    *,
+    tol: float = 1e-10,
+    max_iter: int = 50,
+    weights: Mapping[str, float] | None = None,
+    branch: bool = True,
+    units: str = "model",
+    method: str = "least-change",
+) -> Solution:
+    """The engine solution of :func:`propagate` (its arguments; ``engine`` compiled from the
+    model's mechanism): changes converted to solver units and global addresses resolved at the
+    model's assembly, then one :meth:`Engine.propagate`."""
+    eng = engine
     start = eng.reference if eng.model is model else eng.state_of(model)
     changes = changes_to_internal(model, changes or {}, eng) if check_units(units) else dict(changes or {})
     changes = resolve_changes(eng, start, changes)
-    sol = eng.propagate(
+    return eng.propagate(
         changes,
         free_addresses(eng, free),
         start=start,
@@ -221,7 +243,6 @@ def propagate(
         branch=branch,
         method=method,
     )
-    return propagation_of(eng, model, sol, free)
 
 
 def assemble(

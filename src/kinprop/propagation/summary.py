@@ -4,17 +4,32 @@ CSV are built from (values in the model's units, docs/units.md)."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from html import escape
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
+from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
+from kinprop.model import Model
 from kinprop.propagation.units import address_unit, from_solver_units
+from kinprop.solver import SolveResult
 from kinprop.spatial import log_so3
 
-if TYPE_CHECKING:  # the record imports this module for its repr
-    from kinprop.propagation.propagate import Propagation
+
+class Propagation(Protocol):
+    """What a summary reads of a :class:`kinprop.propagation.propagate.Propagation` (which
+    imports this module for its ``repr``, so this module does not import it)."""
+
+    before: Model
+    after: Model
+    result: SolveResult
+    free: tuple[str, ...]
+    solver_changes: Mapping[str, Any]
+    engine: Engine | None
+
+    def changed_variables(self, atol: float = 0.0) -> list[str]: ...
 
 
 def variable_rows(prop: Propagation) -> list[dict[str, Any]]:

@@ -1,6 +1,6 @@
 """The workbench's HTTP application: the page, its static files and the JSON API under ``/api/``.
 
-The API answers with the CLI's JSON contracts, built by the CLI's own functions:
+The API answers with the CLI's JSON contracts, built by the same functions (:mod:`kinprop.io.commands`):
 
 * ``GET /api/check`` — ``kinprop check --json`` of the session's current model;
 * ``POST /api/propagate`` — ``kinprop propagate --json`` for ``{"set", "free", "weights", ...}``
@@ -36,14 +36,19 @@ from pydantic import BaseModel, ConfigDict, Field
 from kinprop.analysis.mobility import mobility
 from kinprop.analysis.sensitivity import RESIDUAL_WARN
 from kinprop.analysis.sweep import sweep
-from kinprop.cli.app import parse_assignment, parse_weight
-from kinprop.cli.check import check_json
-from kinprop.cli.continuation import propagate_json, solve_propagation
-from kinprop.cli.sensitivity import sensitivities, sensitivity_json
-from kinprop.cli.solve import comparison_csv
-from kinprop.cli.sweep import sweep_inputs, sweep_json
 from kinprop.errors import AddressError, ModelError, SingularityWarning
 from kinprop.io import dump_model
+from kinprop.io.arguments import parse_assignment, parse_weight
+from kinprop.io.commands import (
+    check_json,
+    comparison_csv,
+    propagate_json,
+    sensitivities,
+    sensitivity_json,
+    solve_propagation,
+    sweep_inputs,
+    sweep_json,
+)
 from kinprop.io.units import changes_to_internal
 from kinprop.model import Model
 from kinprop.propagation import assemble

@@ -17,7 +17,16 @@ from typing import NamedTuple
 import numpy as np
 
 from kinprop.jit import GELSD, JIT, LAPACK_INT, inlined, kernel, njit, prange
-from kinprop.kinematics.kernels import evaluate, evaluate_inlined, retract, workspace
+from kinprop.kinematics.kernels import (
+    VEC_CALLER,
+    W_FRAME_R,
+    W_MAT,
+    W_VEC,
+    evaluate,
+    evaluate_inlined,
+    retract,
+    workspace,
+)
 from kinprop.kinematics.tables import (
     R_AXIS_I,
     R_AXIS_J,
@@ -313,7 +322,7 @@ def displacement(tb, free, Q, S, C, L, ref, u, ws):
     (the retraction's ``C <- exp(tilde(dxi')) C``, so the gradient of ``|log|^2 / 2`` is the
     log itself)."""
     Qr, Sr, Cr, Lr = ref
-    T, w = ws[6][2], ws[7][6]
+    T, w = ws[W_MAT][2], ws[W_VEC][VEC_CALLER + 1]  # after an evaluation: free scratch
     last = -1
     for i in range(free.shape[0]):
         c = free[i]
@@ -583,7 +592,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         Phi, vals, none = buf[B_PHI], buf[B_VALS], buf[B_NONE]
         evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need_none, none, none)
         if nrigid > 0:
-            rigid_signs(tb, ws[3], rs)
+            rigid_signs(tb, ws[W_FRAME_R], rs)
         if cfg.branch and assembled < 0:
             r2 = 0.0
             for i in range(Phi.shape[0]):
@@ -599,7 +608,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         flags |= FROM_ESTIMATES
         if s0 != 0 and s1 != 0 and s0 != s1:
             flags |= SIGN_FLIP
-        if st == CONVERGED and nrigid > 0 and flipped(tb, ws[3], rs):
+        if st == CONVERGED and nrigid > 0 and flipped(tb, ws[W_FRAME_R], rs):
             flags |= FLIPPED
             st = INFEASIBLE
         if st != CONVERGED and st != NO_FREE:
@@ -625,7 +634,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
     # (given by a batch whose variants share an assembled start)
     sign_ref = start_sign if start_sign != UNKNOWN_SIGN and its0 == 0 else _sign_at(tb, plan, Q, S, C, L, buf)
     sign_start = sign_ref
-    T = ws[6][0]
+    T = ws[W_MAT][0]
     for j in range(nj):
         for side in range(2):
             turn[j, side] = False
@@ -638,7 +647,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
             if turn[j, side]:
                 mmT_into(C1[j, side], C0[j, side], T)
                 log_so3_into(T, W[j, side])
-    w, E = ws[7][5], ws[6][1]
+    w, E = ws[W_VEC][VEC_CALLER], ws[W_MAT][1]  # predictor scratch (evaluate overwrites E)
     t, h = 0.0, 1.0
     subs, its, last, hlen = 0, its0, CONVERGED, its0 + 1
     status, norm = CONVERGED, 0.0
@@ -679,7 +688,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         # the sign at the last step taken (next to the solution) against the accepted state's
         flip = sign_ref != 0 and s1 != 0 and sign_ref != s1
         # a cut joint turned onto a root it cannot reach (its rigid axes reversed)
-        cut_flip = st == CONVERGED and nrigid > 0 and flipped(tb, ws[3], rs)
+        cut_flip = st == CONVERGED and nrigid > 0 and flipped(tb, ws[W_FRAME_R], rs)
         if cut_flip:
             flags |= FLIPPED
         if single:  # plain Newton: one solve, its outcome
@@ -718,7 +727,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
                                                 history[h0:], buf, ref, True, cfg.max_iter)  # fmt: skip
             its += it
             hlen = h0 + it + 1
-            if st == CONVERGED and not (nrigid > 0 and flipped(tb, ws[3], rs)):
+            if st == CONVERGED and not (nrigid > 0 and flipped(tb, ws[W_FRAME_R], rs)):
                 norm = nr
             else:
                 flags |= LEAST_CHANGE_FAILED
@@ -790,12 +799,14 @@ def follow_batch_threaded(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co,
 
 
 @njit
-def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, row_scale, col_scale, cfg, Qout, out):
+def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, row_scale, col_scale, cfg, Qout, Sout, Cout, Lout,
+                    out):  # fmt: skip
     """Drive the q columns ``set_cols`` through the rows of ``values``, following each step
     from the last good one (a failed step leaves the state at the last good step: the next
-    step restarts from there, on the same branch). ``Qout[s]`` holds the coordinates after
-    step ``s`` (NaN when it failed); ``out[s]`` = (status, iterations, fraction, sub-steps,
-    residual, flags, optimality residual)."""
+    step restarts from there, on the same branch). ``Qout[s]``, ``Sout[s]``, ``Cout[s]``,
+    ``Lout[s]`` hold the state after step ``s`` (NaN when it failed: free design variables
+    move too); ``out[s]`` = (status, iterations, fraction, sub-steps, residual, flags,
+    optimality residual)."""
     buf = buffers(tb, plan, nnz)
     fbuf = follow_buffers(tb, Q, S, C, L)
     hist = np.zeros(0)
@@ -811,10 +822,10 @@ def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, row_scale, col_
         _store(out, s, r)
         if r[0] == CONVERGED:
             sign = r[8]
-            Qout[s] = Q
+            copy_state(Q, S, C, L, Qout[s], Sout[s], Cout[s], Lout[s])
             copy_state(Q, S, C, L, Qg, Sg, Cg, Lg)
         else:
-            Qout[s] = np.nan
+            Qout[s], Sout[s], Cout[s], Lout[s] = np.nan, np.nan, np.nan, np.nan
             copy_state(Qg, Sg, Cg, Lg, Q, S, C, L)
 
 

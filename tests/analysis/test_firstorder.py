@@ -1,0 +1,228 @@
+"""First-order suspension geometry (kinprop.analysis.firstorder) against independent truth:
+
+* a double wishbone whose arm pivot axes are parallel (to x, or tilted by beta in the side
+  view) and whose tie rod keeps the steer still: its wheel turns about the line parallel to
+  the axes through the intersection of the arm lines in the view along them, so the FVIC,
+  the roll centre (classical construction), the camber and half-track gains and the anti-dive
+  (Milliken: tan(beta) L / h times the front braking share; 0 and an SVIC at infinity for
+  beta = 0) follow in closed form;
+* the spring's motion ratio on the lower arm by virtual work with instant centres (Kennedy);
+* the shipped HMMWV double wishbone: every gain and motion ratio against central differences
+  (Richardson) of re-solved positions.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import kinprop as kp
+from kinprop.analysis.context import OutputContext
+from kinprop.analysis.metrics import contact_point, suspension_metrics, wheel_first_order
+from kinprop.analysis.outputs import evaluate_outputs
+from kinprop.io import model_from_data
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+EX = np.array([1.0, 0.0, 0.0])
+
+O_L, LBJ = np.array([0.0, 300.0, 0.0]), np.array([0.0, 750.0, -100.0])
+O_U, UBJ = np.array([0.0, 420.0, 280.0]), np.array([-20.0, 700.0, 250.0])
+C, RADIUS = np.array([0.0, 800.0, 50.0]), 350.0
+T_O = np.array([-150.0, 720.0, 0.0])
+S_C, S_A = np.array([30.0, 450.0, 330.0]), np.array([10.0, 610.0, -60.0])
+WHEELBASE, CG, BRAKE = 2800.0, 500.0, 0.6
+
+
+def _perp(v: np.ndarray, a: np.ndarray) -> np.ndarray:
+    return v - (v @ a) * a
+
+
+def _axis_point(a: np.ndarray) -> np.ndarray:
+    """Where the arm lines meet in the view along the pivot axes ``a`` (a point of the wheel's axis)."""
+    e1 = np.array([0.0, 1.0, 0.0])
+    e2 = np.cross(a, e1)
+
+    def p2(x: np.ndarray) -> np.ndarray:
+        return np.array([x @ e1, x @ e2])
+
+    dL, dU = p2(LBJ) - p2(O_L), p2(UBJ) - p2(O_U)
+    t = np.linalg.solve(np.column_stack([dL, -dU]), p2(O_U) - p2(O_L))
+    X = p2(O_L) + t[0] * dL
+    return X[0] * e1 + X[1] * e2
+
+
+def _model(beta_deg: float, metres: bool = False) -> kp.Model:
+    """The parallel-axis double wishbone (mm and deg; or m and rad, the same suspension)."""
+    k = 1e-3 if metres else 1.0
+    b = math.radians(beta_deg)
+    a = np.array([math.cos(b), 0.0, math.sin(b)])
+    c = _axis_point(a)
+    # the tie rod lies along the perpendicular from the wheel's axis: no steer at this instant
+    T_I = T_O - 0.45 * _perp(T_O - c, a)
+
+    def v(x: np.ndarray) -> list[float]:
+        return [float(y) * k for y in x]
+
+    data = {
+        "kinprop": 1,
+        "style": "hardpoints",
+        "units": {"length": "m" if metres else "mm", "angle": "rad" if metres else "deg", "axes": "ISO8855",
+                  "force": "N"},
+        "bodies": {
+            "chassis": {
+                "fixed": True,
+                "points": {"wheel_centre_ref": v(C), "contact_patch_ref": v(C - [0, 0, RADIUS])},
+            },
+            "lca": {},
+            "uca": {},
+            "upright": {
+                "points": {
+                    "wheel_centre": v(C),
+                    "spin_axis": v(C + [0, 1, 0]),
+                    "contact_patch": v(C - [0, 0, RADIUS]),
+                    "kingpin_upper": v(UBJ),
+                    "kingpin_lower": v(LBJ),
+                }
+            },
+        },
+        "joints": {
+            "LCA": {"type": "revolute", "bodies": ["chassis", "lca"], "point": v(O_L), "axis": [float(y) for y in a]},
+            "LBJ": {"type": "spherical", "bodies": ["lca", "upright"], "point": v(LBJ)},
+            "UCA": {"type": "revolute", "bodies": ["chassis", "uca"], "point": v(O_U), "axis": [float(y) for y in a]},
+            "UBJ": {"type": "spherical", "bodies": ["uca", "upright"], "cut": True, "point": v(UBJ)},
+            "TR": {"type": "distance", "bodies": ["chassis", "upright"], "point_i": v(T_I), "point_j": v(T_O)},
+        },
+        "inputs": ["LCA"],
+        "elements": {
+            "spring": {"type": "spring", "bodies": ["chassis", "lca"], "point_i": v(S_C), "point_j": v(S_A),
+                       "stiffness": 50.0 / k},
+        },
+        "vehicle": {"wheelbase": WHEELBASE * k, "cg_height": CG * k, "brake_front": BRAKE, "axle": "front"},
+    }  # fmt: skip
+    return kp.assemble(model_from_data(data, "parallel.yaml")).after
+
+
+@pytest.mark.parametrize("beta", [0.0, -5.0, 7.0])
+def test_parallel_axes_follow_the_classical_constructions(beta: float) -> None:
+    model = _model(beta)
+    m = evaluate_outputs(model, [
+        "fvic_y", "fvic_z", "fvsa_length", "svic_x", "svic_z", "svsa_length", "roll_centre_height", "anti_dive",
+        "anti_lift", "camber_gain", "half_track_gain", "bump_steer", "motion_ratio:spring", "wheel_rate",
+    ])  # fmt: skip
+    b = math.radians(beta)
+    a = np.array([math.cos(b), 0.0, math.sin(b)])
+    c = _axis_point(a)
+    E = C - [0, 0, RADIUS]
+    # the front-view instant centre: the wheel's axis (through c along a) meets the plane x = x_E
+    fvic = c + (E[0] - c[0]) / a[0] * a
+    assert m["fvic_y"] == pytest.approx(fvic[1], rel=1e-9)
+    assert m["fvic_z"] == pytest.approx(fvic[2], rel=1e-9)
+    assert m["fvsa_length"] == pytest.approx(math.hypot(*(fvic - E)[1:]), rel=1e-9)
+    # the roll centre: the line from the contact patch through the FVIC at y = 0
+    rc = E[2] + (fvic[2] - E[2]) * (0.0 - E[1]) / (fvic[1] - E[1])
+    assert m["roll_centre_height"] == pytest.approx(rc - E[2], rel=1e-9)
+    # the side-view centre is at infinity (the axis is parallel to y = const), said so
+    assert math.isnan(m["svic_x"]) and math.isnan(m["svic_z"]) and m["svsa_length"] == math.inf
+    # anti-dive: the line to the SVIC is parallel to the axis: tan(theta) = -tan(beta)
+    assert m["anti_dive"] == pytest.approx(BRAKE * -math.tan(b) * WHEELBASE / CG * 100.0, abs=1e-9)
+    assert m["anti_lift"] == pytest.approx(0.0, abs=1e-12)  # drive_front 0
+    # camber gain: rotation w about a; a_dot = w x e_y, travel rate (w x (C - c))_z
+    w = a  # per unit rotation rate
+    dz = np.cross(w, C - c)[2]
+    assert m["camber_gain"] == pytest.approx(math.degrees(-np.cross(w, [0, 1, 0])[2]) / dz, rel=1e-9)
+    # toe: a tilted axis also turns the spin axis in the ground plane: toe rate a_dot_x
+    assert m["bump_steer"] == pytest.approx(math.degrees(np.cross(w, [0, 1, 0])[0]) / dz, rel=1e-9, abs=1e-14)
+    # half-track gain: the contact point's lateral rate (the rolling point, zero camber)
+    dE = np.cross(w, C - c) + RADIUS * np.cross(w, [0, 1, 0])[2] * np.array([0, 1.0, 0])
+    assert m["half_track_gain"] == pytest.approx(dE[1] / dz, rel=1e-9)
+    if beta == 0.0:
+        assert m["half_track_gain"] == pytest.approx((c[2] - E[2]) / (C[1] - c[1]), rel=1e-9)
+        assert m["camber_gain"] == pytest.approx(math.degrees(-1.0 / (C[1] - c[1])), rel=1e-9)
+
+
+def test_motion_ratio_by_virtual_work() -> None:
+    """Kennedy's instant centres in the front view (arm axes parallel to x): the lower arm turns
+    at w_L about O_L, the upright at w_u about the FVIC c with v(LBJ) common; a vertical force
+    F at the wheel centre and the spring force f do equal virtual work: f = F dz / dl."""
+    model = _model(0.0)
+    c = _axis_point(EX)
+    w_L = 1.0
+    v_lbj = np.cross(w_L * EX, LBJ - O_L)
+    r = LBJ - c
+    w_u = v_lbj[2] / r[1]  # v = w_u e_x x r: v_z = w_u r_y
+    assert np.allclose(np.cross(w_u * EX, r), v_lbj, atol=1e-9)
+    dz = np.cross(w_u * EX, C - c)[2]
+    u = (S_A - S_C) / np.linalg.norm(S_A - S_C)
+    dl = u @ np.cross(w_L * EX, S_A - O_L)
+    mr = abs(dl / dz)
+    m = evaluate_outputs(model, ["motion_ratio:spring", "wheel_rate"])
+    assert m["motion_ratio:spring"] == pytest.approx(mr, rel=1e-10)
+    assert m["wheel_rate"] == pytest.approx(50.0 * mr**2, rel=1e-10)
+
+
+def _richardson(f, h: float) -> np.ndarray:
+    d = lambda k: (f(k * h) - f(-k * h)) / (2 * k * h)  # noqa: E731
+    return (4 * d(0.5) - d(1.0)) / 3
+
+
+def test_hmmwv_gains_match_central_differences() -> None:
+    base = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
+    ctx = OutputContext.of(base)
+    first = wheel_first_order(ctx, "upright")
+    spring = base.element("spring")
+
+    def values(dq: float) -> np.ndarray:
+        m = base if dq == 0 else kp.propagate(base, {"LCA.q": [float(base.coordinates["LCA"][0]) * 180 / math.pi + dq]},
+                                             free=["q"], tol=1e-13).after  # fmt: skip
+        s = suspension_metrics(m, "upright")
+        kin = kp.compile(m).kinematics(m.design, m.coordinates)
+        ends = [
+            kin.r[b] + kin.A[b] @ np.array(p) for b, p in ((spring.body_i, spring.s_i), (spring.body_j, spring.s_j))
+        ]
+        cx = OutputContext.of(m)
+        centre = cx.body_point("upright", "wheel_centre")
+        E = contact_point(centre, cx.body_point("upright", "spin_axis") - centre, 470.0)
+        return np.array([s["wheel_centre_dz"], s["camber"], s["toe"], s["caster"], E[1], E[0],
+                         np.linalg.norm(ends[1] - ends[0])])  # fmt: skip
+
+    d = _richardson(values, 0.2)  # per degree of lower arm
+    dz = d[0]
+    assert first["camber_gain"] == pytest.approx(d[1] / dz, rel=1e-8)
+    assert first["bump_steer"] == pytest.approx(d[2] / dz, rel=1e-7)
+    assert first["caster_gain"] == pytest.approx(d[3] / dz, rel=1e-8)
+    assert first["half_track_gain"] == pytest.approx(d[4] / dz, rel=1e-8)
+    assert first["contact_patch_dx_gain"] == pytest.approx(d[5] / dz, rel=1e-7)
+    assert first["motion_ratio:spring"] == pytest.approx(abs(d[6] / dz), rel=1e-8)
+    assert first["wheel_rate"] == pytest.approx(167.0 * first["motion_ratio:spring"] ** 2, rel=1e-12)
+    # the documented values (docs/analysis/suspension.md)
+    assert first["camber_gain"] == pytest.approx(-0.0237, abs=5e-5)
+    assert first["bump_steer"] == pytest.approx(-0.0051, abs=5e-5)
+
+
+def test_units_and_names() -> None:
+    base = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
+    from kinprop.io.units import unit_of
+
+    assert unit_of(base, "camber_gain") == "deg/mm"
+    assert unit_of(base, "metric:upright.anti_dive") == "%"
+    assert unit_of(base, "motion_ratio:spring") == ""
+    assert unit_of(base, "wheel_rate") == "N/mm"
+    assert unit_of(base, "roll_centre_height") == "mm"
+    with pytest.raises(kp.AddressError, match="unknown element 'nope'"):
+        evaluate_outputs(base, ["motion_ratio:nope"])
+
+
+def test_results_do_not_depend_on_the_file_units() -> None:
+    """The same suspension written in m and rad: every first-order metric converts exactly."""
+    names = ["camber_gain", "bump_steer", "caster_gain", "fvic_y", "fvic_z", "fvsa_length", "roll_centre_height",
+             "anti_dive", "half_track_gain", "half_track_change", "motion_ratio:spring", "wheel_rate"]  # fmt: skip
+    mm = evaluate_outputs(_model(-5.0), names)
+    m = evaluate_outputs(_model(-5.0, metres=True), names)
+    per_mm_to_per_m = {"camber_gain": math.pi / 180 * 1e3, "bump_steer": math.pi / 180 * 1e3,
+                       "caster_gain": math.pi / 180 * 1e3, "fvic_y": 1e-3, "fvic_z": 1e-3, "fvsa_length": 1e-3,
+                       "roll_centre_height": 1e-3, "half_track_change": 1e-3, "wheel_rate": 1e3}  # fmt: skip
+    for n in names:
+        assert m[n] == pytest.approx(mm[n] * per_mm_to_per_m.get(n, 1.0), rel=1e-9, abs=1e-12), n
