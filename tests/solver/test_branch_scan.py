@@ -87,12 +87,15 @@ def test_offset_slider_crank_cli(offset, tmp_path):
         assert r.exit_code == 1, r.output
 
 
-def test_plain_newton_is_flagged_when_it_lands_turned(offset):
-    """branch=False (plain Newton, one solve) may land on the turned root: it says so."""
+def test_plain_newton_landing_turned_is_a_failure(offset):
+    """branch=False (plain Newton, one solve) lands on the turned root (the pin at -194.63 mm):
+    status infeasible with flag FLIPPED, never converged."""
     eng = compile(offset)
     sol = eng.propagate({"O.q": 2.88}, branch=False)
-    if sol.converged and sol.flags & newton.FLIPPED:
-        assert any("reversed" in n for n in sol.notes)
+    pin = eng.kinematics(sol.state).frames["B"].P_i
+    assert pin[0] == pytest.approx(-194.63, abs=0.01)  # where plain Newton goes
+    assert sol.flags & newton.FLIPPED and sol.status == "infeasible" and not sol.converged
+    assert "turned" in sol.message
     ok = eng.propagate({"O.q": 2.88})
     assert ok.converged and not ok.flags & newton.LEAST_CHANGE_FAILED
 

@@ -159,9 +159,6 @@ def notes(status: Status, flags: int, substeps: int) -> list[str]:
         if flags & newton.FLIPPED:
             why = " (a full step turned a cut joint onto a pose the joint cannot take)"
         out.append(f"the change was followed in {substeps} sub-steps to stay on the start's branch{why}")
-    if status is Status.CONVERGED and flags & newton.FLIPPED and not flags & newton.SUBDIVIDED:
-        out.append("a cut joint's axes are reversed at the solution (a root of its constraints the joint itself "
-                   "cannot reach: plain Newton, branch=False)")  # fmt: skip
     return out
 
 
@@ -178,13 +175,13 @@ def message(status: Status, iterations: int, residual: float, tol: float, reques
     if status is Status.CONVERGED:
         opt = f", optimality {optimality:.3g}" if optimality else ""
         return f"converged in {iterations} iterations: ||Phi|| = {residual:.3g} < {bound}{opt}"
-    if flags & newton.LEAST_CHANGE_FAILED:
+    if flags & newton.LEAST_CHANGE_FAILED and not flags & newton.FLIPPED:
         return (f"assembled (||Phi|| = {residual:.3g}) but the closest assembly to the start was not reached in "
                 f"{iterations} iterations (optimality {optimality:.3g}); method='paper' returns the iteration's own "
                 "end point")  # fmt: skip
     if status is Status.INFEASIBLE and flags & newton.FLIPPED and fraction == 0.0:
-        return ("the assembly from the estimates turns a cut joint onto a pose the joint cannot take (its axes "
-                "reversed): better estimates are needed")  # fmt: skip
+        return ("the solve converged onto a root with a cut joint turned (its axes reversed): a pose the joint "
+                "itself cannot take; better estimates, or the default branch following")  # fmt: skip
     if status is Status.NO_FREE:
         return "no free variables: nothing can move to satisfy the constraints"
     if status is Status.DIVERGED:
@@ -752,6 +749,8 @@ class Engine:
             self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, goal.Q, goal.S, goal.C, goal.L,
             -1 if assembled is None else int(assembled), self.row_scale, self.col_scale, cfg, hist,
             sign0)  # fmt: skip
+        if flags & newton.FLIPPED and not flags & newton.SUBDIVIDED:  # plain Newton landed on a turned cut joint
+            code, frac = newton.INFEASIBLE, 0.0
         if ref_key is not None and sign_start != newton.UNKNOWN_SIGN and not flags & newton.FROM_ESTIMATES:
             self._reference_signs[ref_key] = int(sign_start)
         return Solution(self, start, st, STATUSES[code], int(it), float(norm), hist[: min(hlen, hist.size)], cols,
