@@ -37,6 +37,10 @@ _EXPORTS = {
     "Joint": "kinprop.model",
     "Mechanism": "kinprop.model",
     "Model": "kinprop.model",
+    "LoadCase": "kinprop.model",
+    "PointLoad": "kinprop.model",
+    "Statics": "kinprop.analysis.statics",
+    "statics": "kinprop.analysis.statics",
     "Propagation": "kinprop.propagation",
     "assemble": "kinprop.propagation",
     "propagate": "kinprop.propagation",
@@ -47,11 +51,12 @@ _EXPORTS = {
 if TYPE_CHECKING:
     from kinprop.analysis import design_sensitivity, evaluate_outputs, mobility, output_sensitivity, sweep
     from kinprop.analysis.motion import Motion, motion
+    from kinprop.analysis.statics import Statics, statics
     from kinprop.analysis.targets import TargetPropagation, propagate_targets
     from kinprop.engine import BatchSolution, Engine, Solution, State, Status, compile
     from kinprop.errors import AddressError, ConvergenceError, KinpropError, ModelError, SingularityWarning
     from kinprop.io import dump_model, load_model
-    from kinprop.model import Body, Design, Joint, Mechanism, Model
+    from kinprop.model import Body, Design, Joint, LoadCase, Mechanism, Model, PointLoad
     from kinprop.propagation import Propagation, assemble, propagate, propagate_continuation
     from kinprop.solver import SolveResult
 
@@ -79,15 +84,18 @@ __all__ = [
     "Engine",
     "Joint",
     "KinpropError",
+    "LoadCase",
     "Mechanism",
     "Model",
     "ModelError",
     "Motion",
+    "PointLoad",
     "Propagation",
     "SingularityWarning",
     "Solution",
     "SolveResult",
     "State",
+    "Statics",
     "Status",
     "TargetPropagation",
     "assemble",
@@ -102,5 +110,6 @@ __all__ = [
     "propagate",
     "propagate_continuation",
     "propagate_targets",
+    "statics",
     "sweep",
 ]

@@ -142,9 +142,9 @@ def leg_addresses(model: Model) -> list[str]:
     """The leg-length addresses of a Stewart model built here (``.length`` or ``P*.q``)."""
     out = []
     for j in model.mechanism.joints:
-        if j.type == "distance":
+        if j.jtype.has_length:  # a distance leg
             out.append(f"{j.name}.length")
-        elif j.type == "translational":
+        elif j.jtype.n_coordinates == 1 and not j.jtype.angle_indices:  # a sliding leg (translational)
             out.append(f"{j.name}.q")
     return out
 

@@ -54,9 +54,11 @@ def _axis_point(a: np.ndarray) -> np.ndarray:
     return X[0] * e1 + X[1] * e2
 
 
-def _model(beta_deg: float, metres: bool = False) -> kp.Model:
-    """The parallel-axis double wishbone (mm and deg; or m and rad, the same suspension)."""
+def _model(beta_deg: float, metres: bool = False, right: bool = False, inputs: bool = True) -> kp.Model:
+    """The parallel-axis double wishbone (mm and deg; or m and rad, the same suspension; or its
+    mirror image, a right corner; without declared inputs)."""
     k = 1e-3 if metres else 1.0
+    mirror = np.array([1.0, -1.0 if right else 1.0, 1.0])
     b = math.radians(beta_deg)
     a = np.array([math.cos(b), 0.0, math.sin(b)])
     c = _axis_point(a)
@@ -64,7 +66,7 @@ def _model(beta_deg: float, metres: bool = False) -> kp.Model:
     T_I = T_O - 0.45 * _perp(T_O - c, a)
 
     def v(x: np.ndarray) -> list[float]:
-        return [float(y) * k for y in x]
+        return [float(y) * k for y in np.asarray(x) * mirror]
 
     data = {
         "kinprop": 1,
@@ -95,7 +97,7 @@ def _model(beta_deg: float, metres: bool = False) -> kp.Model:
             "UBJ": {"type": "spherical", "bodies": ["uca", "upright"], "cut": True, "point": v(UBJ)},
             "TR": {"type": "distance", "bodies": ["chassis", "upright"], "point_i": v(T_I), "point_j": v(T_O)},
         },
-        "inputs": ["LCA"],
+        "inputs": ["LCA"] if inputs else [],
         "elements": {
             "spring": {"type": "spring", "bodies": ["chassis", "lca"], "point_i": v(S_C), "point_j": v(S_A),
                        "stiffness": 50.0 / k},
@@ -226,3 +228,57 @@ def test_results_do_not_depend_on_the_file_units() -> None:
                        "roll_centre_height": 1e-3, "half_track_change": 1e-3, "wheel_rate": 1e3}  # fmt: skip
     for n in names:
         assert m[n] == pytest.approx(mm[n] * per_mm_to_per_m.get(n, 1.0), rel=1e-9, abs=1e-12), n
+
+
+def test_first_order_targets_are_met() -> None:
+    """Targets on camber gain, anti-dive and a motion ratio move the upper arm's pivots until
+    the re-assembled design has them (checked by evaluating the metrics afresh)."""
+    from kinprop.analysis.targets import propagate_targets
+
+    base = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
+    res = propagate_targets(base, ["camber_gain=-0.025", "anti_dive=60", "motion_ratio:spring=0.46"],
+                            ["hardpoint:UCA", "hardpoint:LCA"])  # fmt: skip
+    assert res.status == "met"
+    got = evaluate_outputs(res.after, ["camber_gain", "anti_dive", "motion_ratio:spring"])
+    assert got["camber_gain"] == pytest.approx(-0.025, rel=1e-8)
+    assert got["anti_dive"] == pytest.approx(60.0, rel=1e-8)
+    assert got["motion_ratio:spring"] == pytest.approx(0.46, rel=1e-8)
+    rows = {r["output"].split(".")[-1]: r["unit"] for r in res.table()}
+    assert rows["camber_gain"] == "deg/mm" and rows["anti_dive"] == "%"
+
+
+def test_a_right_corner_and_no_declared_inputs_give_the_same_metrics() -> None:
+    """The mirror image (y -> -y) is a right corner: every metric is the same (the signs are
+    side-independent) except the FVIC's y; without declared inputs the bump motion is the
+    mechanism's only degree of freedom, and nothing changes either."""
+    names = ["camber_gain", "bump_steer", "caster_gain", "fvic_y", "fvic_z", "fvsa_length", "roll_centre_height",
+             "anti_dive", "half_track_gain", "contact_patch_dx_gain", "motion_ratio:spring", "wheel_rate"]  # fmt: skip
+    left = evaluate_outputs(_model(-5.0), names)
+    right = evaluate_outputs(_model(-5.0, right=True), names)
+    free = evaluate_outputs(_model(-5.0, inputs=False), names)
+    for n in names:
+        sign = -1.0 if n == "fvic_y" else 1.0
+        assert right[n] == pytest.approx(sign * left[n], rel=1e-9, abs=1e-12), n
+        assert free[n] == pytest.approx(left[n], rel=1e-9, abs=1e-12), n
+
+
+def test_sensitivities_of_first_order_metrics_match_re_solved_models() -> None:
+    """``kinprop sensitivity --of camber_gain ...`` (the implicit-function tangent, the output
+    map differenced along it) against central differences of re-solved models."""
+    from kinprop.analysis.sensitivity import output_sensitivity_matrix
+
+    base = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
+    outs = ["camber_gain", "bump_steer", "roll_centre_height", "anti_dive", "motion_ratio:spring"]
+    D, _, _, _ = output_sensitivity_matrix(base, outs, ["TR.s_i"])
+    s0 = np.array(base.design["TR.s_i"], dtype=float)
+    for k in range(3):
+
+        def f(h: float, k: int = k) -> np.ndarray:
+            s = s0.copy()
+            s[k] += h
+            m = kp.propagate(base, {"TR.s_i": s}, free=["q"], tol=1e-13).after
+            v = evaluate_outputs(m, outs)
+            return np.array([v[n] for n in outs])
+
+        fd = _richardson(f, 0.05)
+        assert np.allclose(D[:, k], fd, rtol=1e-6, atol=1e-12), (k, D[:, k], fd)

@@ -37,6 +37,21 @@ def run_kinprop(
     )
 
 
+def invoke_kinprop(*args: object) -> subprocess.CompletedProcess[str]:
+    """``kinprop ARGS`` in this process (typer's CliRunner: the kernels already compiled, no
+    new interpreter), as a CompletedProcess; for checks of what a command prints and its exit
+    code. A process of its own (:func:`run_kinprop`) when the process is the point: memory
+    limits, signals, pipes, the entry point."""
+    from typer.testing import CliRunner
+
+    from kinprop.cli import app
+
+    r = CliRunner().invoke(app, [str(a) for a in args], prog_name="kinprop")
+    if r.exception is not None and not isinstance(r.exception, SystemExit):
+        raise r.exception
+    return subprocess.CompletedProcess(["kinprop", *map(str, args)], r.exit_code, r.stdout, r.stderr)
+
+
 def one_error_line(p: subprocess.CompletedProcess[str]) -> str:
     """The single ``error: ...`` line of an invalid-input run (exit 2, nothing else on stderr)."""
     assert p.returncode == 2, (p.returncode, p.stdout[-2000:], p.stderr[-2000:])

@@ -7,6 +7,11 @@ outputs such as ``assembled.yaml`` chain from one command to the next as the doc
 (ignoring a trailing ``<- note``) must appear in what the command printed, and ``$ echo $?``
 states the expected exit code (otherwise 0).
 
+``kinprop`` commands run in this process (``typer``'s CliRunner in the scratch directory, the
+kernels compiled once for the whole test run; a new process per command would import the
+library and load the kernels again, ~1.5 s each); ``python`` commands and snippets run in a new
+process.
+
 A block that must not run in CI is marked, on the line before its fence, with
 ``<!-- doc-test: skip REASON -->`` (e.g. ``scripts/paper.sh`` builds a virtualenv, a benchmark
 takes minutes, ``--scheduler tcp://HOST`` needs a cluster).
@@ -14,11 +19,13 @@ takes minutes, ``--scheduler tcp://HOST`` needs a cluster).
 
 from __future__ import annotations
 
+import os
 import re
 import shlex
 import shutil
 import subprocess
 import sys
+import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -112,6 +119,27 @@ def _argv(text: str) -> list[str] | None:
     return None
 
 
+def _run_command(argv: list[str], cwd: Path) -> tuple[int, str]:
+    """(exit code, stdout + stderr) of one doc command: ``kinprop`` in this process, else a new one."""
+    if argv[: len(CLI)] != CLI:
+        p = subprocess.run(argv, capture_output=True, text=True, cwd=cwd, timeout=TIMEOUT)
+        return p.returncode, p.stdout + p.stderr
+    from typer.testing import CliRunner
+
+    from kinprop.cli import app
+
+    here = Path.cwd()
+    os.chdir(cwd)
+    try:
+        r = CliRunner().invoke(app, argv[len(CLI) :], prog_name="kinprop")
+    finally:
+        os.chdir(here)
+    printed = r.stdout + r.stderr
+    if r.exception is not None and not isinstance(r.exception, SystemExit):
+        printed += "".join(traceback.format_exception(*r.exc_info))  # type: ignore[misc]
+    return r.exit_code, printed
+
+
 def _printed(expected: str, printed: list[float]) -> bool:
     """``expected`` (as the doc prints it) is among the numbers the command printed, to the
     doc's precision: within two units of its last printed digit or 1e-5 relative."""
@@ -142,9 +170,8 @@ def _run_block(block: Block, cwd: Path) -> None:
     for cmd in block.commands():
         argv = _argv(cmd.text)
         assert argv is not None, f"{where}: cannot run {cmd.text!r} here; mark the block <!-- doc-test: skip ... -->"
-        p = subprocess.run(argv, capture_output=True, text=True, cwd=cwd, timeout=TIMEOUT)
-        printed = p.stdout + p.stderr
-        assert p.returncode == cmd.exit_code, f"{where}: {cmd.text!r} exited {p.returncode}:\n{printed[-3000:]}"
+        code, printed = _run_command(argv, cwd)
+        assert code == cmd.exit_code, f"{where}: {cmd.text!r} exited {code}:\n{printed[-3000:]}"
         values = [float(x) for x in _numbers(printed.splitlines())]
         missing = [x for x in _numbers(cmd.expected) if not _printed(x, values)]
         assert not missing, f"{where}: {cmd.text!r} did not print {missing} (the doc says so):\n{printed[-3000:]}"

@@ -249,3 +249,11 @@ def test_velocity_ratios_of_outputs() -> None:
     assert mo.ratio("hardpoint:B.j[x]", "O2.q") == pytest.approx(xdot, rel=1e-10)
     # the distance from the crank pin to the slider: d/dt |B - A| = 0 (the rod is rigid)
     assert mo.output_rate("distance:hardpoint:A.i,hardpoint:B.j") == pytest.approx(0.0, abs=1e-12)
+
+
+def test_an_unassembled_state_says_so() -> None:
+    raw = kp.load_model(EXAMPLES / "fourbar.yaml")  # the file's estimates: not an assembly
+    mo = motion(raw, {"O2": 1.0}, {"O2": 0.0})
+    assert mo.status == "not_assembled" and "assemble" in mo.message
+    assert all(np.isnan(v).all() for v in mo.rates.values())
+    assert np.isnan(mo.body_twist("rocker").angular).all()

@@ -302,13 +302,19 @@ def test_body_frame_rules_are_the_same_mechanism():
 
 
 def test_joint_body_frames_have_no_child_side_vectors():
-    data = _all_types_file(np.random.default_rng(3)) | {"body_frames": "joint"}
+    """With the paper's reading of edits; edits: design adds them (zero s', the frame's C) so that
+    a tree joint can move without moving its child body."""
+    data = _all_types_file(np.random.default_rng(3)) | {"body_frames": "joint", "edits": "mechanism"}
     model = model_from_data(data)
     topo = assembly_for(model.mechanism).topology
     for t in topo.tree:
         child = "i" if t.reversed else "j"
         assert f"{t.joint}.s_{child}" not in model.design
         assert f"{t.joint}.C_{child}" not in model.design
+    design = model_from_data(data | {"edits": "design"})
+    for t in topo.tree:
+        child = "i" if t.reversed else "j"
+        np.testing.assert_array_equal(design.design[f"{t.joint}.s_{child}"], 0.0)
 
 
 def test_named_points_live_in_body_frames():
@@ -408,7 +414,7 @@ def test_double_wishbone_from_published_hardpoints():
     example (whose s' and C were derived by hand, printed to ~10 digits)."""
     frames = load_model(EXAMPLES / "double_wishbone.yaml")
     hard = load_model(EXAMPLES / "double_wishbone_hardpoints.yaml")
-    assert hard.units == {"length": "mm", "angle": "deg", "axes": "ISO8855"}
+    assert hard.units == {"length": "mm", "angle": "deg", "axes": "ISO8855", "force": "N"}
     assert max(joint_mismatch(hard).values()) < 1e-9
     assert hardpoint_difference(frames, hard) < 1e-6
     jounce = {"LCA.q": [np.radians(5.0)]}

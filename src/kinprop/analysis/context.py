@@ -15,7 +15,7 @@ from kinprop.model import Model
 from kinprop.spatial import Array
 
 POINT = re.compile(r"^point:(?P<body>[^.\s\[\]]+)\.(?P<name>[^\s\[\]]+?)(\[(?P<c>[xyz012])\])?$")
-HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[ij])(\[(?P<c>[xyz012])\])?$")
+HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[^\s.\[\]]+)(\[(?P<c>[xyz012])\])?$")
 
 
 @dataclass(frozen=True)
@@ -61,10 +61,14 @@ class OutputContext:
         mech = self.model.mechanism
         if body not in mech.body_names:
             raise AddressError(f"unknown body {body!r}; bodies are {', '.join(mech.body_names)}")
-        pts = dict(mech.body(body).points)
+        b = mech.body(body)
+        pts = dict(b.points)
         if point not in pts:
             known = ", ".join(pts) or "none"
             raise AddressError(f"body {body!r} has no named point {point!r}; its points: {known}")
+        ref = b.joint_point(point)
+        if ref is not None:  # a joint's point: it follows the joint (kinprop.model.joint_points)
+            return self.hardpoint(*ref)
         return self.kin.r[body] + self.kin.A[body] @ np.asarray(pts[point], dtype=float)
 
     def hardpoint(self, joint: str, side: str) -> Array:
@@ -72,6 +76,8 @@ class OutputContext:
         mech = self.model.mechanism
         if joint not in mech.joint_names:
             raise AddressError(f"unknown joint {joint!r}; joints are {', '.join(mech.joint_names)}")
+        if side not in ("i", "j"):  # a pivot: the fixed body's point JOINT.NAME
+            return self.body_point(*pivot_point(self.model, joint, side))
         f = self.kin.frames[joint]
         return f.P_i if side == "i" else f.P_j
 
@@ -84,3 +90,15 @@ class OutputContext:
         if m and m.group("c") is None:
             return self.hardpoint(m.group("joint"), m.group("side"))
         raise AddressError(f"{spec!r} is not a point: expected point:BODY.NAME or hardpoint:JOINT.i|j")
+
+
+def pivot_point(model: Model, joint: str, name: str) -> tuple[str, str]:
+    """``(fixed body, point name)`` of the pivot ``name`` of ``joint`` (``hardpoint:UCA.front``)."""
+    j = model.mechanism.joint(joint)
+    for body in (j.body_i, j.body_j):
+        b = model.mechanism.body(body)
+        if b.fixed and f"{joint}.{name}" in dict(b.points):
+            return body, f"{joint}.{name}"
+    raise AddressError(
+        f"hardpoint:{joint}.{name}: expected {joint}.i, {joint}.j or a pivot of {joint} (none is named {name!r})"
+    )

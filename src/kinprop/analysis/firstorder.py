@@ -23,7 +23,6 @@ through them are parallel to the axis).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -47,15 +46,6 @@ GROUND_METRICS = ("half_track_change", "contact_patch_dx", "half_track_gain", "c
 #: motion ratios are ``motion_ratio:ELEMENT``
 MOTION_RATIO = "motion_ratio"
 FIRST_ORDER = GAIN_METRICS + CENTRE_METRICS + ANTI_METRICS + GROUND_METRICS + ("wheel_rate",)
-
-
-@dataclass(frozen=True)
-class WheelMotion:
-    """The wheel's bump motion at one state: the engine's velocity state and the travel rate."""
-
-    state: MotionState
-    wheel: int
-    travel_rate: float
 
 
 def travel_motion(
@@ -134,7 +124,6 @@ def first_order_metrics(
     ctx: OutputContext,
     engine: Engine,
     wheel: str,
-    metrics: dict[str, float],
     points: dict[str, tuple[int, Array]],
     radius: float | None,
     reference_contact: Array | None,
@@ -142,7 +131,8 @@ def first_order_metrics(
 ) -> dict[str, float]:
     """Every first-order metric the wheel supports (module docstring). ``points``: ``centre``,
     ``spin``, optionally ``upper``/``lower`` (the steering axis) as ``(body, position)``;
-    ``metrics``: the position-level ones (for the steering axis' side and existence)."""
+    ``radius``: the loaded radius (None: no contact patch); ``reference_contact``: the contact
+    point's reference (None: no half-track / contact-patch changes)."""
     model = ctx.model
     ms = travel_motion(engine, model, travel_input, ctx.state if ctx.engine is engine else None)
     out: dict[str, float] = {}

@@ -57,6 +57,7 @@ from kinprop.analysis.motion import point_of
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.model import Model
+from kinprop.model.joint_points import steering_joints
 from kinprop.spatial import EZ, Array
 
 ANGLE_METRICS = ("camber", "toe", "caster", "kpi")
@@ -133,8 +134,10 @@ def available_metrics(
 ) -> list[str]:
     """Metrics a wheel body supports with the points the model declares."""
     out = ["camber", "toe"]
-    steer = (spec is not None and spec.steering_axis is not None) or all(
-        _find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")
+    steer = (
+        (spec is not None and spec.steering_axis is not None)
+        or all(_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
+        or steering_joints(model.mechanism, wheel) is not None
     )
     if steer:
         out += ["caster", "kpi"]
@@ -148,9 +151,12 @@ def available_metrics(
     return out
 
 
-def metric_names(model: Model) -> list[str]:
-    """``metric:WHEEL.NAME`` for every wheel body and every metric it supports."""
-    return [f"metric:{w}.{m}" for w in wheel_bodies(model) for m in available_metrics(model, w)]
+def metric_names(model: Model, first_order: bool = False) -> list[str]:
+    """``metric:WHEEL.NAME`` for every wheel body and every position-level metric it supports
+    (the default outputs of sweeps and studies); ``first_order``: the first-order ones too
+    (a velocity analysis per state: asked for by name)."""
+    return [f"metric:{w}.{m}" for w in wheel_bodies(model) for m in available_metrics(model, w)
+            if first_order or not is_first_order(m)]  # fmt: skip
 
 
 def resolve_metric(model: Model, name: str) -> tuple[str, str]:
@@ -182,6 +188,81 @@ def resolve_metric(model: Model, name: str) -> tuple[str, str]:
         raise AddressError(f"output {name!r}: unknown metric {metric!r}; metrics: {', '.join(METRICS)}, "
                            f"{MOTION_RATIO}:ELEMENT")  # fmt: skip
     return wheel, metric
+
+
+def steering_points(ctx: OutputContext, wheel: str) -> tuple[Array | None, Array | None]:
+    """Global upper and lower points of the wheel's steering axis at the context's state: the
+    declared ``kingpin_upper``/``kingpin_lower`` points (coordinates, or references to joints
+    that follow them), else the default joints of :func:`kinprop.model.joint_points.steering_joints`
+    (two ball joints, or a strut top mount and the lower ball joint), the higher one upper."""
+    model = ctx.model
+    found_upper, found_lower = (_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
+    if found_upper is not None and found_lower is not None:
+        return ctx.body_point(*found_upper), ctx.body_point(*found_lower)
+    pair = steering_joints(model.mechanism, wheel)
+    if pair is None:
+        return None, None
+    a, b = (ctx.hardpoint(*p) for p in pair)
+    return (a, b) if a[2] >= b[2] else (b, a)
+
+
+def steering_bodies(ctx: OutputContext, wheel: str) -> tuple[tuple[str, Array], tuple[str, Array]] | None:
+    """``((body, point), (body, point))`` of the steering axis' upper and lower points (as
+    :func:`steering_points`), each with the body it moves with (a joint's point: that side's)."""
+    model = ctx.model
+    mech = model.mechanism
+    found = [_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
+    if found[0] is not None and found[1] is not None:
+        out = []
+        for body, name in found:  # type: ignore[misc]
+            ref = mech.body(body).joint_point(name)
+            if ref is not None:
+                j = mech.joint(ref[0])
+                out.append((j.body_i if ref[1] == "i" else j.body_j, ctx.hardpoint(*ref)))
+            else:
+                out.append((body, ctx.body_point(body, name)))
+        return out[0], out[1]
+    pair = steering_joints(mech, wheel)
+    if pair is None:
+        return None
+    ends = []
+    for joint, side in pair:
+        j = mech.joint(joint)
+        ends.append((j.body_i if side == "i" else j.body_j, ctx.hardpoint(joint, side)))
+    a, b = ends
+    return (a, b) if a[1][2] >= b[1][2] else (b, a)
+
+
+def steering_axis_mismatch(model: Model) -> list[str]:
+    """Declared steering-axis points (``kingpin_upper``/``kingpin_lower`` given by coordinates)
+    that do not coincide with the joint the default steering axis takes, at the model's
+    coordinates: one message each, with the distance. Such points are used as declared."""
+    out = []
+    ctx = None  # forward kinematics only when a wheel declares its axis by coordinates
+    for wheel in wheel_bodies(model):
+        pair = steering_joints(model.mechanism, wheel)
+        found = [_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
+        if pair is None or None in found:
+            continue
+        if all(model.mechanism.body(b).joint_point(k) is not None for b, k in found):  # type: ignore[misc]
+            continue
+        ctx = ctx or OutputContext.of(model)
+        a, b = (ctx.hardpoint(*p) for p in pair)
+        ordered = (pair[0], a), (pair[1], b)
+        if a[2] < b[2]:
+            ordered = ordered[::-1]
+        names = ("kingpin_upper", "kingpin_lower")
+        for name, (body, key), ((joint, side), p) in zip(names, found, ordered, strict=True):
+            if model.mechanism.body(body).joint_point(key) is not None:
+                continue
+            d = float(np.linalg.norm(ctx.body_point(body, key) - p))
+            if d > 1e-6 * max(1.0, float(np.max(np.abs(p)))):
+                out.append(
+                    f"bodies.{body}.points.{key}: the declared {name} is {d:.6g} from joint {joint} ({joint}.{side} "
+                    f"at {np.round(p, 6).tolist()}), which the steering axis would otherwise follow; it is used as "
+                    f"declared. Write '{key}: {joint}' (or delete it) to follow the joint."
+                )
+    return out
 
 
 def is_first_order(metric: str) -> bool:
@@ -219,10 +300,10 @@ def wheel_first_order(ctx: OutputContext, wheel: str, spec: WheelSpec | None = N
     if spec is not None and spec.steering_axis is not None:
         points["upper"], points["lower"] = (point_of(ctx, engine, s) for s in spec.steering_axis)
     else:
-        found = [_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
-        if found[0] is not None and found[1] is not None:
-            for key, (body, name) in zip(("upper", "lower"), found, strict=True):  # type: ignore[misc]
-                points[key] = (engine.body_index[body], ctx.body_point(body, name))
+        found = steering_bodies(ctx, wheel)
+        if found is not None:
+            for key, (body, p) in zip(("upper", "lower"), found, strict=True):
+                points[key] = (engine.body_index[body], p)
     radius = _radius(model, wheel)
     ref = None
     if radius is not None:
@@ -233,7 +314,7 @@ def wheel_first_order(ctx: OutputContext, wheel: str, spec: WheelSpec | None = N
             if found_ref is not None:
                 ref = ctx.body_point(*found_ref)
     travel = spec.travel_input if spec is not None else None
-    return first_order_metrics(ctx, engine, wheel, {}, points, radius, ref, travel)
+    return first_order_metrics(ctx, engine, wheel, points, radius, ref, travel)
 
 
 def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:
@@ -250,17 +331,13 @@ def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None)
     if spec is not None and spec.steering_axis is not None:
         upper, lower = (ctx.point(s) for s in spec.steering_axis)
     else:
-        found_upper, found_lower = (_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
-        if found_upper is not None and found_lower is not None:
-            upper, lower = ctx.body_point(*found_upper), ctx.body_point(*found_lower)
+        upper, lower = steering_points(ctx, wheel)
     if upper is not None and lower is not None:
         out["caster"], out["kpi"] = steering_angles(upper, lower, side)
         pts = dict(model.mechanism.body(wheel).points)
         if "contact_patch" in pts:
-            v = np.asarray(pts["contact_patch"], dtype=float) - np.asarray(pts["wheel_centre"], dtype=float)
-            a_B = np.asarray(pts["spin_axis"], dtype=float) - np.asarray(pts["wheel_centre"], dtype=float)
-            a_B /= np.linalg.norm(a_B)
-            radius = float(np.linalg.norm(v - (v @ a_B) * a_B))
+            v = ctx.body_point(wheel, "contact_patch") - centre
+            radius = float(np.linalg.norm(v - (v @ axis) * axis))
             contact = contact_point(centre, axis, radius)
             out["scrub_radius"], out["trail"] = ground_offsets(upper, lower, contact, axis)
     ref = None

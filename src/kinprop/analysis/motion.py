@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -34,6 +34,8 @@ from kinprop.propagation.units import from_solver_units, to_solver_units
 from kinprop.spatial import Array
 
 AXES = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
+#: scaled residual norm above which a state is not an assembly (its rates would mean nothing)
+ASSEMBLED_TOL = 1e-6
 #: a relative angular velocity below this fraction of |v| / L is a pure translation
 TRANSLATION_RTOL = 1e-12
 
@@ -242,6 +244,11 @@ def motion(
     solver_rates = solver(rates)
     solver_acc = None if accelerations is None else solver(accelerations)
     ms = eng.motion(st, solver_rates, solver_acc)
+    if ms.residual > ASSEMBLED_TOL:
+        msg = f"not an assembly (||Phi|| = {ms.residual:.3g}): assemble the model first"
+        nan = {f.name: np.full_like(getattr(ms, f.name), np.nan) for f in fields(ms)
+               if f.name in ("qdot", "V", "qddot", "dV") and getattr(ms, f.name) is not None}  # fmt: skip
+        ms = replace(ms, status="not_assembled", message=msg, **nan)
 
     def by_joint(x: Array | None) -> dict[str, Array] | None:
         if x is None:

@@ -25,7 +25,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from kinprop.analysis.context import HARD, POINT, OutputContext
+from kinprop.analysis.context import HARD, POINT, OutputContext, pivot_point
 from kinprop.analysis.metrics import (
     WheelSpec,
     is_first_order,
@@ -34,6 +34,7 @@ from kinprop.analysis.metrics import (
     wheel_first_order,
     wheel_metrics,
 )
+from kinprop.analysis.statics import is_load_output, load_value
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
@@ -69,7 +70,10 @@ def expand_outputs(model: Model, names: Sequence[str], engine: Engine | None = N
     out: list[str] = []
     for name in names:
         name = name.strip()
-        if name.startswith("distance:"):
+        if is_load_output(name):
+            load_value(model, name, {}, engine)  # the joint, element, input and load case exist
+            out.append(name)
+        elif name.startswith("distance:"):
             ctx = OutputContext.of(model, engine=engine)
             for end in _distance_ends(name):
                 ctx.point(end)  # both ends exist
@@ -108,6 +112,11 @@ def _check_point(model: Model, name: str, m: re.Match[str]) -> None:
         raise AddressError(
             f"output {name!r}: unknown joint {m.group('joint')!r}; joints are {', '.join(mech.joint_names)}"
         )
+    elif m.group("side") not in ("i", "j"):
+        try:
+            pivot_point(model, m.group("joint"), m.group("side"))  # a pivot of the joint
+        except AddressError as exc:
+            raise AddressError(f"bad output {name!r}: {exc.args[0]}") from None
 
 
 def _parse_variable(engine: Engine, name: str) -> Address:
@@ -130,6 +139,8 @@ def _parse_variable(engine: Engine, name: str) -> Address:
 
 
 def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, float]]) -> float:
+    if is_load_output(name):
+        return load_value(ctx.model, name, metric_cache, ctx.engine, ctx.reference)
     if name.startswith("distance:"):
         a, b = _distance_ends(name)
         return float(np.linalg.norm(ctx.point(a) - ctx.point(b)))
@@ -224,7 +235,7 @@ def output_names(model: Model, engine: Engine | None = None) -> list[str]:
     for j in mech.joints:
         for side in "ij":
             names += _vector_name(f"hardpoint:{j.name}.{side}", 3, True)
-    names += metric_names(model)
+    names += metric_names(model, first_order=True)
     return names
 
 

@@ -79,7 +79,12 @@ def named_points(model: Model) -> dict[str, list[float]]:
     out: dict[str, list[float]] = {}
     for b in model.mechanism.bodies:
         for name, p in b.points:
-            out[f"{b.name}.{name}"] = _xyz(snap.r[b.name] + snap.A[b.name] @ np.asarray(p, dtype=float))
+            ref = b.joint_point(name)
+            if ref is not None:  # a joint's point follows the joint
+                f = snap.frames[ref[0]]
+                out[f"{b.name}.{name}"] = _xyz(f.P_i if ref[1] == "i" else f.P_j)
+            else:
+                out[f"{b.name}.{name}"] = _xyz(snap.r[b.name] + snap.A[b.name] @ np.asarray(p, dtype=float))
     return out
 
 

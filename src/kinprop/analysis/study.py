@@ -257,10 +257,16 @@ def evaluate_chunk(eng: Engine, spec: StudySpec, values: Array, start: int) -> p
         base, _, _ = eng.apply(base, spec.sets)
     st = eng.stack([base] * n) if n else base
     ok = np.ones(n, dtype=bool)
+    # an orientation varied as all nine components (a pivot's joint frame) is set as one matrix
+    whole_c = _whole_rotations(eng, spec.addresses)
+    in_c = {k for cols in whole_c.values() for k in cols}
     for i in range(n):
         try:
             for k, a in enumerate(spec.addresses):
-                eng.set(st[i], a, solver_values[i, k])
+                if k not in in_c:
+                    eng.set(st[i], a, solver_values[i, k])
+            for key, cols in whole_c.items():
+                eng.set(st[i], key, solver_values[i, cols].reshape(3, 3))
         except AddressError:
             ok[i] = False
     changed = {parse_address(a).key for a in spec.addresses} | {parse_address(a).key for a in spec.sets}
@@ -323,6 +329,17 @@ def read_study(path: str | Path) -> pd.DataFrame:
         return _pandas().DataFrame()
     pd = _pandas()
     return pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True).sort_values("variant", ignore_index=True)
+
+
+def _whole_rotations(eng: Engine, addresses: Sequence[str]) -> dict[str, list[int]]:
+    """``{J.C_i: plan columns of its components 0..8}`` for orientations whose nine components
+    are all in ``addresses`` (a global pivot factor's plan, :func:`kinprop.propagation.hardpoints.global_plan`)."""
+    found: dict[str, dict[int, int]] = {}
+    for k, a in enumerate(addresses):
+        addr = parse_address(a)
+        if addr.index is not None and addr.key in eng.layout and eng.layout[addr.key].group == "C":
+            found.setdefault(addr.key, {})[addr.index] = k
+    return {key: [cols[c] for c in range(9)] for key, cols in found.items() if set(cols) == set(range(9))}
 
 
 def run_study(
@@ -388,13 +405,16 @@ def run_study(
     lay = eng0.layout
     for a in addrs:
         addr = parse_address(a)
-        if addr.key in lay and lay[addr.key].group == "C":
+        if addr.key in lay and lay[addr.key].group == "C" and addr.key not in _whole_rotations(eng0, addrs):
             raise AddressError(f"--vary {a!r}: orientations cannot be varied component by component")
         if addr.key in lay and lay[addr.key].size > 1 and addr.index is None:
             raise AddressError(f"--vary {a!r}: give a component, e.g. {a}[0]")
     base, _, _ = apply_changes(model, dict(sets or {}), eng0)
     if len(values):
-        apply_changes(base, {a: values[0, k] for k, a in enumerate(addrs)}, eng0)
+        whole = _whole_rotations(eng0, addrs)
+        first = {a: values[0, k] for k, a in enumerate(addrs) if parse_address(a).key not in whole}
+        first.update({key: values[0, cols].reshape(3, 3) for key, cols in whole.items()})
+        apply_changes(base, first, eng0)
     if outputs:  # unknown output names fail here, before any directory is created
         expand_outputs(base, list(outputs), eng0)
     if scale is None and model_units:

@@ -42,8 +42,16 @@ from typing import Any
 
 import numpy as np
 
-from kinprop.analysis.context import HARD, POINT
-from kinprop.analysis.metrics import ANGLE_METRICS, METRIC_ALIASES, resolve_metric, wheel_bodies
+from kinprop.analysis.context import HARD, POINT, pivot_point
+from kinprop.analysis.firstorder import GAIN_METRICS
+from kinprop.analysis.metrics import (
+    ANGLE_METRICS,
+    METRIC_ALIASES,
+    is_first_order,
+    metric_unit,
+    resolve_metric,
+    wheel_bodies,
+)
 from kinprop.analysis.outputs import _distance_ends, expand_outputs, output_function
 from kinprop.engine import Engine, State
 from kinprop.errors import AddressError
@@ -85,7 +93,8 @@ class TargetSpec:
 
 
 def _kind(model: Model, output: str) -> str:
-    """``deg`` (metric angle, degrees), ``rad`` (coordinate/joint angle, radians), ``length``, ``none``."""
+    """``deg`` (metric angle, degrees), ``rad`` (coordinate/joint angle, radians), ``length``,
+    ``gain`` (a first-order angle gain, degrees per length unit), ``none``."""
     if output.startswith("joint:"):
         m = _JOINT_OUT.match(output)
         name = m["name"] if m else ""
@@ -94,6 +103,9 @@ def _kind(model: Model, output: str) -> str:
         return "length"
     if output.startswith("metric:") or "." not in output:
         _, metric = resolve_metric(model, output)
+        if is_first_order(metric):
+            length = model.units.get("length", "m")
+            return "gain" if metric in GAIN_METRICS else "length" if metric_unit(metric, length) == length else "none"
         return "deg" if METRIC_ALIASES.get(metric, metric) in ANGLE_METRICS else "length"
     addr = parse_address(output)
     if addr.field == "q":
@@ -115,6 +127,9 @@ def _unit_factor(model: Model, kind: str, unit: str, where: str) -> float:
             return math.pi / 180 if model.units.get("angle") == "deg" else 1.0
         if unit in ANGLES:
             return ANGLES[unit] * math.pi / 180
+    elif kind == "gain":  # internal: degrees per length unit; given in the model's angle per length unit
+        if not unit:
+            return 1.0 if model.units.get("angle", "rad") == "deg" else 180 / math.pi
     elif kind == "length":
         if not unit:
             return 1.0
@@ -145,7 +160,7 @@ def _metric_name(model: Model, name: str) -> str:
     if name.startswith("metric:") and "." not in name:
         wheel, metric = resolve_metric(model, name[len("metric:") :])
         return f"metric:{wheel}.{metric}"
-    if "." not in name and name not in ("travel",) and ":" not in name:
+    if "." not in name and name not in ("travel",) and (":" not in name or name.startswith("motion_ratio:")):
         wheel, metric = resolve_metric(model, name)
         return f"metric:{wheel}.{metric}"
     return name
@@ -258,8 +273,16 @@ def _point_spec(model: Model, engine: Engine, spec: str) -> PointSpec:
     """A ``point:BODY.NAME`` / ``hardpoint:JOINT.i|j`` spec (no component) as a :class:`PointSpec`."""
     m = POINT.match(spec)
     if m:
-        return PointSpec(m["body"], tuple(float(x) for x in dict(model.mechanism.body(m["body"]).points)[m["name"]]))
+        body = model.mechanism.body(m["body"])
+        ref = body.joint_point(m["name"])
+        if ref is not None:  # a joint's point: as the hardpoint (it follows the joint's s')
+            spec = f"hardpoint:{ref[0]}.{ref[1]}"
+        else:
+            return PointSpec(m["body"], tuple(float(x) for x in dict(body.points)[m["name"]]))
     m = HARD.match(spec)
+    if m is not None and m["side"] not in ("i", "j"):  # a pivot: a fixed body's point
+        body, name = pivot_point(model, m["joint"], m["side"])
+        return PointSpec(body, tuple(float(x) for x in dict(model.mechanism.body(body).points)[name]))
     j = model.mechanism.joint(m["joint"])  # type: ignore[index]
     side = 0 if m["side"] == "i" else 1  # type: ignore[index]
     return PointSpec(j.body_i if side == 0 else j.body_j, joint=j.name, side=side)
@@ -294,9 +317,8 @@ def _analytic_rows(model: Model, engine: Engine, names: list[str]) -> tuple[list
             rows[name] = dist
         elif name.startswith("metric:"):
             wheel, metric = resolve_metric(model, name)
-            pts = dict(model.mechanism.body(wheel).points)
-            centre = idx(PointSpec(wheel, tuple(float(x) for x in pts["wheel_centre"])))
-            spin = idx(PointSpec(wheel, tuple(float(x) for x in pts["spin_axis"])))
+            centre = idx(_point_spec(model, engine, f"point:{wheel}.wheel_centre"))
+            spin = idx(_point_spec(model, engine, f"point:{wheel}.spin_axis"))
             if metric == "camber":
 
                 def camber(P, G, cols, c=centre, s=spin):
@@ -391,8 +413,11 @@ class TargetPropagation:
         """The display unit of a target's values (a slope: per model length unit)."""
         length = self.model.units.get("length", "")
         angle = self.model.units.get("angle", "rad")
-        names = {"deg": angle, "rad": angle, "length": length, "none": ""}
+        names = {"deg": angle, "rad": angle, "length": length, "none": "", "gain": f"{angle}/{length}"}
         u = names[_kind(self.model, spec.output)]
+        metric = spec.output.startswith("metric:") or "." not in spec.output
+        if _kind(self.model, spec.output) == "none" and spec.slope is None and metric:
+            u = metric_unit(resolve_metric(self.model, spec.output)[1], length, angle, self.model.units.get("force"))
         if spec.slope is not None:
             if u == "deg" and _kind(self.model, spec.output) == "rad":
                 u = "rad"
@@ -408,7 +433,7 @@ class TargetPropagation:
             k, kind = 1.0, _kind(self.model, spec.output)
             if kind == "rad" and deg and spec.slope is None:
                 k = 180 / math.pi
-            elif kind == "deg" and not deg:  # a metric angle (degrees inside) in a radian model
+            elif kind in ("deg", "gain") and not deg:  # a metric angle (degrees inside) in a radian model
                 k = math.pi / 180
             row = {"target": spec.text, "output": spec.output, "unit": self.unit(spec)}
             rows.append(row | {n: t[n] * k for n in ("value", "before", "achieved", "residual")})

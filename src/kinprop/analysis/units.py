@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 from kinprop.analysis.metrics import METRIC_ALIASES, METRICS, is_angle_valued, is_first_order, metric_unit
+from kinprop.analysis.statics import is_load_output, load_output_unit
 from kinprop.engine import Engine
 from kinprop.model import Model
 from kinprop.propagation.units import address_scale, address_unit
@@ -26,7 +27,9 @@ def unit_of(model: Model, name: str, engine: Engine | None = None) -> str:
     ``J01.q`` -> ``deg`` (a revolute in a degree model), ``J03.q`` -> ``m`` (a slide),
     ``J12.s_j[0]``, ``J12.length``, ``point:...``, ``hardpoint:...`` -> the length unit,
     ``J.C_i`` -> ``""`` (a rotation matrix), Euler parameters -> ``""``, ``metric:W.camber`` ->
-    the angle unit."""
+    the angle unit; a load output (``reaction:J.fz``) -> the force unit (force x length for a moment)."""
+    if is_load_output(name):
+        return load_output_unit(model, name)
     if is_metric(name):
         short = name.split(".")[-1]
         if METRIC_ALIASES.get(short, short) not in METRICS and not is_first_order(short):

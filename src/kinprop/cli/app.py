@@ -77,6 +77,11 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "smallest change of the --free design variables meeting the targets.",
     ),
     "sweep": ("kinprop.cli.sweep", "Drive joint coordinates over a range; each step is solved from the previous one."),
+    "loads": (
+        "kinprop.cli.loads",
+        "Joint reactions, member forces (tension positive), spring and damper forces (positive pushing apart) "
+        "and the efforts that hold the inputs, at the model's assembled pose.",
+    ),
     "import": ("kinprop.cli.importer", "Read another tool's mechanism file and write it as a kinprop model file."),
     "serve": (
         "kinprop.cli.serve",
@@ -333,6 +338,22 @@ def load_model_cli(path: Path) -> Model:
 
     A 20,000-body model takes a few seconds to parse, validate and cut into a tree; a terminal
     user sees what is happening (a pipe or CI log gets nothing extra)."""
+    import warnings
+
+    from kinprop.io.points import JointPointWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", JointPointWarning)
+        model = _load_model_cli(path)
+    for w in caught:  # a declared point off its joint: one warning line each (issue 20)
+        if issubclass(w.category, JointPointWarning):
+            err.print(f"warning: {w.message}", soft_wrap=True, markup=False, highlight=False)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return model
+
+
+def _load_model_cli(path: Path) -> Model:
     from kinprop.io import load_model
 
     try:

@@ -93,6 +93,9 @@ class MotionState:
     dV: Array | None = None  # (nb, 6) spatial accelerations [dv_O, alpha]
     #: smallest / largest singular value of the scaled velocity system
     conditioning: float = 1.0
+    #: ``||Phi||`` of the state (scaled as the solver's test): the rates are those of the
+    #: tangent there; :func:`kinprop.analysis.motion.motion` refuses a state that is not an assembly
+    residual: float = 0.0
 
     @property
     def ok(self) -> bool:
@@ -152,6 +155,7 @@ class _Frames:
         kernels.evaluate(tb, st.Q, st.S, st.C, st.L, ws, Phi, vals, need, dummy, dummy)
         rows, cols = engine.pattern
         q = cols < nq
+        self.residual = float(np.linalg.norm(Phi * engine.row_scale))
         self.Phi_q = np.zeros((engine.n_rows, nq))
         np.add.at(self.Phi_q, (rows[q], cols[q]), vals[q])
         slots = (kernels.W_BODY_R, kernels.W_BODY_A, kernels.W_FRAME_P, kernels.W_FRAME_R, kernels.W_TWIST_Q)
@@ -322,11 +326,12 @@ def motion_state(
     fr = _Frames(engine, state)
     cols, vals = _driven_rows(engine, rates)
     qdot, cond, msg = _solve(engine, fr.Phi_q, cols, np.zeros(engine.n_rows), vals)
+    status = SINGULAR if msg else OK
     V = _tree_velocities(engine, fr, qdot)
     if msg or accelerations is None:
         nan = None if accelerations is None else np.full_like(qdot, np.nan)
         return MotionState(
-            SINGULAR if msg else OK,
+            status,
             msg or "ok",
             qdot,
             V,
@@ -337,6 +342,7 @@ def motion_state(
             nan,
             None if nan is None else np.full_like(V, np.nan),
             cond,
+            fr.residual,
         )
     acc = {a: 0.0 for a in rates} | dict(accelerations)
     acols, avals = _driven_rows(engine, acc)
@@ -346,7 +352,9 @@ def motion_state(
     gamma = _gamma(engine, fr, qdot, V, dV0)
     qddot, _, msg = _solve(engine, fr.Phi_q, acols, gamma, avals)
     dV = dV0 + _tree_velocities(engine, fr, qddot)  # the q-ddot part is linear, like the twists
-    return MotionState(SINGULAR if msg else OK, msg or "ok", qdot, V, fr.r, fr.A, fr.P, fr.R, qddot, dV, cond)
+    return MotionState(
+        SINGULAR if msg else OK, msg or "ok", qdot, V, fr.r, fr.A, fr.P, fr.R, qddot, dV, cond, fr.residual
+    )
 
 
 __all__ = ["MotionState", "cross3", "motion_state", "spatial_cross"]

@@ -6,7 +6,8 @@ the left side and builds, per template (topology as in Chrono::Vehicle's ``ChDou
 ``ChMacPhersonStrut`` and ``ChMultiLink``):
 
 * ``DoubleWishbone``: control arms ``uca``/``lca`` revolute to the chassis about the line
-  through their two chassis points (point: the midpoint), ball joints ``UCA_U``/``LCA_U`` to
+  through their two chassis points, written as ``pivots: {front, rear}`` (addresses
+  ``hardpoint:UCA.front``, :mod:`kinprop.propagation.hardpoints`), ball joints ``UCA_U``/``LCA_U`` to
   the upright, tie rod ``TIEROD`` a distance joint from the rack point (on the chassis) to the
   upright; spring and shock between the chassis and the lower arm.
 * ``MacPhersonStrut``: lower arm ``lca`` revolute to the chassis and ball-jointed to the
@@ -23,8 +24,9 @@ Common to all: the chassis is fixed; the steering rack is held (the tie rod's in
 chassis point), so the mobility is 1 (wheel travel). The spindle's revolute joint is left out
 (wheel spin moves no hardpoint); the wheel is declared on the upright by named points
 (``wheel_centre`` = the spindle location, ``spin_axis`` from the file's camber and toe angles,
-``kingpin_upper``/``kingpin_lower`` where the template has a steering axis through two ball
-joints, ``contact_patch`` when a tyre radius is given) and the chassis point
+``kingpin: [UPPER, LOWER]`` by reference to the joints where the template has a steering axis
+(the two ball joints; McPherson: the strut top mount and the lower ball joint), so it follows
+every edit of them, ``contact_patch`` when a tyre radius is given) and the chassis point
 ``wheel_centre_ref``, so camber, toe, caster, KPI, scrub radius, trail and wheel-centre travel
 work at once. Spring and shock end points are named points: their length is the output
 ``distance:chassis.spring_chassis,BODY.spring_BODY`` (not a constraint). Masses, inertias,
@@ -99,8 +101,8 @@ def _l(v: Array) -> list[float]:
 
 
 def _revolute(body: str, front: Array, back: Array) -> dict[str, Any]:
-    """A control arm's chassis revolute: the line through its two chassis points."""
-    return {"type": "revolute", "bodies": ["chassis", body], "point": _l((front + back) / 2), "axis": _l(front - back)}
+    """A control arm's chassis revolute by its two chassis pivots (the axis runs back -> front)."""
+    return {"type": "revolute", "bodies": ["chassis", body], "pivots": {"front": _l(front), "rear": _l(back)}}
 
 
 def _ball(body_i: str, body_j: str, p: Array, cut: bool = False) -> dict[str, Any]:
@@ -142,16 +144,9 @@ def _double_wishbone(r: _Reader, tire_radius: float | None) -> tuple[dict[str, A
                 "shock_chassis": _l(shock_c),
             },
         },
-        "uca": {"points": {"front_pivot": _l(uca_f), "rear_pivot": _l(uca_b)}},
-        "lca": {
-            "points": {
-                "front_pivot": _l(lca_f),
-                "rear_pivot": _l(lca_b),
-                "spring_lca": _l(spring_a),
-                "shock_lca": _l(shock_a),
-            }
-        },
-        "upright": {"points": {**wheel, "kingpin_upper": _l(uca_u), "kingpin_lower": _l(lca_u)}},
+        "uca": {},
+        "lca": {"points": {"spring_lca": _l(spring_a), "shock_lca": _l(shock_a)}},
+        "upright": {"points": wheel, "kingpin": ["UCA_U", "LCA_U"]},
     }
     joints = {
         "LCA": _revolute("lca", lca_f, lca_b),
@@ -188,20 +183,15 @@ def _macpherson(r: _Reader, tire_radius: float | None) -> tuple[dict[str, Any], 
             "fixed": True,
             "points": {
                 "wheel_centre_ref": wheel["wheel_centre"],
-                "kingpin_upper": _l(spring_c),
                 "spring_chassis": _l(spring_c),
                 "shock_chassis": _l(shock_c),
             },
         },
-        "lca": {"points": {"front_pivot": _l(lca_f), "rear_pivot": _l(lca_b)}},
+        "lca": {},
         "strut": {},
         "upright": {
-            "points": {
-                **wheel,
-                "kingpin_lower": _l(lca_u),
-                "spring_upright": _l(spring_u),
-                "shock_upright": _l(shock_u),
-            }
+            "points": {**wheel, "spring_upright": _l(spring_u), "shock_upright": _l(shock_u)},
+            "kingpin": ["STRUT_TOP", "LCA_U"],
         },
     }
     joints = {
@@ -245,7 +235,7 @@ def _multilink(r: _Reader, tire_radius: float | None) -> tuple[dict[str, Any], d
                 "shock_chassis": _l(shock_c),
             },
         },
-        "upper_arm": {"points": {"front_pivot": _l(ua_f), "rear_pivot": _l(ua_b)}},
+        "upper_arm": {},
         "lateral": {},
         "trailing_link": {"points": {"spring_trailing_link": _l(spring_l), "shock_trailing_link": _l(shock_l)}},
         "upright": {"points": wheel},

@@ -41,29 +41,18 @@ from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.couplings import build_couplings, couplings_to_data
 from kinprop.io.elements import build_elements, build_vehicle, elements_to_data, vehicle_to_data
 from kinprop.io.loader import build_or_report
+from kinprop.io.loads import build_loads, loads_to_data
+from kinprop.io.points import attach_references, point_order, point_references, written_points
 from kinprop.io.schema import HardpointFile, HardpointJointSpec
-from kinprop.joints import joint_type
+from kinprop.joints import REGISTRY, joint_type
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates, parse_address
 from kinprop.model.mechanism import validate_couplings, validate_structure
 from kinprop.spatial import EY, EZ, Array, is_rotation, log_so3
 from kinprop.topology import WORLD, build_topology
 
-#: hardpoint keys per joint type: (required, optional)
+#: hardpoint keys per joint type: (required, optional) (each type's ``hardpoint_keys``)
 KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "revolute": (("point", "axis"), ()),
-    "translational": (("point", "axis"), ()),
-    "cylindrical": (("point", "axis"), ()),
-    "universal": (("point", "axis_i", "axis_j"), ()),
-    "spherical": (("point",), ()),
-    "spherical-point": (("point",), ()),
-    "fixed": (("point",), ()),
-    "free": ((), ("point",)),
-    "spherical-translational": (("point", "axis"), ()),
-    "revolute-spherical": (("point_i", "axis", "point_j"), ("length",)),
-    "translational-distance": (("point_i", "axis", "point_j"), ("length",)),
-    "distance": (("point_i", "point_j"), ("length",)),
-    "dot-1": (("axis_i", "axis_j"), ()),
-    "dot-2": (("point_i", "axis", "point_j"), ()),
+    name: jt.hardpoint_keys for name, jt in REGISTRY.items() if jt.hardpoint_keys is not None
 }
 
 #: what each hardpoint key means, for messages and docs
@@ -77,23 +66,11 @@ KEY_MEANING = {
     "length": "the link length (default: the distance between point_i and point_j)",
 }
 
-#: design fields a cut joint defines: those its constraints use
-CUT_FIELDS: dict[str, tuple[str, ...]] = {
-    "revolute": ("s_i", "s_j", "C_i", "C_j"),
-    "translational": ("s_i", "s_j", "C_i", "C_j"),
-    "cylindrical": ("s_i", "s_j", "C_i", "C_j"),
-    "universal": ("s_i", "s_j", "C_i", "C_j"),
-    "fixed": ("s_i", "s_j", "C_i", "C_j"),
-    "spherical": ("s_i", "s_j"),
-    "spherical-point": ("s_i", "s_j"),
-    "spherical-translational": ("s_i", "s_j", "C_j"),
-    "revolute-spherical": ("s_i", "s_j", "C_i", "length"),
-    "translational-distance": ("s_i", "s_j", "C_i", "length"),
-    "distance": ("s_i", "s_j", "length"),
-    "dot-1": ("C_i", "C_j"),
-    "dot-2": ("s_i", "s_j", "C_i"),
-}
+#: design fields a cut joint defines: those its constraints use (each type's ``cut_fields``)
+CUT_FIELDS: dict[str, tuple[str, ...]] = {name: jt.cut_fields for name, jt in REGISTRY.items() if jt.cut}
 
+#: joint types that may be given by two pivots (their axis runs from the second to the first)
+PIVOT_TYPES = ("revolute", "cylindrical")
 #: a direction shorter than this is "zero"
 ZERO_AXIS = 1e-12
 #: largest |cos| between the two axes of a universal joint (they are made exactly perpendicular)
@@ -181,6 +158,26 @@ def _check_keys(name: str, jtype: str, spec: HardpointJointSpec, file: str) -> l
     return problems
 
 
+def _pivot_problems(name: str, spec: HardpointJointSpec, fixed: set[str], file: str) -> list[Problem]:
+    """A joint by its pivots: a revolute (or cylindrical) to a fixed body, no point or axis."""
+    loc = f"joints.{name}.pivots"
+    out = []
+    try:
+        jtype = joint_type(spec.type).name
+    except KeyError:
+        jtype = None  # reported with the known types
+    if jtype is not None and jtype not in PIVOT_TYPES:
+        out.append(Problem(loc, f"only {' and '.join(PIVOT_TYPES)} joints take pivots, found type {spec.type!r}", file))
+    if spec.point is not None or spec.axis is not None:
+        out.append(Problem(loc, "give either pivots or point and axis, not both", file))
+    if not set(spec.bodies) & fixed:
+        out.append(Problem(loc, "pivots are on a fixed body: one of the joint's bodies must be fixed", file))
+    (_, a), (_, b) = spec.pivots.items()  # type: ignore[union-attr]
+    if np.linalg.norm(np.subtract(a, b)) <= ZERO_AXIS:
+        out.append(Problem(loc, "the two pivots coincide: they define no axis", file))
+    return out
+
+
 def _reference(jtype: str, spec: HardpointJointSpec) -> _Reference:
     """The joint's global frames at the reference (keys already checked)."""
     point, axis = _vec(spec.point), _vec(spec.axis)
@@ -237,6 +234,20 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
 
     refs: dict[str, _Reference] = {}
     provisional: list[Joint] = []
+    pivots: dict[str, tuple[str, dict[str, list[float]]]] = {}
+    fixed_bodies = {n for n, b in spec.bodies.items() if b.fixed}
+    for name, j in list(spec.joints.items()):
+        if j.pivots is None:
+            continue
+        found = _pivot_problems(name, j, fixed_bodies, file)
+        problems += found
+        if not found:
+            (_, front), (_, rear) = j.pivots.items()
+            front, rear = np.array(front, dtype=float), np.array(rear, dtype=float)
+            spec.joints[name] = j.model_copy(
+                update={"point": ((front + rear) / 2).tolist(), "axis": (front - rear).tolist()}
+            )
+            pivots[name] = (j.bodies[0] if j.bodies[0] in fixed_bodies else j.bodies[1], dict(j.pivots))
     for name, j in spec.joints.items():
         try:
             jt = joint_type(j.type)
@@ -275,6 +286,7 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
     for t in topo.tree:
         ref = refs[t.joint]
         pose[t.child] = (ref.p_i, ref.r_i if spec.body_frames == "joint" else np.eye(3))
+    design_edits = spec.edits == "design"
 
     values: dict[str, object] = {}
     joints: list[Joint] = []
@@ -286,8 +298,10 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
         if j.name in tree:
             parent, child = ("j", "i") if tree[j.name].reversed else ("i", "j")
             fields = {f"s_{parent}", f"C_{parent}"}
-            if spec.body_frames == "global":
+            if spec.body_frames == "global" or design_edits:
                 fields.add(f"C_{child}")
+            if design_edits:  # the joint moves without moving its child body (design position kept)
+                fields.add(f"s_{child}")
             coords[j.name] = jt.default_coordinates()
         else:
             fields = set(CUT_FIELDS[jt.name])
@@ -315,23 +329,36 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
         raise ModelError(problems)
 
     final = []
+    refs = {}
     for b in bodies:
         r, a = pose[b.name]
-        pts = tuple((k, tuple((a.T @ (np.array(v) - r)).tolist())) for k, v in spec.bodies[b.name].points.items())
+        refs[b.name], found = point_references(b.name, spec.bodies[b.name], file)
+        problems += found
+        declared = dict(spec.bodies[b.name].points)
+        for joint, (body, pair) in pivots.items():
+            if body == b.name:
+                declared.update({f"{joint}.{k}": v for k, v in pair.items()})
+        pts = tuple(
+            (k, tuple((a.T @ (np.array(v) - r)).tolist())) for k, v in declared.items() if not isinstance(v, str)
+        )
         if not all(np.all(np.isfinite(v)) for _, v in pts):
             problems.append(Problem(f"bodies.{b.name}.points", "overflow: the coordinates are too large", file))
         final.append(Body(b.name, b.fixed, b.position, b.orientation, pts))
     if problems:
         raise ModelError(problems)
     elements, eproblems = build_elements(spec.elements, set(pose), "hardpoints", file, lambda b: pose[b])
-    if eproblems:
-        raise ModelError(eproblems)
-    mech = Mechanism(tuple(final), tuple(joints), spec.name, tuple(spec.inputs), couplings)
+    loads, lproblems = build_loads(spec.loads, {b.name: [n for n, _ in b.points] for b in final}, "hardpoints", file,
+                                   lambda b: pose[b])  # fmt: skip
+    if eproblems or lproblems:
+        raise ModelError(eproblems + lproblems)
+    mech = Mechanism(tuple(final), tuple(joints), spec.name, tuple(spec.inputs), couplings, spec.edits)
     values.update(coefs)
     units = {"length": spec.units.length, "angle": spec.units.angle, "axes": spec.units.axes}
     if spec.units.force is not None:
         units["force"] = spec.units.force
-    return Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle))
+    model = Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle),
+                  loads)  # fmt: skip
+    return attach_references(model, refs, file, point_order(spec.bodies))
 
 
 # --- frames -> hardpoints ----------------------------------------------------------------------
@@ -396,9 +423,17 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
             if not np.array_equal(b.A, np.eye(3)):
                 spec["orientation"] = [_clean(row) for row in b.A]
         if b.points:
-            r, a = kin.r[b.name], kin.A[b.name]
-            spec["points"] = {k: _clean(r + a @ np.array(v)) for k, v in b.points}
+            spec["points"] = {
+                k: v if isinstance(v, str) else _clean(v) for k, v in written_points(model, b, True).items()
+            }
         bodies[b.name] = spec
+    for j in mech.joints:  # pivots are written with their joint
+        if _pivots_of(model, j.name) is not None:
+            for b in (j.body_i, j.body_j):
+                for k in [k for k in bodies[b].get("points", {}) if k.startswith(f"{j.name}.")]:
+                    del bodies[b]["points"][k]
+                if "points" in bodies[b] and not bodies[b]["points"]:
+                    del bodies[b]["points"]
     joints: dict[str, Any] = {}
     for j in mech.joints:
         if j.jtype.name not in KEYS:
@@ -407,6 +442,11 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
         if j.cut is not None:
             spec["cut"] = j.cut
         spec.update(hardpoint_keys(j.jtype.name, frames[j.name]))
+        pair = _pivots_of(model, j.name)
+        if pair is not None:
+            for key in ("point", "axis"):
+                spec.pop(key, None)
+            spec["pivots"] = pair
         if j.jtype.has_length:
             spec["length"] = float(model.design[f"{j.name}.length"])
         joints[j.name] = spec
@@ -424,10 +464,39 @@ def model_to_hardpoints(model: Model, body_frames: str = "global") -> dict[str, 
         "joints": joints,
         **({"inputs": list(mech.inputs)} if mech.inputs else {}),
         **({"couplings": couplings_to_data(model, _coupled_now(model))} if mech.couplings else {}),
+        **({"edits": mech.edits} if mech.edits != "design" else {}),
         **({"elements": elements_to_data(model.elements, "hardpoints", lambda b: (kin.r[b], kin.A[b]))}
            if model.elements else {}),
         **({"vehicle": vehicle_to_data(model.vehicle)} if model.vehicle is not None else {}),
+        **({"loads": loads_to_data(model.loads, "hardpoints", lambda b: (kin.r[b], kin.A[b]))}
+           if model.loads is not None else {}),
     }  # fmt: skip
+
+
+def pivot_points(model: Model, joint: str) -> tuple[str, dict[str, Array]] | None:
+    """``(fixed body, {name: global point})`` of a joint given by its pivots (the fixed body's
+    named points ``JOINT.NAME``, two of them), or None."""
+    j = model.mechanism.joint(joint)
+    for name in (j.body_i, j.body_j):
+        b = model.mechanism.body(name)
+        pts = {k.split(".", 1)[1]: np.asarray(v, dtype=float) for k, v in b.points if k.startswith(f"{joint}.")}
+        if b.fixed and len(pts) == 2:
+            return name, {k: b.r + b.A @ v for k, v in pts.items()}
+    return None
+
+
+def _pivots_of(model: Model, joint: str) -> dict[str, list[float]] | None:
+    """The pivots to write for a joint, when its axis still runs through them."""
+    found = pivot_points(model, joint)
+    if found is None or model.mechanism.joint(joint).jtype.name not in PIVOT_TYPES:
+        return None
+    f = joint_frames(model)[joint]
+    z = f.R_i @ EZ
+    for p in found[1].values():
+        d = p - f.P_i
+        if np.linalg.norm(d - (d @ z) * z) > 1e-9 * max(1.0, float(np.max(np.abs(p)))):
+            return None
+    return {k: _clean(v) for k, v in found[1].items()}
 
 
 def _coupled_now(model: Model) -> dict[str, float]:
@@ -503,6 +572,7 @@ __all__ = [
     "joint_mismatch",
     "model_from_hardpoints",
     "model_to_hardpoints",
+    "pivot_points",
     "rotate_into",
     "rotation_change",
 ]

@@ -20,6 +20,8 @@ from pydantic import BaseModel, ValidationError
 from kinprop.errors import ModelError, Problem
 from kinprop.io.couplings import build_couplings
 from kinprop.io.elements import build_elements, build_vehicle
+from kinprop.io.loads import build_loads
+from kinprop.io.points import attach_references, point_order, point_references
 from kinprop.io.schema import ModelFile
 from kinprop.joints import REGISTRY, joint_type
 from kinprop.model import Body, Design, Joint, Mechanism, Model, as_coordinates
@@ -297,7 +299,7 @@ def _body(name: str, b: Any, file: str, problems: list[Problem]) -> Body:
         rot = euler_to_matrix(p)
     if not b.fixed and (b.position is not None or b.orientation is not None or b.euler_parameters is not None):
         problems.append(Problem(loc, "only fixed bodies take a pose; moving bodies follow from the joints", file))
-    points = tuple((k, tuple(v)) for k, v in b.points.items())
+    points = tuple((k, tuple(v)) for k, v in b.points.items() if not isinstance(v, str))
     return Body(name, b.fixed, tuple(b.position or (0.0, 0.0, 0.0)), tuple(map(tuple, rot.tolist())), points)
 
 
@@ -306,6 +308,10 @@ def build_model(spec: ModelFile, file: str) -> Model:
     problems: list[Problem] = []
     deg = spec.units.angle == "deg"
     bodies = [_body(name, b, file, problems) for name, b in spec.bodies.items()]
+    refs = {}
+    for name, b in spec.bodies.items():
+        refs[name], found = point_references(name, b, file)
+        problems += found
     if not bodies:
         problems.append(Problem("bodies", "no bodies: expected at least one, marked 'fixed: true'", file))
     joints, values, coords = [], {}, {}
@@ -331,9 +337,11 @@ def build_model(spec: ModelFile, file: str) -> Model:
     problems += [Problem(p.location, p.message, file) for p in validate_couplings(tuple(joints), couplings)]
     elements, eproblems = build_elements(spec.elements, {b.name for b in bodies}, "frames", file)
     problems += eproblems
+    loads, lproblems = build_loads(spec.loads, {b.name: [n for n, _ in b.points] for b in bodies}, "frames", file)
+    problems += lproblems
     if problems:
         raise ModelError(problems)
-    mech = Mechanism(tuple(bodies), tuple(joints), spec.name, tuple(spec.inputs), couplings)
+    mech = Mechanism(tuple(bodies), tuple(joints), spec.name, tuple(spec.inputs), couplings, spec.edits)
     try:
         topo = build_topology(mech)
     except ModelError as exc:
@@ -381,7 +389,9 @@ def build_model(spec: ModelFile, file: str) -> Model:
         units["axes"] = spec.units.axes
     if spec.units.force is not None:
         units["force"] = spec.units.force
-    return Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle))
+    model = Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle),
+                  loads)  # fmt: skip
+    return attach_references(model, refs, file, point_order(spec.bodies))
 
 
 def known_joint_types() -> list[str]:

@@ -22,6 +22,11 @@ Vec3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
 Vec4 = Annotated[list[Finite], Field(min_length=4, max_length=4)]
 Mat3 = Annotated[list[Vec3], Field(min_length=3, max_length=3)]
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+#: a named point: coordinates, or a reference to a joint's point (``UBJ``, ``TR.j``;
+#: :mod:`kinprop.model.joint_points`)
+PointValue = Annotated[Vec3 | str, Field(union_mode="left_to_right")]
+#: a wheel body's steering axis by its joints, upper first (``[UBJ, LBJ]``)
+Kingpin = Annotated[list[str], Field(min_length=2, max_length=2)]
 
 #: axis conventions a file may declare (all right-handed; kept as declared, never converted)
 AXES = {
@@ -53,7 +58,9 @@ class BodySpec(Strict):
     position: Vec3 | None = None
     orientation: Mat3 | None = None
     euler_parameters: Vec4 | None = None
-    points: dict[str, Vec3] = Field(default_factory=dict)
+    points: dict[str, PointValue] = Field(default_factory=dict)
+    #: the steering axis by its joints (points ``kingpin_upper``, ``kingpin_lower``)
+    kingpin: Kingpin | None = None
 
 
 class JointSpec(Strict):
@@ -124,6 +131,43 @@ class VehicleSpec(Strict):
     axle: Literal["front", "rear"] = "front"
 
 
+class PointLoadSpec(Strict):
+    """A force and a couple on a body point (:class:`kinprop.model.loads.PointLoad`): ``point`` a
+    named point of the body, or coordinates (frame style: the body's frame; hardpoint style:
+    global at the reference configuration). Force unit ``units.force``, moments force x length."""
+
+    body: str
+    point: str | Vec3
+    force: Vec3 | None = None
+    moment: Vec3 | None = None
+    #: components in the global axes or in the body's axes
+    axes: Literal["global", "body"] = "global"
+
+
+class MassSpec(Strict):
+    """A body's weight (force at 1 g, ``units.force``) at its centre of mass (named point or coordinates)."""
+
+    weight: Annotated[float, Field(ge=0, allow_inf_nan=False)]
+    cm: str | Vec3
+
+
+class LoadCaseSpec(Strict):
+    """One named load case (:class:`kinprop.model.loads.LoadCase`)."""
+
+    forces: list[PointLoadSpec] = Field(default_factory=list)
+    #: contact-patch force of a wheel body, ``[Fx, Fy, Fz]`` in ISO 8855 axes (Fz > 0: vertical load)
+    wheels: dict[str, Vec3] = Field(default_factory=dict)
+    #: gravity in multiples of g (``[0, 0, -1]``: 1 g down in a z-up model); weights from ``masses``
+    gravity: Vec3 | None = None
+
+
+class LoadsSpec(Strict):
+    """The ``loads:`` section: body masses and named load cases (:mod:`kinprop.io.loads`)."""
+
+    masses: dict[str, MassSpec] = Field(default_factory=dict)
+    cases: dict[str, LoadCaseSpec] = Field(default_factory=dict)
+
+
 class ModelFile(Strict):
     kinprop: Literal[1] = 1
     name: str = "mechanism"
@@ -136,9 +180,13 @@ class ModelFile(Strict):
     inputs: list[str] = Field(default_factory=list)
     #: couplings between joint coordinates (one constraint row each)
     couplings: dict[str, CouplingSpec] = Field(default_factory=dict)
+    #: how an edit of a global hardpoint is read (hardpoint files: ``design``)
+    edits: Literal["design", "mechanism"] = "mechanism"
     #: springs and dampers (``s_i``/``s_j`` in the bodies' frames)
     elements: dict[str, ElementSpec] = Field(default_factory=dict)
     vehicle: VehicleSpec | None = None
+    #: applied loads: body masses and named load cases
+    loads: LoadsSpec | None = None
 
 
 class HardpointBodySpec(Strict):
@@ -148,7 +196,9 @@ class HardpointBodySpec(Strict):
     fixed: bool = False
     position: Vec3 | None = None
     orientation: Mat3 | None = None
-    points: dict[str, Vec3] = Field(default_factory=dict)
+    points: dict[str, PointValue] = Field(default_factory=dict)
+    #: the steering axis by its joints (points ``kingpin_upper``, ``kingpin_lower``)
+    kingpin: Kingpin | None = None
 
 
 class HardpointJointSpec(Strict):
@@ -164,6 +214,9 @@ class HardpointJointSpec(Strict):
     point_i: Vec3 | None = None
     point_j: Vec3 | None = None
     length: Positive | None = None
+    #: a revolute to a fixed body by its two pivots (instead of point and axis):
+    #: ``{front: [x, y, z], rear: [x, y, z]}``; the axis runs rear -> front (second -> first)
+    pivots: Annotated[dict[str, Vec3], Field(min_length=2, max_length=2)] | None = None
 
 
 class HardpointFile(Strict):
@@ -175,6 +228,10 @@ class HardpointFile(Strict):
     #: body-frame rule: ``global`` (axes parallel to the global axes at the reference) or
     #: ``joint`` (axes of the body's tree-joint frame, the paper's convention)
     body_frames: Literal["global", "joint"] = "global"
+    #: what an edit of a hardpoint keeps: ``design`` (the design position: the other hardpoints
+    #: stay, link lengths are re-derived; hardpoint tools') or ``mechanism`` (the paper's: the
+    #: lengths stay and the mechanism moves); :mod:`kinprop.propagation.hardpoints`
+    edits: Literal["design", "mechanism"] = "design"
     bodies: dict[str, HardpointBodySpec]
     joints: dict[str, HardpointJointSpec]
     #: driven joints (``JOINT`` or ``JOINT.q[k]``): held unless named in a free set
@@ -184,3 +241,5 @@ class HardpointFile(Strict):
     #: springs and dampers (``point_i``/``point_j`` global at the reference)
     elements: dict[str, ElementSpec] = Field(default_factory=dict)
     vehicle: VehicleSpec | None = None
+    #: applied loads: body masses and named load cases
+    loads: LoadsSpec | None = None

@@ -18,6 +18,8 @@ from kinprop.io.couplings import couplings_to_data
 from kinprop.io.elements import elements_to_data, vehicle_to_data
 from kinprop.io.hardpoints import model_to_hardpoints
 from kinprop.io.loader import parse_text
+from kinprop.io.loads import loads_to_data
+from kinprop.io.points import written_points
 from kinprop.model import Model
 
 
@@ -57,7 +59,9 @@ def model_to_data(model: Model) -> dict[str, Any]:
         if b.fixed:
             spec = {"fixed": True, "position": _floats(b.position), "orientation": _floats(b.orientation)}
         if b.points:
-            spec["points"] = {k: _floats(v) for k, v in b.points}
+            spec["points"] = {
+                k: v if isinstance(v, str) else _floats(v) for k, v in written_points(model, b, False).items()
+            }
         bodies[b.name] = spec
     joints: dict[str, Any] = {}
     for j in mech.joints:
@@ -83,8 +87,10 @@ def model_to_data(model: Model) -> dict[str, Any]:
         "joints": joints,
         **({"inputs": list(mech.inputs)} if mech.inputs else {}),
         **({"couplings": couplings_to_data(model)} if mech.couplings else {}),
+        **({"edits": mech.edits} if mech.edits != "mechanism" else {}),
         **({"elements": elements_to_data(model.elements, "frames")} if model.elements else {}),
         **({"vehicle": vehicle_to_data(model.vehicle)} if model.vehicle is not None else {}),
+        **({"loads": loads_to_data(model.loads, "frames")} if model.loads is not None else {}),
     }
 
 

@@ -19,9 +19,9 @@ from typing import ClassVar
 
 import numpy as np
 
-from kinprop.constraints.basic import BasicConstraint
+from kinprop.constraints.basic import BasicConstraint, Spherical
 from kinprop.jit import kernel
-from kinprop.spatial import Array, eye_into
+from kinprop.spatial import Array, eye_into, matrix_to_euler
 
 
 @kernel
@@ -35,6 +35,22 @@ def no_placement(q: Array, A: Array, d: Array) -> None:
 def no_motion(q: Array, A: Array, d: Array, dd: Array, H: Array) -> None:
     dd[:, :] = 0.0
     H[:, :] = 0.0
+
+
+def angle_about_z(R: Array) -> float:
+    """The rotation angle of ``R`` about z'' (``atan2(R_10, R_00)``), radians."""
+    return float(np.arctan2(R[1, 0], R[0, 0]))
+
+
+def euler_of(R: Array) -> Array:
+    """Euler parameters ``[e0..e3]`` of ``R`` with ``e0 >= 0``."""
+    p = np.asarray(matrix_to_euler(R), dtype=float)
+    return -p if p[0] < 0 else p
+
+
+def distance_of(d: Array) -> float:
+    """``|d''|``: the distance of the two joint origins."""
+    return float(np.linalg.norm(d))
 
 
 @dataclass(frozen=True)
@@ -54,6 +70,11 @@ class JointType:
     has_length: bool = False
     tree: bool = True
     cut: bool = True
+    #: the keys of its hardpoint form (global points and axes; kinprop.io.hardpoints):
+    #: (required, optional); None: the type has no hardpoint form
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = None
+    #: the design fields its cut form uses (those a hardpoint file defines for it as a cut joint)
+    cut_fields: tuple[str, ...] = ()
 
     #: the kernel's code for this type (:mod:`kinprop.joints.dispatch`)
     code: ClassVar[int] = -1
@@ -92,6 +113,14 @@ class JointType:
         type(self).motion_kernel(q, A, d, dd, H)
         return dd, H
 
+    # --- reading a joint back -------------------------------------------------------------------
+    def relative_values(self, R: Array, d: Array) -> dict[str, float | Array]:
+        """The joint's own named values from its relative placement ``R'' = R_i^T R_j``,
+        ``d'' = R_i^T (P_j - P_i)`` (frame i), by this type's convention: a tree joint's equal
+        its coordinates, a cut joint's are what they would be as a tree joint
+        (:mod:`kinprop.propagation.poses`). Angles in radians. None by default."""
+        return {}
+
     # --- cut form ----------------------------------------------------------------------------
     def constraints(self) -> tuple[BasicConstraint, ...]:
         """The basic constraints that replace this joint when it is cut."""
@@ -103,6 +132,12 @@ class JointType:
 
     def default_cut_coordinates(self) -> Array:
         return np.zeros(self.n_cut_coordinates)
+
+    @property
+    def origins_coincide(self) -> bool:
+        """Whether the cut form holds the two joint-frame origins together (a spherical basic
+        constraint among its rows: revolute, universal, spherical, fixed, spherical-point)."""
+        return self.cut and any(isinstance(c, Spherical) for c in self.constraints())
 
     @property
     def n_constraints(self) -> int:

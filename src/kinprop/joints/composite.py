@@ -7,7 +7,7 @@ from typing import ClassVar
 
 from kinprop.constraints.basic import Distance, Dot2
 from kinprop.jit import kernel
-from kinprop.joints.base import JointType
+from kinprop.joints.base import JointType, distance_of, euler_of
 from kinprop.spatial import EX, EY, EZ, euler_A_into, euler_E_into
 
 ST_CODE, FREE_CODE, TD_CODE = 6, 7, 8
@@ -42,12 +42,18 @@ class SphericalTranslational(JointType):
     """
 
     name: str = "spherical-translational"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point", "axis"), ())
+    cut_fields: tuple[str, ...] = ("s_i", "s_j", "C_j")
     description: str = "Euler parameters then translation along the rotated z'' (5 coordinates)"
     n_coordinates: int = 5
     euler_start: int | None = 0
     code: ClassVar[int] = ST_CODE
     placement_kernel = st_placement
     motion_kernel = st_motion
+
+    def relative_values(self, R, d):
+        """``euler`` of the ball and ``displacement`` along the rotated z''."""
+        return {"euler": euler_of(R), "displacement": float(d @ R[:, 2])}
 
     def constraints(self):
         return (Dot2(EX, on="j"), Dot2(EY, on="j"))
@@ -58,9 +64,14 @@ class RevoluteSpherical(JointType):
     """R-S: a link of length l, revolute about z''_i at body i, spherical at body j (eq. 52)."""
 
     name: str = "revolute-spherical"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point_i", "axis", "point_j"), ("length",))
+    cut_fields: tuple[str, ...] = ("s_i", "s_j", "C_i", "length")
     description: str = "link of length l: revolute on body i, ball on body j (cut only)"
     has_length: bool = True
     tree: bool = False
+
+    def relative_values(self, R, d):
+        return {"distance": distance_of(d)}
 
     def constraints(self):
         return (Dot2(EZ), Distance())
@@ -75,11 +86,16 @@ class TranslationalDistance(JointType):
     """
 
     name: str = "translational-distance"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point_i", "axis", "point_j"), ("length",))
+    cut_fields: tuple[str, ...] = ("s_i", "s_j", "C_i", "length")
     description: str = "rack along z''_i (1 own coordinate) and rod of length l (cut only)"
     n_cut_coordinates: int = 1
     has_length: bool = True
     tree: bool = False
     code: ClassVar[int] = TD_CODE
+
+    def relative_values(self, R, d):
+        return {"distance": distance_of(d)}
 
     def constraints(self):
         return (Distance(),)
@@ -118,6 +134,7 @@ class Free(JointType):
     """
 
     name: str = "free"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = ((), ("point",))
     description: str = "translation then Euler parameters (7 coordinates; tree only)"
     n_coordinates: int = 7
     euler_start: int | None = 3
@@ -125,6 +142,9 @@ class Free(JointType):
     code: ClassVar[int] = FREE_CODE
     placement_kernel = free_placement
     motion_kernel = free_motion
+
+    def relative_values(self, R, d):
+        return {"euler": euler_of(R), "translation_i": d.copy()}
 
 
 __all__ = ["Free", "RevoluteSpherical", "SphericalTranslational", "TranslationalDistance"]

@@ -7,7 +7,7 @@ from typing import ClassVar
 
 from kinprop.constraints.basic import Dot1, Dot2
 from kinprop.jit import kernel
-from kinprop.joints.base import JointType
+from kinprop.joints.base import JointType, angle_about_z
 from kinprop.spatial import EX, EY, EZ, rot_z_into
 
 CODE = 2
@@ -30,12 +30,17 @@ def motion(q, A, d, dd, H):
 @dataclass(frozen=True)
 class Cylindrical(JointType):
     name: str = "cylindrical"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point", "axis"), ())
+    cut_fields: tuple[str, ...] = ("s_i", "s_j", "C_i", "C_j")
     description: str = "rotation about and translation along z'' (2 coordinates)"
     n_coordinates: int = 2
     angle_indices: tuple[int, ...] = (0,)
     code: ClassVar[int] = CODE
     placement_kernel = placement
     motion_kernel = motion
+
+    def relative_values(self, R, d):
+        return {"angle": angle_about_z(R), "displacement": float(d[2])}
 
     def constraints(self):
         return (Dot1(EX, EZ), Dot1(EY, EZ), Dot2(EX), Dot2(EY))

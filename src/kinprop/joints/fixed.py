@@ -15,6 +15,8 @@ CODE = 5
 @dataclass(frozen=True)
 class Fixed(JointType):
     name: str = "fixed"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point",), ())
+    cut_fields: tuple[str, ...] = ("s_i", "s_j", "C_i", "C_j")
     description: str = "rigid connection (0 coordinates)"
     code: ClassVar[int] = CODE
 

@@ -29,11 +29,16 @@ def motion(q, A, d, dd, H):
 @dataclass(frozen=True)
 class Prismatic(JointType):
     name: str = "translational"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point", "axis"), ())
+    cut_fields: tuple[str, ...] = ("s_i", "s_j", "C_i", "C_j")
     description: str = "translation along z'' (1 coordinate)"
     n_coordinates: int = 1
     code: ClassVar[int] = CODE
     placement_kernel = placement
     motion_kernel = motion
+
+    def relative_values(self, R, d):
+        return {"displacement": float(d[2])}
 
     def constraints(self):
         # axes parallel, the offset along z''_i only, no twist about the axis

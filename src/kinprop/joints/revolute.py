@@ -7,7 +7,7 @@ from typing import ClassVar
 
 from kinprop.constraints.basic import Dot1, Spherical
 from kinprop.jit import kernel
-from kinprop.joints.base import JointType
+from kinprop.joints.base import JointType, angle_about_z
 from kinprop.spatial import EX, EY, EZ, rot_z_into
 
 CODE = 0
@@ -29,12 +29,17 @@ def motion(q, A, d, dd, H):
 @dataclass(frozen=True)
 class Revolute(JointType):
     name: str = "revolute"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point", "axis"), ())
+    cut_fields: tuple[str, ...] = ("s_i", "s_j", "C_i", "C_j")
     description: str = "rotation about z'' (1 coordinate)"
     n_coordinates: int = 1
     angle_indices: tuple[int, ...] = (0,)
     code: ClassVar[int] = CODE
     placement_kernel = placement
     motion_kernel = motion
+
+    def relative_values(self, R, d):
+        return {"angle": angle_about_z(R)}
 
     def constraints(self):
         return (Spherical(), Dot1(EX, EZ), Dot1(EY, EZ))

@@ -7,7 +7,7 @@ from typing import ClassVar
 
 from kinprop.constraints.basic import Spherical as SphericalConstraint
 from kinprop.jit import kernel
-from kinprop.joints.base import JointType
+from kinprop.joints.base import JointType, euler_of
 from kinprop.spatial import euler_A_into, euler_E_into
 
 CODE = 4
@@ -28,12 +28,17 @@ def motion(q, A, d, dd, H):
 @dataclass(frozen=True)
 class Spherical(JointType):
     name: str = "spherical"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point",), ())
+    cut_fields: tuple[str, ...] = ("s_i", "s_j")
     description: str = "three rotations as Euler parameters [e0, e1, e2, e3] (4 coordinates)"
     n_coordinates: int = 4
     euler_start: int | None = 0
     code: ClassVar[int] = CODE
     placement_kernel = placement
     motion_kernel = motion
+
+    def relative_values(self, R, d):
+        return {"euler": euler_of(R)}
 
     def constraints(self):
         return (SphericalConstraint(),)

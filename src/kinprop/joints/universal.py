@@ -40,12 +40,18 @@ def motion(q, A, d, dd, H):
 @dataclass(frozen=True)
 class Universal(JointType):
     name: str = "universal"
+    hardpoint_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = (("point", "axis_i", "axis_j"), ())
+    cut_fields: tuple[str, ...] = ("s_i", "s_j", "C_i", "C_j")
     description: str = "rotations about z''_i then the rotated y'' (2 coordinates)"
     n_coordinates: int = 2
     angle_indices: tuple[int, ...] = (0, 1)
     code: ClassVar[int] = CODE
     placement_kernel = placement
     motion_kernel = motion
+
+    def relative_values(self, R, d):
+        """``R'' = Rz(q0) Ry(q1)``: ``angle_1 = atan2(-R''_01, R''_11)``, ``angle_2 = atan2(-R''_20, R''_22)``."""
+        return {"angle_1": float(np.arctan2(-R[0, 1], R[1, 1])), "angle_2": float(np.arctan2(-R[2, 0], R[2, 2]))}
 
     def constraints(self):
         return (Spherical(), Dot1(EZ, EY))

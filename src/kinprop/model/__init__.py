@@ -3,6 +3,7 @@
 from kinprop.constraints.coupling import N_COEF
 from kinprop.model.design import GROUPS, Address, Coordinates, Design, as_coordinates, parse_address
 from kinprop.model.elements import Element, Vehicle
+from kinprop.model.loads import LoadCase, Loads, Mass, PointLoad
 from kinprop.model.mechanism import DESIGN_FIELDS, Body, Coupling, Joint, Mechanism
 from kinprop.model.model import Model
 
@@ -17,8 +18,12 @@ __all__ = [
     "Design",
     "Element",
     "Joint",
+    "LoadCase",
+    "Loads",
+    "Mass",
     "Mechanism",
     "Model",
+    "PointLoad",
     "Vehicle",
     "as_coordinates",
     "parse_address",

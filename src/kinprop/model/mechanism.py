@@ -14,6 +14,8 @@ from kinprop.spatial import Array
 VECTOR_FIELDS = ("s_i", "s_j")
 ROTATION_FIELDS = ("C_i", "C_j")
 DESIGN_FIELDS = ("s_i", "s_j", "C_i", "C_j", "length")
+#: readings of a hardpoint edit (:attr:`Mechanism.edits`)
+EDITS = ("design", "mechanism")
 
 
 @dataclass(frozen=True)
@@ -26,6 +28,19 @@ class Body:
     orientation: tuple[tuple[float, ...], ...] = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
     #: named points in the body frame (e.g. wheel centre), for outputs
     points: tuple[tuple[str, tuple[float, float, float]], ...] = ()
+    #: named points that are a joint's point: ``(name, joint, side, declared)`` with ``side``
+    #: ``"i"`` or ``"j"``; such a point is evaluated as that joint's frame origin on that side
+    #: (``P = r + A s'``), so it follows every edit of the joint. ``declared``: written in the
+    #: file as a reference (``UBJ``, ``TR.j``, ``kingpin: [...]``) rather than found to coincide
+    #: at load time. Its entry in ``points`` holds its body-frame position at load.
+    joint_points: tuple[tuple[str, str, str, bool], ...] = ()
+
+    def joint_point(self, name: str) -> tuple[str, str] | None:
+        """``(joint, side)`` a named point refers to, or None for a plain body-fixed point."""
+        for n, joint, side, _ in self.joint_points:
+            if n == name:
+                return joint, side
+        return None
 
     @property
     def r(self) -> Array:
@@ -88,6 +103,11 @@ class Mechanism:
     inputs: tuple[str, ...] = ()
     #: couplings between joint coordinates (one constraint row each)
     couplings: tuple[Coupling, ...] = ()
+    #: what an edit of a global hardpoint keeps (:mod:`kinprop.propagation.hardpoints`):
+    #: ``"mechanism"`` (the paper's: every length and body-frame vector not edited, so the
+    #: mechanism moves) or ``"design"`` (hardpoint tools': the design position, so every other
+    #: hardpoint stays and the lengths of the links ending at the edited point are re-derived)
+    edits: str = "mechanism"
 
     _bodies: dict[str, Body] = field(init=False, repr=False, compare=False, hash=False)
     _joints: dict[str, Joint] = field(init=False, repr=False, compare=False, hash=False)
@@ -95,6 +115,8 @@ class Mechanism:
     def __post_init__(self) -> None:
         problems = validate_structure(self.bodies, self.joints, self.inputs)
         problems += validate_couplings(self.joints, self.couplings)
+        if self.edits not in EDITS:
+            problems.append(Problem("edits", f"expected one of {', '.join(EDITS)}, found {self.edits!r}"))
         if problems:
             raise ModelError(problems)
         object.__setattr__(self, "_bodies", {b.name: b for b in self.bodies})

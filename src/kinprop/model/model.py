@@ -7,6 +7,7 @@ from dataclasses import dataclass, field, replace
 
 from kinprop.model.design import Design, as_coordinates
 from kinprop.model.elements import Element, Vehicle
+from kinprop.model.loads import Loads
 from kinprop.model.mechanism import Mechanism
 from kinprop.spatial import Array
 
@@ -25,6 +26,8 @@ class Model:
     elements: tuple[Element, ...] = ()
     #: vehicle parameters of a suspension model (``vehicle:``), or None
     vehicle: Vehicle | None = None
+    #: applied loads: body weights and named load cases (``loads:``, kinprop.model.loads), or None
+    loads: Loads | None = None
 
     def element(self, name: str) -> Element:
         for e in self.elements:

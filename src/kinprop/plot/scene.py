@@ -27,9 +27,6 @@ from kinprop.analysis.points import snapshot
 from kinprop.model import Model
 from kinprop.spatial import Array
 
-#: joint points that should coincide when assembled (their joint frames' origins)
-_COINCIDENT = {"revolute", "universal", "spherical", "fixed", "spherical-point"}
-
 
 @dataclass(frozen=True)
 class Segment:
@@ -150,7 +147,7 @@ def build_scene(model: Model) -> Scene:
             markers += [Marker(j.name, "spherical", f.P_i), Marker(j.name, "spherical", f.P_j)]
         else:
             markers.append(Marker(j.name, "other", f.P_i))
-        if j.name not in tree and kind in _COINCIDENT:
+        if j.name not in tree and j.jtype.origins_coincide:  # their gap shows the loop not closed
             segments.append(Segment("gap", j.name, f.P_i, f.P_j))
 
     points: dict[str, Array] = {}

@@ -50,7 +50,8 @@ class PointJacobians:
         )
         self.engine = engine
         self.points = tuple(points)
-        self.probe = compile_engine(Mechanism(mech.bodies, mech.joints + probes, mech.name, couplings=mech.couplings))
+        probed = Mechanism(mech.bodies, mech.joints + probes, mech.name, couplings=mech.couplings, edits=mech.edits)
+        self.probe = compile_engine(probed)
         if self.probe.column_labels != engine.column_labels:  # pragma: no cover - probes add no columns
             raise AddressError("internal: probe joints changed the variable layout")
         blocks = {b.joint: b.rows for b in self.probe.row_blocks}

@@ -16,7 +16,8 @@ coordinates and a cut joint gets the value it would have as a tree joint:
   spherical-point): ``distance`` ``|P_j - P_i|``; dot-1: ``angle`` between z''_i and z''_j.
 
 Every joint also carries ``rotation_vector`` and ``translation`` (frame i). Angles in
-radians, lengths in the model's length unit.
+radians, lengths in the model's length unit. Each type's values are its own
+(:meth:`kinprop.joints.base.JointType.relative_values`).
 """
 
 from __future__ import annotations
@@ -24,7 +25,8 @@ from __future__ import annotations
 import numpy as np
 
 from kinprop.engine import Engine, State
-from kinprop.spatial import Array, log_so3, matrix_to_euler
+from kinprop.joints import joint_type
+from kinprop.spatial import Array, log_so3
 
 
 def body_poses(engine: Engine, state: State) -> dict[str, dict[str, Array]]:
@@ -33,31 +35,11 @@ def body_poses(engine: Engine, state: State) -> dict[str, dict[str, Array]]:
     return {b: {"R": A[k].copy(), "t": r[k].copy()} for k, b in enumerate(engine.mechanism.body_names)}
 
 
-def _euler(Rr: Array) -> Array:
-    p = np.asarray(matrix_to_euler(Rr), dtype=float)
-    return -p if p[0] < 0 else p
-
-
 def joint_value(jtype: str, Rr: Array, d: Array) -> dict[str, float | Array]:
-    """The named relative values of a joint type from ``R''`` and ``d''`` (module docstring)."""
-    out: dict[str, float | Array] = {}
-    if jtype in ("revolute", "cylindrical"):
-        out["angle"] = float(np.arctan2(Rr[1, 0], Rr[0, 0]))
-    if jtype in ("translational", "cylindrical"):
-        out["displacement"] = float(d[2])
-    if jtype == "universal":
-        out["angle_1"] = float(np.arctan2(-Rr[0, 1], Rr[1, 1]))
-        out["angle_2"] = float(np.arctan2(-Rr[2, 0], Rr[2, 2]))
-    if jtype in ("spherical", "spherical-translational", "free"):
-        out["euler"] = _euler(Rr)
-    if jtype == "spherical-translational":
-        out["displacement"] = float(d @ Rr[:, 2])
-    if jtype == "free":
-        out["translation_i"] = d.copy()
-    if jtype in ("distance", "revolute-spherical", "translational-distance", "spherical-point"):
-        out["distance"] = float(np.linalg.norm(d))
-    if jtype == "dot-1":
-        out["angle"] = float(np.arccos(np.clip(Rr[2, 2], -1.0, 1.0)))
+    """The named relative values of a joint type from ``R''`` and ``d''`` (the type's own
+    :meth:`~kinprop.joints.base.JointType.relative_values`), with ``rotation_vector`` and
+    ``translation``."""
+    out = joint_type(jtype).relative_values(Rr, d)
     out["rotation_vector"] = np.asarray(log_so3(Rr), dtype=float)
     out["translation"] = d.copy()
     return out

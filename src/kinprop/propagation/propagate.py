@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -25,7 +25,7 @@ from kinprop.engine import Engine, Solution, compile
 from kinprop.errors import SingularityWarning
 from kinprop.model.model import Model
 from kinprop.propagation.conditioning import SINGULAR_RTOL, conditioning
-from kinprop.propagation.hardpoints import free_addresses, free_weights, resolve_changes
+from kinprop.propagation.hardpoints import free_addresses, free_weights, pivot_updates, resolve_changes
 from kinprop.propagation.poses import body_poses, joint_values
 from kinprop.propagation.summary import summary_html, summary_text
 from kinprop.propagation.units import (
@@ -210,7 +210,11 @@ def propagate(
     eng = engine_for(model, engine)
     sol = solve_changes(eng, model, changes, free, tol=tol, max_iter=max_iter, weights=weights, branch=branch,
                         units=units, method=method)  # fmt: skip
-    return propagation_of(eng, model, sol, free)
+    prop = propagation_of(eng, model, sol, free)
+    moved_pivots = pivot_updates(eng, changes or {})
+    if moved_pivots:  # the result carries its moved pivots (fixed-body points, not variables)
+        prop = replace(prop, after=with_points(prop.after, moved_pivots))
+    return prop
 
 
 def solve_changes(
@@ -243,6 +247,20 @@ def solve_changes(
         branch=branch,
         method=method,
     )
+
+
+def with_points(model: Model, points: Mapping[str, Mapping[str, Array]]) -> Model:
+    """``model`` with named points (body frame) of some bodies replaced or added."""
+    mech = model.mechanism
+    bodies = []
+    for b in mech.bodies:
+        new = points.get(b.name)
+        if new:
+            pts = dict(b.points)
+            pts.update({k: tuple(float(x) for x in v) for k, v in new.items()})
+            b = replace(b, points=tuple(pts.items()))
+        bodies.append(b)
+    return replace(model, mechanism=replace(mech, bodies=tuple(bodies)))
 
 
 def assemble(

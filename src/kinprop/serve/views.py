@@ -103,7 +103,7 @@ def _coordinate_components(model: Model) -> list[dict[str, Any]]:
                     "value": value,
                     "curve": [value - half, value + half],
                     "slider": [value - wide, value + wide],
-                    "slider_ok": q.size == 1 and jt.n_coordinates == 1 and jt.name in ("revolute", "translational"),
+                    "slider_ok": q.size == 1 and jt.n_coordinates == 1,  # one coordinate: revolute, translational
                     "size": q.size,
                 }
             )

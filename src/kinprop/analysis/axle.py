@@ -1,0 +1,108 @@
+"""Axle metrics of a left and a right wheel (ISO 8855 axes; Milliken & Milliken, *Race Car
+Vehicle Dynamics*, ch. 17 and 19; Dixon, *Suspension Geometry and Computation*, ch. 6).
+
+* ``roll_centre`` — the **axle roll centre**: in the front view (the y-z plane), the line from
+  each wheel's contact point through its front-view instant centre (FVIC,
+  :mod:`kinprop.analysis.firstorder`); the two lines meet at the roll centre. Returned: its
+  ``y``, ``z`` and its height above the ground line through the two contact points (length,
+  positive above the ground). At a symmetric state it lies on ``y = 0`` at the corners' own
+  ``roll_centre_height``; in heave or roll it migrates.
+* ``roll_gradients`` — **roll steer** and **roll camber** (deg/deg): the wheels' toe and camber
+  per degree of body roll. Body roll ``phi`` (positive: rolling about +x, the left side up) is
+  applied as the opposite wheel travels it causes with the body held, ``travel = -y_C sin(phi)``
+  for a wheel centre at ``y_C``, each held by one more constraint row (:mod:`kinprop.analysis.
+  drives`), the rack held; central over ``+-angle``.
+* ``ackermann`` — **Ackermann percentage** at a rack travel: ``100 (delta_i - delta_o) /
+  (delta_i - delta_o,ack)`` with the road-wheel steer angles ``delta = -toe`` change of the
+  inner and outer wheel and ``cot(delta_o,ack) - cot(delta_i) = t / L`` (track ``t`` between
+  the wheel centres, wheelbase ``L``): 100 % is true Ackermann, 0 % parallel steer.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from kinprop.analysis.context import OutputContext, WheelSpec
+from kinprop.analysis.drives import outputs_at
+from kinprop.analysis.metrics import _radius, contact_point
+from kinprop.analysis.outputs import evaluate_outputs
+from kinprop.errors import AddressError
+from kinprop.model import Model
+
+
+def _contact(model: Model, wheel: str) -> np.ndarray:
+    ctx = OutputContext.of(model)
+    radius = _radius(model, wheel)
+    if radius is None:
+        raise AddressError(f"wheel {wheel!r}: the axle metrics need its contact_patch point")
+    centre = ctx.body_point(wheel, "wheel_centre")
+    return contact_point(centre, ctx.body_point(wheel, "spin_axis") - centre, radius)
+
+
+def roll_centre(model: Model, left: str, right: str, travel_inputs: Mapping[str, str]) -> dict[str, float]:
+    """Axle roll centre (module docstring): ``{"y", "z", "height"}``; ``travel_inputs`` names
+    each wheel's bump input (``{"upright_L": "LCA_L", ...}``)."""
+    wheels = {w: WheelSpec(travel_input=travel_inputs[w]) for w in (left, right)}
+    v = evaluate_outputs(
+        model, [f"metric:{w}.{m}" for w in (left, right) for m in ("fvic_y", "fvic_z")], wheels=wheels, units="solver"
+    )
+    lines = []
+    for w in (left, right):
+        E = _contact(model, w)
+        F = np.array([v[f"metric:{w}.fvic_y"], v[f"metric:{w}.fvic_z"]])
+        lines.append((E[1:], F - E[1:]))
+    (p, d), (q, e) = lines
+    A = np.column_stack([d, -e])
+    s, _ = np.linalg.solve(A, q - p)
+    rc = p + s * d
+    (yl, zl), (yr, zr) = lines[0][0], lines[1][0]
+    ground = zl + (zr - zl) * (rc[0] - yl) / (yr - yl)
+    return {"y": float(rc[0]), "z": float(rc[1]), "height": float(rc[1] - ground)}
+
+
+def roll_gradients(
+    model: Model, left: str, right: str, *, held: Mapping[str, float] | None = None, angle: float = 1.0
+) -> dict[str, float]:
+    """Roll steer and roll camber (deg/deg) of both wheels (module docstring): keys
+    ``roll_steer:WHEEL``, ``roll_camber:WHEEL``. ``held``: coordinates held (``{"RACK.q": 0}``,
+    model units); ``angle``: the roll half-range in degrees."""
+    ctx = OutputContext.of(model)
+    y = {w: float(ctx.body_point(w, "wheel_centre")[1]) for w in (left, right)}
+    hold = "".join(f"&{k}={v}" for k, v in (held or {}).items())
+    out: dict[str, float] = {}
+    names = []
+    for sign in (1, -1):
+        phi = math.radians(sign * angle)
+        cond = "&".join(f"metric:{w}.wheel_centre_dz={-y[w] * math.sin(phi)!r}" for w in (left, right)) + hold
+        names += [f"metric:{w}.{m}@{cond}" for w in (left, right) for m in ("toe", "camber")]
+    v = outputs_at(model, names)
+    half = len(names) // 2
+    for k, name in enumerate(names[:half]):
+        w, m = name.split("@")[0][len("metric:") :].split(".")
+        key = "roll_steer" if m == "toe" else "roll_camber"
+        out[f"{key}:{w}"] = (v[name] - v[names[half + k]]) / (2 * angle)
+    return out
+
+
+def ackermann(model: Model, inner: str, outer: str, rack: str, travel: float, wheelbase: float) -> float:
+    """Ackermann percentage (module docstring) at rack travel ``travel`` (the rack coordinate
+    ``rack``, e.g. ``RACK.q``; the turn's ``inner`` and ``outer`` wheel bodies)."""
+    names = [f"metric:{w}.toe@{rack}={t!r}" for t in (0.0, travel) for w in (inner, outer)]
+    v = outputs_at(model, names)
+    side = {w: 1.0 if OutputContext.of(model).body_point(w, "wheel_centre")[1] > 0 else -1.0 for w in (inner, outer)}
+
+    def steer(w: str) -> float:  # road-wheel angle, positive to the left, from the toe change
+        toe0, toe1 = v[f"metric:{w}.toe@{rack}={0.0!r}"], v[f"metric:{w}.toe@{rack}={travel!r}"]
+        return math.radians(-side[w] * (toe1 - toe0))
+
+    d_i, d_o = abs(steer(inner)), abs(steer(outer))
+    ctx = OutputContext.of(model)
+    track = abs(float(ctx.body_point(inner, "wheel_centre")[1] - ctx.body_point(outer, "wheel_centre")[1]))
+    d_ack = math.atan(1.0 / (1.0 / math.tan(d_i) + track / wheelbase))
+    return 100.0 * (d_i - d_o) / (d_i - d_ack)
+
+
+__all__ = ["ackermann", "roll_centre", "roll_gradients"]

@@ -1,0 +1,147 @@
+"""Axles (issue 20, item 4): a corner mirrored into an axle with a rack; left and right equal
+with mirrored signs, the axle roll centre, roll steer against two travel solves of the
+independent solver, Ackermann of a planar trapezoid against its closed form."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import yaml
+from analysis_helpers import EXAMPLES
+from dw_oracle import HMMWV, solve
+from scipy.optimize import brentq
+
+from kinprop import propagate
+from kinprop.analysis.axle import ackermann, roll_centre, roll_gradients
+from kinprop.analysis.metrics import suspension_metrics
+from kinprop.analysis.outputs import evaluate_outputs
+from kinprop.io import model_from_data
+from kinprop.io.axle import mirror_corner
+
+pytestmark = pytest.mark.filterwarnings("ignore::kinprop.SingularityWarning")
+
+
+@pytest.fixture(scope="module")
+def axle():
+    data = yaml.safe_load((EXAMPLES / "double_wishbone_hardpoints.yaml").read_text())
+    return model_from_data(mirror_corner(data, tie_rods=("TR",)), "axle.yaml")
+
+
+def test_mirrored_wheels_are_equal_with_mirrored_signs(axle):
+    assert axle.mechanism.inputs == ("LCA_L", "LCA_R", "RACK")
+    after = propagate(axle, {"LCA_L.q": 4.0, "LCA_R.q": -4.0}, ["q"], tol=1e-9).after
+    left, right = suspension_metrics(after, "upright_L"), suspension_metrics(after, "upright_R")
+    for name, value in left.items():
+        mirrored = -right[name] if name == "wheel_centre_dy" else right[name]
+        assert value == pytest.approx(mirrored, abs=1e-9), name
+    assert left["wheel_centre_dz"] == pytest.approx(solve(HMMWV, 4.0)["wheel_centre_dz"], abs=1e-7)
+    assert left["camber"] == pytest.approx(solve(HMMWV, 4.0)["camber"], abs=1e-7)
+
+
+def test_axle_roll_centre_at_design_is_the_corners(axle):
+    rc = roll_centre(axle, "upright_L", "upright_R", {"upright_L": "LCA_L", "upright_R": "LCA_R"})
+    corner = evaluate_outputs(axle, ["metric:upright_L.roll_centre_height"], units="solver")
+    assert rc["y"] == pytest.approx(0.0, abs=1e-6)
+    assert rc["height"] == pytest.approx(corner["metric:upright_L.roll_centre_height"], abs=1e-6)
+
+
+def _theta_at(travel: float) -> float:
+    return brentq(lambda t: solve(HMMWV, t)["wheel_centre_dz"] - travel, -8.0, 8.0, xtol=1e-13)
+
+
+def test_roll_steer_against_two_travel_solves_of_the_independent_solver(axle):
+    """Roll steer and camber: body roll +-phi as opposite wheel travels; the oracle's toe and
+    camber at the two travels of the left wheel, differenced centrally."""
+    phi = 1.0
+    got = roll_gradients(axle, "upright_L", "upright_R", held={"RACK.q": 0.0}, angle=phi)
+    y = HMMWV["WC"][1]
+    up, down = (solve(HMMWV, _theta_at(-y * math.sin(math.radians(s * phi)))) for s in (1, -1))
+    assert got["roll_steer:upright_L"] == pytest.approx((up["toe"] - down["toe"]) / (2 * phi), abs=1e-8)
+    assert got["roll_camber:upright_L"] == pytest.approx((up["camber"] - down["camber"]) / (2 * phi), abs=1e-8)
+    assert got["roll_steer:upright_R"] == pytest.approx(-got["roll_steer:upright_L"], abs=1e-9)
+
+
+def _trapezoid(track=1500.0, arm=150.0, beta_deg=15.0, rack_half=500.0):
+    """A planar trapezoidal steering linkage (all points in z = 0): kingpins vertical at
+    y = +-track/2, steering arms behind them turned inboard by beta, a rack along y at x = -arm cos beta."""
+    beta = math.radians(beta_deg)
+    bodies = {"chassis": {"fixed": True}, "rack": {}}
+    joints = {"RACK": {"type": "translational", "bodies": ["chassis", "rack"], "point": [0, 0, 0], "axis": [0, 1, 0]}}
+    for sfx, s in (("_L", 1.0), ("_R", -1.0)):
+        k = np.array([0.0, s * track / 2, 0.0])
+        tip = k + arm * np.array([-math.cos(beta), -s * math.sin(beta), 0.0])
+        bodies[f"knuckle{sfx}"] = {
+            "points": {
+                "wheel_centre": k.tolist(),
+                "spin_axis": (k + [0, s, 0]).tolist(),
+            }
+        }
+        joints[f"K{sfx}"] = {
+            "type": "revolute",
+            "bodies": ["chassis", f"knuckle{sfx}"],
+            "point": k.tolist(),
+            "axis": [0, 0, 1],
+        }
+        inner = np.array([tip[0], s * rack_half, 0.0])
+        joints[f"TR{sfx}"] = {
+            "type": "distance",
+            "bodies": ["rack", f"knuckle{sfx}"],
+            "point_i": inner.tolist(),
+            "point_j": tip.tolist(),
+            "cut": True,
+        }
+    units = {"length": "mm", "angle": "deg", "axes": "ISO8855"}
+    data = {"kinprop": 1, "name": "trapezoid", "style": "hardpoints", "units": units,
+            "bodies": bodies, "joints": joints, "inputs": ["RACK"]}  # fmt: skip
+    return model_from_data(data, "trapezoid.yaml"), (track, arm, beta, rack_half)
+
+
+def _closed_steer(s: float, side: float, track, arm, beta, rack_half) -> float:
+    """Road-wheel angle (rad, positive to the left) of one knuckle at rack travel s: the arm tip
+    on the circle of radius arm about the kingpin meets the circle of the tie rod about its
+    inner end (circle-circle intersection, the branch of the design position)."""
+    k = np.array([0.0, side * track / 2])
+    tip0 = k + arm * np.array([-math.cos(beta), -side * math.sin(beta)])
+    inner0 = np.array([tip0[0], side * rack_half])
+    rod = np.linalg.norm(tip0 - inner0)
+    inner = inner0 + [0.0, s]
+    d = inner - k
+    dist = np.linalg.norm(d)
+    a = (arm**2 - rod**2 + dist**2) / (2 * dist)
+    h = math.sqrt(arm**2 - a**2)
+    base = k + a * d / dist
+    perp = np.array([-d[1], d[0]]) / dist
+    cands = [base + h * perp, base - h * perp]
+    tip = min(cands, key=lambda p: np.linalg.norm(p - tip0))
+    ang = lambda v: math.atan2(v[1], v[0])  # noqa: E731
+    return ang(tip - k) - ang(tip0 - k)
+
+
+def test_ackermann_of_a_planar_trapezoid_against_its_closed_form():
+    model, (track, arm, beta, rack_half) = _trapezoid()
+    wheelbase = 2800.0
+    s = 30.0  # rack to the left pulls the arms (behind the kingpins) left: a right turn, the right wheel inner
+    got = ackermann(model, "knuckle_R", "knuckle_L", "RACK.q", s, wheelbase)
+    d_i = abs(_closed_steer(s, -1.0, track, arm, beta, rack_half))
+    d_o = abs(_closed_steer(s, 1.0, track, arm, beta, rack_half))
+    assert d_i > d_o > 0
+    d_ack = math.atan(1 / (1 / math.tan(d_i) + track / wheelbase))
+    assert got == pytest.approx(100 * (d_i - d_o) / (d_i - d_ack), abs=1e-6)
+    assert 0 < got < 200
+
+
+@pytest.mark.parametrize(
+    ("file", "arm"),
+    [("hmmwv_front_axle.yaml", "LCA"), ("mcpherson_axle.yaml", "LCA"), ("multilink_rear_axle.yaml", "UA")],
+)
+def test_shipped_axles_are_mirror_images(file, arm):
+    model = model_from_data(yaml.safe_load((EXAMPLES / file).read_text()), file)
+    theta = 3.0
+    after = propagate(model, {f"{arm}_L.q": theta, f"{arm}_R.q": -theta}, ["q"], tol=1e-11).after
+    left, right = suspension_metrics(after, "upright_L"), suspension_metrics(after, "upright_R")
+    assert left["wheel_centre_dz"] > 0
+    for name, value in left.items():
+        mirrored = -right[name] if name == "wheel_centre_dy" else right[name]
+        assert value == pytest.approx(mirrored, abs=1e-9), name

@@ -1,0 +1,53 @@
+"""Wheel travel as the drive and outputs at a drive position (issue 20, items 5-6): uniform
+travel steps by one more constraint row, against the independent double-wishbone solver and
+central differences of two travel solves."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from analysis_helpers import EXAMPLES
+from dw_oracle import HMMWV, solve
+
+from kinprop import load_model
+from kinprop.analysis.drives import outputs_at, travel_sweep
+from kinprop.errors import AddressError
+
+pytestmark = pytest.mark.filterwarnings("ignore::kinprop.SingularityWarning")
+FILE = EXAMPLES / "double_wishbone_hardpoints.yaml"
+
+
+def test_uniform_travel_steps_against_the_independent_solver():
+    model = load_model(FILE)
+    travels = np.linspace(-40.0, 40.0, 5)
+    got = travel_sweep(model, travels, ["wheel_centre_dz", "camber", "toe", "caster", "LCA.q"])
+    np.testing.assert_allclose(got["wheel_centre_dz"], travels, atol=1e-8)
+    for k, theta in enumerate(got["LCA.q"]):  # degrees (the model's angle unit)
+        truth = solve(HMMWV, float(theta))
+        assert truth["wheel_centre_dz"] == pytest.approx(travels[k], abs=1e-7)
+        for name in ("camber", "toe", "caster"):
+            assert got[name][k] == pytest.approx(truth[name], abs=1e-7), (name, travels[k])
+
+
+def test_slope_over_travel_is_the_difference_of_two_travel_solves():
+    model = load_model(FILE)
+    v = outputs_at(model, ["slope:toe@travel=-30..30", "toe@travel=-30", "toe@travel=30", "camber@travel=30mm"])
+    assert v["slope:toe@travel=-30..30"] == pytest.approx((v["toe@travel=30"] - v["toe@travel=-30"]) / 60, abs=1e-12)
+    lo, hi = (solve(HMMWV, _theta(model, t)) for t in (-30.0, 30.0))
+    assert v["slope:toe@travel=-30..30"] == pytest.approx((hi["toe"] - lo["toe"]) / 60, abs=1e-9)
+    assert v["camber@travel=30mm"] == pytest.approx(hi["camber"], abs=1e-7)
+
+
+def _theta(model, travel: float) -> float:
+    return outputs_at(model, [f"LCA.q@travel={travel}"])[f"LCA.q@travel={travel}"]
+
+
+def test_plain_names_pass_through_and_bad_names_are_refused():
+    model = load_model(FILE)
+    v = outputs_at(model, ["kpi", "camber@travel=0"])
+    assert v["kpi"] == pytest.approx(math.degrees(math.atan2(70.993, 333.6036)), abs=1e-9)
+    assert v["camber@travel=0"] == pytest.approx(0.0, abs=1e-9)
+    with pytest.raises(AddressError, match="no =VALUE"):
+        outputs_at(model, ["camber=2@travel=3"])

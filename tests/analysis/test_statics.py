@@ -1,0 +1,373 @@
+"""Loads of assembled models (kp.statics) against closed forms and independent balances:
+the four-bar's input torque for an output torque and for a coupler-point force (the loop's
+velocity ratios by hand, Norton, *Design of Machinery*, sec. 6.7, and virtual work), the offset
+slider-crank's input torque for a piston force, a redundant (all-revolute) planar four-bar
+whose out-of-plane reactions are named undetermined while the in-plane ones match, and the
+3D double wishbone's free-body balance of every moving body written here from the reported
+reactions, element and applied forces."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+import kinprop as kp
+from kinprop.analysis.metrics import contact_point
+from kinprop.model.loads import LoadCase, PointLoad
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def _assembled(source: str | Path | dict, tmp_path: Path | None = None) -> kp.Model:
+    if isinstance(source, dict):
+        assert tmp_path is not None
+        f = tmp_path / "model.yaml"
+        f.write_text(yaml.safe_dump(source))
+        source = f
+    return kp.assemble(kp.load_model(source), tol=1e-13).after
+
+
+def _angle(A: np.ndarray) -> float:
+    return math.atan2(A[1, 0], A[0, 0])
+
+
+def _fourbar_ratios(model: kp.Model) -> tuple[float, float, dict[str, np.ndarray]]:
+    """``(w3/w2, w4/w2)`` of the four-bar by hand: a e^{i t2} + b e^{i t3} - c e^{i t4} - d = 0
+    differentiated (Norton eq. 6.18); the angles checked against the loop closure first."""
+    kin = kp.compile(model).kinematics(model.design, model.coordinates)
+    t2, t3, t4 = (_angle(kin.A[b]) for b in ("crank", "coupler", "rocker"))
+    a, b, c, d = 0.15, 0.40, 0.30, 0.40
+    loop = a * np.exp(1j * t2) + b * np.exp(1j * t3) - c * np.exp(1j * t4) - d
+    assert abs(loop) < 1e-12
+    w3 = a * math.sin(t4 - t2) / (b * math.sin(t3 - t4))
+    w4 = a * math.sin(t2 - t3) / (c * math.sin(t4 - t3))
+    return w3, w4, {"t2": t2, "t3": t3, "t4": t4}
+
+
+@pytest.mark.parametrize("crank_deg", [60.0, 150.0, 250.0])
+def test_fourbar_input_torque_closed_form(crank_deg: float) -> None:
+    base = _assembled(EXAMPLES / "fourbar.yaml")
+    model = kp.propagate(base, {"O2.q": crank_deg}, free=["q"], tol=1e-13).after
+    w3, w4, ang = _fourbar_ratios(model)
+    T4 = 12.5  # N m on the rocker, counter-clockwise
+    s = kp.statics(model, PointLoad("rocker", (0.0, 0.0, 0.0), moment=(0.0, 0.0, T4)))
+    assert s.ok
+    assert s.efforts["O2.q"] == pytest.approx(-T4 * w4, rel=1e-10)
+    # a force at the coupler point P (0.2, 0.1 in the coupler frame): v_P = v_A + w3 x (P - A)
+    F = np.array([30.0, -45.0, 0.0])
+    s = kp.statics(model, PointLoad("coupler", "P", force=tuple(F)))
+    t2, t3 = ang["t2"], ang["t3"]
+    vA = 0.15 * np.array([-math.sin(t2), math.cos(t2), 0.0])
+    rel = np.array([0.2 * math.cos(t3) - 0.1 * math.sin(t3), 0.2 * math.sin(t3) + 0.1 * math.cos(t3), 0.0])
+    vP = vA + np.cross([0.0, 0.0, w3], rel)
+    assert s.efforts["O2.q"] == pytest.approx(-F @ vP, rel=1e-10)
+    # the rocker is a two-force member under the coupler load: its pin force at O4 along O4-B
+    B = s.reactions["B"].points[1]
+    F4 = s.reactions["O4"].force[1]
+    u = (B - s.reactions["O4"].points[1]) / np.linalg.norm(B - s.reactions["O4"].points[1])
+    assert abs(F4[0] * u[1] - F4[1] * u[0]) < 1e-10 * np.linalg.norm(F4)
+
+
+@pytest.mark.parametrize("crank_deg", [30.0, 100.0, 200.0, 300.0])
+def test_offset_slider_crank_input_torque_closed_form(crank_deg: float) -> None:
+    base = _assembled(EXAMPLES / "slider_crank_offset.yaml")
+    model = kp.propagate(base, {"O2.q": crank_deg}, free=["q"], tol=1e-13).after
+    t = math.radians(crank_deg)
+    a, b, e = 0.10, 0.35, 0.05
+    root = math.sqrt(b**2 - (e - a * math.sin(t)) ** 2)
+    dx = -a * math.sin(t) + (e - a * math.sin(t)) * a * math.cos(t) / root
+    Fx = -800.0  # gas force on the piston, towards the crank
+    s = kp.statics(model, PointLoad("slider", (0.0, 0.0, 0.0), force=(Fx, 0.0, 0.0)), inputs=["O2"])
+    assert s.efforts["O2.q"] == pytest.approx(-Fx * dx, rel=1e-10)
+    # the connecting rod is a two-force member: the pin force at A on the rod is along A-B
+    A_, B_ = s.reactions["A"].points[1], s.reactions["B"].points[0]
+    FA = s.reactions["A"].force[1]
+    u = (B_ - A_) / np.linalg.norm(B_ - A_)
+    assert np.linalg.norm(np.cross(FA, u)) < 1e-10 * np.linalg.norm(FA)
+
+
+def test_redundant_planar_fourbar_names_undetermined_components(tmp_path: Path) -> None:
+    """All four joints revolute: three redundant rows (the out-of-plane reactions). The
+    in-plane forces and the torques about the pins are determined (and equal the
+    non-redundant model's); the out-of-plane force and the moments about in-plane axes are
+    named undetermined and reported NaN, never a least-squares split."""
+    data = yaml.safe_load((EXAMPLES / "fourbar.yaml").read_text())
+    data["joints"]["B"] = {"type": "revolute", "bodies": ["coupler", "rocker"], "cut": True,
+                           "s_i": [0.40, 0, 0], "s_j": [0.30, 0, 0]}  # fmt: skip
+    redundant = _assembled(data, tmp_path)
+    plain = _assembled(EXAMPLES / "fourbar.yaml")
+    load = PointLoad("coupler", "P", force=(30.0, -45.0, 0.0), moment=(0.0, 0.0, 2.0))
+    s, ref = kp.statics(redundant, load), kp.statics(plain, load)
+    assert s.ok and s.undetermined
+    assert "self-stress" in s.message
+    assert s.efforts["O2.q"] == pytest.approx(ref.efforts["O2.q"], rel=1e-10)
+    comps = {u.split(".")[1] for u in s.undetermined}
+    assert comps <= {"fz", "mx", "my"}
+    for j in ("O2", "A", "B", "O4"):
+        r, r0 = s.reactions[j], ref.reactions[j]
+        inplane = [0, 1, 5]  # fx, fy, mz in the joint frame (z'' along global z)
+        assert not np.isnan(r.local[:, inplane]).any(), j
+        assert np.allclose(r.local[:, inplane], r0.local[:, inplane], atol=1e-9 * 100), j
+        for c in r.undetermined:
+            assert np.isnan(r.local[1, ("fx", "fy", "fz", "mx", "my", "mz").index(c)])
+    assert any(u.endswith(".fz") for u in s.undetermined)
+
+
+def _dw_balance(model: kp.Model, s) -> None:
+    """Every moving body: the reported joint forces and moments on it, the element forces
+    (recomputed here from the element's ends and reported force) and the applied loads sum to
+    zero; every joint's reactions are equal and opposite."""
+    kin = kp.compile(model).kinematics(model.design, model.coordinates)
+    scale = max(np.linalg.norm(r.force[1]) for r in s.reactions.values())
+    L = 1000.0
+    for body in ("lca", "uca", "upright"):
+        F, M = np.zeros(3), np.zeros(3)  # about the global origin
+        for j in model.mechanism.joints:
+            for side, b in enumerate((j.body_i, j.body_j)):
+                if b == body:
+                    r = s.reactions[j.name]
+                    F += r.force[side]
+                    M += r.moment[side] + np.cross(r.points[side], r.force[side])
+        for e in model.elements:
+            Pi = kin.r[e.body_i] + kin.A[e.body_i] @ np.array(e.s_i)
+            Pj = kin.r[e.body_j] + kin.A[e.body_j] @ np.array(e.s_j)
+            u = (Pj - Pi) / np.linalg.norm(Pj - Pi)
+            f = s.element_forces[e.name]
+            if e.body_j == body:
+                F += f * u
+                M += np.cross(Pj, f * u)
+            if e.body_i == body:
+                F -= f * u
+                M -= np.cross(Pi, f * u)
+        applied = s.state.applied[s.engine.body_index[body]]
+        # the applied wrench minus the elements' (recomputed above): the loads alone
+        W_el = np.zeros(6)
+        for e in model.elements:
+            Pi = kin.r[e.body_i] + kin.A[e.body_i] @ np.array(e.s_i)
+            Pj = kin.r[e.body_j] + kin.A[e.body_j] @ np.array(e.s_j)
+            fu = s.element_forces[e.name] * (Pj - Pi) / np.linalg.norm(Pj - Pi)
+            if e.body_j == body:
+                W_el += np.concatenate([fu, np.cross(Pj, fu)])
+            if e.body_i == body:
+                W_el -= np.concatenate([fu, np.cross(Pi, fu)])
+        F += applied[:3] - W_el[:3]
+        M += applied[3:] - W_el[3:]
+        assert np.linalg.norm(F) < 1e-9 * scale, body
+        assert np.linalg.norm(M) < 1e-9 * scale * L, body
+    for name, r in s.reactions.items():
+        assert np.allclose(r.force[0], -r.force[1], atol=1e-9 * scale), name
+        if np.allclose(r.points[0], r.points[1], atol=1e-9):
+            assert np.allclose(r.moment[0], -r.moment[1], atol=1e-9 * scale * L), name
+
+
+def test_double_wishbone_free_bodies_balance() -> None:
+    model = _assembled(EXAMPLES / "double_wishbone.yaml")
+    Fw = np.array([-4000.0, 2500.0, 9000.0])  # braking, cornering, vertical (ISO 8855, N)
+    s = kp.statics(model, LoadCase("combined", wheels={"upright": tuple(Fw)}))
+    assert s.ok and not s.undetermined
+    # the applied load is the wheel force at the contact point (recomputed here)
+    kin = kp.compile(model).kinematics(model.design, model.coordinates)
+    pts = dict(model.mechanism.body("upright").points)
+    centre = kin.r["upright"] + kin.A["upright"] @ np.array(pts["wheel_centre"])
+    axis = kin.A["upright"] @ (np.array(pts["spin_axis"]) - np.array(pts["wheel_centre"]))
+    radius = np.linalg.norm(np.array(pts["contact_patch"]) - np.array(pts["wheel_centre"]))
+    Pc = contact_point(centre, axis, radius)
+    b = s.engine.body_index["upright"]
+    assert np.allclose(s.state.applied[b, :3], Fw)
+    assert np.allclose(s.state.applied[b, 3:], np.cross(Pc, Fw), rtol=1e-12, atol=1e-6)
+    _dw_balance(model, s)
+    # joints: ball joints carry no moment; the upper arm's revolute no moment about its axis,
+    # the lower arm's the input effort; the tie rod a force along its line
+    scale = np.linalg.norm(Fw) * 1000.0
+    for j in ("LBJ", "UBJ"):
+        assert np.linalg.norm(s.reactions[j].moment[1]) < 1e-9 * scale
+    fr = kin.frames
+    assert abs(s.reactions["UCA"].moment[1] @ fr["UCA"].R_i[:, 2]) < 1e-9 * scale
+    assert s.reactions["LCA"].moment[1] @ fr["LCA"].R_i[:, 2] == pytest.approx(s.efforts["LCA.q"], rel=1e-10)
+    tr = s.reactions["TR"]
+    u = (tr.points[1] - tr.points[0]) / np.linalg.norm(tr.points[1] - tr.points[0])
+    assert np.linalg.norm(np.cross(tr.force[1], u)) < 1e-9 * np.linalg.norm(Fw)
+    assert s.member_forces["TR"] == pytest.approx(-tr.force[1] @ u, rel=1e-12)
+    # the spring's force from its stiffness and free length at the recomputed length
+    e = model.element("spring")
+    Pi = kin.r[e.body_i] + kin.A[e.body_i] @ np.array(e.s_i)
+    Pj = kin.r[e.body_j] + kin.A[e.body_j] @ np.array(e.s_j)
+    assert s.element_forces["spring"] == pytest.approx(e.stiffness * (e.free_length - np.linalg.norm(Pj - Pi)))
+    assert s.element_forces["shock"] == 0.0
+
+
+def test_tie_rod_tension_sign() -> None:
+    """Tension positive: a positive member force pulls body j towards body i (a longitudinal
+    wheel force ahead of the steering axis loads the tie rod)."""
+    model = _assembled(EXAMPLES / "double_wishbone.yaml")
+    s = kp.statics(model, LoadCase("steer", wheels={"upright": (2000.0, 0.0, 0.0)}))
+    tr = s.reactions["TR"]
+    towards_i = tr.points[0] - tr.points[1]
+    assert np.sign(tr.force[1] @ towards_i) == np.sign(s.member_forces["TR"])
+    assert abs(s.member_forces["TR"]) > 1.0
+
+
+def test_loads_as_outputs() -> None:
+    """``reaction:``, ``force:``, ``effort:`` outputs (``@CASE``) are kp.statics' numbers, with
+    their units; unknown joints, components, elements and cases are refused by name."""
+    from kinprop.analysis.outputs import evaluate_outputs
+    from kinprop.analysis.units import unit_of
+    from kinprop.errors import AddressError
+
+    base = _assembled(EXAMPLES / "double_wishbone.yaml")
+    model = kp.propagate(base, {"LCA.q": 4.0}, free=["q"], tol=1e-13).after
+    names = ["reaction:UBJ.fz@bump_3g", "reaction:LCA.local.mz@bump_3g", "force:TR@braking_1g", "force:spring",
+             "effort:LCA@cornering_1g"]  # fmt: skip
+    got = evaluate_outputs(model, names)
+    s = {c: kp.statics(model, c) for c in ("bump_3g", "braking_1g", "cornering_1g")}
+    tol = 1e-10 * 3e4  # round-off of the largest reaction (the engines' scalings differ)
+    assert got["reaction:UBJ.fz@bump_3g"] == pytest.approx(s["bump_3g"].reactions["UBJ"].force[1][2], abs=tol)
+    assert got["reaction:LCA.local.mz@bump_3g"] == pytest.approx(s["bump_3g"].efforts["LCA.q"], rel=1e-9)
+    assert got["force:TR@braking_1g"] == pytest.approx(s["braking_1g"].member_forces["TR"], abs=tol)
+    assert got["force:spring"] == pytest.approx(s["bump_3g"].element_forces["spring"], rel=1e-12)
+    assert got["effort:LCA@cornering_1g"] == pytest.approx(s["cornering_1g"].efforts["LCA.q"], rel=1e-10)
+    assert [unit_of(model, n) for n in names] == ["N", "N mm", "N", "N", "N mm"]
+    for bad in ("reaction:NOPE.fz", "reaction:UBJ.fw", "force:nope", "effort:UCA", "force:TR@nope"):
+        with pytest.raises((AddressError, KeyError)):
+            evaluate_outputs(model, [bad])
+
+
+LEVER = {
+    "kinprop": 1,
+    "name": "spring-loaded lever",
+    "units": {"length": "m", "angle": "deg", "force": "N"},
+    "bodies": {
+        "ground": {"fixed": True, "points": {"anchor": [0.3, 0.5, 0.0]}},
+        "lever": {"points": {"tip": [0.8, 0, 0]}},
+    },
+    "joints": {"O": {"type": "revolute", "bodies": ["ground", "lever"], "s_i": [0, 0, 0], "q": [10.0]}},
+    "inputs": ["O"],
+    "elements": {"spring": {"type": "spring", "bodies": ["ground", "lever"], "s_i": [0.3, 0.5, 0.0],
+                            "s_j": [0.6, 0.0, 0.0], "stiffness": 2000.0, "free_length": 0.45}},
+}  # fmt: skip
+
+
+def _lever_tau(theta: float, Fy: float) -> float:
+    """Effort holding the lever at ``theta`` (rad) against the spring and a force Fy at the tip, by hand."""
+    c, s = math.cos(theta), math.sin(theta)
+    anchor, Pj, dPj = np.array([0.3, 0.5]), 0.6 * np.array([c, s]), 0.6 * np.array([-s, c])
+    d = Pj - anchor
+    L = np.linalg.norm(d)
+    f = 2000.0 * (0.45 - L)  # pushing apart
+    power = f * (d / L) @ dPj + Fy * 0.8 * c  # spring on the lever + tip force, per unit rate
+    return -power
+
+
+def test_equilibrium_of_a_spring_loaded_lever(tmp_path: Path) -> None:
+    """The equilibrium angle against a root of the hand-written effort (scipy's brentq)."""
+    import scipy.optimize
+
+    from kinprop.analysis.statics import equilibrium
+
+    model = _assembled(LEVER, tmp_path)
+    Fy = -150.0
+    e = equilibrium(model, PointLoad("lever", "tip", force=(0.0, Fy, 0.0)))
+    assert e.converged, e.message
+    theta = float(e.model.coordinates["O"][0])  # a Model keeps coordinates in radians
+    truth = scipy.optimize.brentq(lambda t: _lever_tau(t, Fy), theta - 0.3, theta + 0.3, xtol=1e-15)
+    assert theta == pytest.approx(truth, abs=1e-10)
+    assert abs(e.statics.efforts["O.q"]) < 1e-8
+    # the stiffness is the derivative of the hand-written effort
+    h = 1e-6
+    assert e.stiffness[0, 0] == pytest.approx(
+        (_lever_tau(truth + h, Fy) - _lever_tau(truth - h, Fy)) / (2 * h), rel=1e-6
+    )
+    assert e.stable == (e.stiffness[0, 0] > 0)
+
+
+def test_double_wishbone_equilibrium_and_wheel_rate() -> None:
+    """Ride height under an 11 kN corner load: no effort left at the input, every body in
+    balance; the wheel rate against central differences of the wheel-centre force that holds
+    the springs (from statics at re-solved poses) over the wheel-centre travel."""
+    from kinprop.analysis.statics import equilibrium, wheel_rate
+
+    model = _assembled(EXAMPLES / "double_wishbone.yaml")
+    e = equilibrium(model, LoadCase("corner", wheels={"upright": (0.0, 0.0, 11000.0)}))
+    assert e.converged and e.stable, e.message
+    assert abs(e.statics.efforts["LCA.q"]) < 1e-9 * 11000.0 * 1000.0
+    _dw_balance(e.model, e.statics)
+
+    def force_and_height(m: kp.Model) -> tuple[float, float]:
+        springs = kp.statics(m).efforts["LCA.q"]
+        with_unit = kp.statics(m, PointLoad("upright", "wheel_centre", force=(0.0, 0.0, 1.0))).efforts["LCA.q"]
+        unit = with_unit - springs  # loads superpose: the effort of 1 N up at the wheel centre
+        kin = kp.compile(m).kinematics(m.design, m.coordinates)
+        z = (kin.r["upright"] + kin.A["upright"] @ np.array(dict(m.mechanism.body("upright").points)["wheel_centre"]))[
+            2
+        ]
+        return -springs / unit, float(z)  # the vertical force at the wheel centre that replaces the input
+
+    for m in (model, e.model):
+        q0 = math.degrees(float(m.coordinates["LCA"][0]))  # propagate takes the model's unit
+
+        def at(t: float, m: kp.Model = m, q0: float = q0) -> tuple[float, float]:
+            return force_and_height(kp.propagate(m, {"LCA.q": q0 + t}, free=["q"], tol=1e-14).after)
+
+        h = 1e-3  # degrees
+        (f1, z1), (f0, z0) = at(h), at(-h)
+        (g1, y1), (g0, y0) = at(h / 2), at(-h / 2)
+        truth = (4 * (g1 - g0) / (y1 - y0) - (f1 - f0) / (z1 - z0)) / 3
+        assert wheel_rate(m) == pytest.approx(truth, rel=1e-6)
+
+
+def test_mcpherson_rods_carry_axial_forces() -> None:
+    """The McPherson strut's lower arm (revolute-spherical link) and tie rod (translational-
+    distance): each rod's tension from its distance row equals minus the reported force on
+    the wheel along the rod (the ball end transmits no moment, the link only its axial force
+    in its plane), and the wheel body balances."""
+    model = _assembled(EXAMPLES / "mcpherson.yaml")
+    F = np.array([-2000.0, 3000.0, 8000.0])
+    s = kp.statics(model, PointLoad("wheel", (0.0, 0.0, 0.0), force=tuple(F)), inputs=["TD", "ST.q[4]"])
+    assert s.ok and not s.undetermined
+    kin = kp.compile(model).kinematics(model.design, model.coordinates)
+    fr = kin.frames
+    for name in ("RS", "TD"):
+        r = s.reactions[name]
+        Pi = fr[name].P_i + (fr[name].R_i[:, 2] * model.coordinates["TD"][0] if name == "TD" else 0.0)
+        u = (r.points[1] - Pi) / np.linalg.norm(r.points[1] - Pi)
+        assert s.member_forces[name] == pytest.approx(-r.force[1] @ u, rel=1e-9, abs=1e-9 * 8000)
+        assert np.linalg.norm(r.moment[1]) < 1e-9 * 8000
+    total = np.concatenate([F, np.zeros(3)])
+    for j in model.mechanism.joints:
+        r = s.reactions[j.name]
+        total += np.concatenate([r.force[1], r.moment[1] + np.cross(r.points[1], r.force[1])])
+    # the load acts at the wheel frame's origin: its moment about the global origin
+    b = s.engine.body_index["wheel"]
+    total[3:] += np.cross(s.state.r[b], F)
+    assert np.allclose(total, 0.0, atol=1e-8 * 8000)
+
+
+def test_wheel_forces_in_an_sae_model(tmp_path: Path) -> None:
+    """The double wishbone turned upside down about x (SAE J670 axes: y right, z down) under
+    the same ISO 8855 wheel force: the same input effort and member forces, every reaction
+    the ISO one turned by Rx(180 deg)."""
+    data = yaml.safe_load((EXAMPLES / "double_wishbone.yaml").read_text())
+    data["units"]["axes"] = "SAE"
+    data["bodies"]["chassis"]["orientation"] = [[1, 0, 0], [0, -1, 0], [0, 0, -1]]
+    data.pop("loads")
+    sae = _assembled(data, tmp_path)
+    iso = _assembled(EXAMPLES / "double_wishbone.yaml")
+    case = LoadCase("c", wheels={"upright": (-4000.0, 2500.0, 9000.0)})
+    a, b = kp.statics(iso, case), kp.statics(sae, case)
+    flip = np.array([1.0, -1.0, -1.0])
+    assert b.efforts["LCA.q"] == pytest.approx(a.efforts["LCA.q"], rel=1e-9)
+    assert b.member_forces["TR"] == pytest.approx(a.member_forces["TR"], rel=1e-9)
+    for j in a.reactions:
+        assert np.allclose(b.reactions[j].force[1], flip * a.reactions[j].force[1], rtol=1e-9, atol=1e-6)
+        assert np.allclose(b.reactions[j].moment[1], flip * a.reactions[j].moment[1], rtol=1e-9, atol=1e-3)
+
+
+def test_an_unassembled_model_has_no_loads() -> None:
+    raw = kp.load_model(EXAMPLES / "slider_crank.yaml")  # estimates: J12 open by more than 1e-4
+    s = kp.statics(raw, PointLoad("slider", (0.0, 0.0, 0.0), force=(100.0, 0.0, 0.0)))
+    assert s.status == "not_assembled" and "assemble" in s.message
+    assert all(np.isnan(r.force[1]).all() for r in s.reactions.values())

@@ -1,0 +1,68 @@
+"""``kinprop loads``: the JSON and CSV carry kp.statics' numbers in the model's units; an
+unknown load case is invalid input (exit 2, one located line); loads the inputs cannot hold
+exit 1."""
+
+from __future__ import annotations
+
+import csv
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import kinprop as kp
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from cli_run import one_error_line, run_kinprop
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def test_json_and_csv_match_the_library(tmp_path: Path) -> None:
+    out = tmp_path / "loads.csv"
+    p = run_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--load-case", "braking_1g", "--json", "--csv", out)
+    assert p.returncode == 0, p.stderr
+    data = json.loads(p.stdout)
+    model = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
+    s = kp.statics(model, "braking_1g")
+    assert data["units"] == {"force": "N", "moment": "N mm", "length": "mm"}
+    assert data["efforts"]["LCA.q"] == pytest.approx(s.efforts["LCA.q"], rel=1e-9)
+    assert np.allclose(data["reactions"]["UBJ"]["force"][1], s.reactions["UBJ"].force[1], rtol=1e-9)
+    assert data["member_forces"]["TR"] == pytest.approx(s.member_forces["TR"], rel=1e-9)
+    rows = {r["output"]: r for r in csv.DictReader(out.open())}
+    assert float(rows["reaction:UBJ.fz"]["value"]) == pytest.approx(s.value("reaction:UBJ.fz"), rel=1e-9)
+    assert rows["reaction:LCA.mx"]["unit"] == "N mm" and rows["force:spring"]["unit"] == "N"
+    assert rows["effort:LCA.q"]["unit"] == "N mm"
+
+
+def test_bad_case_and_unheld_loads() -> None:
+    line = one_error_line(run_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--load-case", "nope"))
+    assert "'nope'" in line and "bump_3g" in line
+    # the offset slider-crank declares no input: a piston force moves it
+    p = run_kinprop("loads", EXAMPLES / "slider_crank_offset.yaml", "--force", "slider.origin=100,0,0")
+    assert p.returncode == 2  # no named point 'origin' on the slider
+    p = run_kinprop("loads", EXAMPLES / "slider_crank_offset.yaml", "--moment", "crank=0,0,5")
+    assert p.returncode == 1, p.stderr
+    assert "unbalanced" in p.stderr
+    p = run_kinprop("loads", EXAMPLES / "slider_crank_offset.yaml", "--moment", "crank=0,0,5", "--input", "O2")
+    assert p.returncode == 0, p.stderr
+    assert "effort O2.q: -5 force m" in p.stdout
+
+
+def test_equilibrium_option() -> None:
+    dw = EXAMPLES / "double_wishbone.yaml"
+    p = run_kinprop("loads", dw, "--wheel", "upright=0,0,11000", "--equilibrium", "--json")
+    assert p.returncode == 0, p.stderr
+    data = json.loads(p.stdout)
+    eq = data["equilibrium"]
+    assert eq["stable"] and eq["steps"] >= 1
+    assert abs(data["efforts"]["LCA.q"]) < 1e-9 * 11000 * 1000
+    model = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
+    at = kp.propagate(model, {"LCA.q": eq["coordinates"]["LCA.q"]}, free=["q"], tol=1e-13).after
+    s = kp.statics(at, kp.LoadCase("w", wheels={"upright": (0.0, 0.0, 11000.0)}))
+    assert abs(s.efforts["LCA.q"]) < 1e-6 * 11000 * 1000  # the printed angle is the balanced pose
+    from kinprop.analysis.statics import wheel_rate
+
+    assert eq["wheel_rate"] == pytest.approx(wheel_rate(at), rel=1e-8)
