@@ -337,7 +337,7 @@ class Engine:
             raise ValueError("the reference model has another mechanism than the engine")
         new = object.__new__(Engine)
         new.__dict__.update(self.__dict__)
-        for key in ("col_scale", "row_scale", "_reference_assembled", "unit", "si_scale"):
+        for key in ("col_scale", "row_scale", "_reference_assembled", "unit", "si_scale", "_unit_metric"):
             new.__dict__.pop(key, None)
         if new.unit != self.unit:  # the plans hold the rows' SI scale
             new._plans = {}
@@ -404,8 +404,13 @@ class Engine:
         """Per-free-column weights ``w_k / si_k^2`` of the step's metric ``sum (si_k dx_k)^2 / w_k``
         (:attr:`si_scale`: changes measured in metres and radians, so that a model in mm and in m
         take the same step) from the user's ``{address or group: w}``; None: all ones."""
-        full = self.metric_weights(weights)
+        full = self.metric_weights(weights) if weights else self._unit_metric
         return None if full is None else full[free]
+
+    @cached_property
+    def _unit_metric(self) -> Array | None:
+        """:meth:`metric_weights` without user weights (None for a metre model), computed once."""
+        return self.metric_weights(None)
 
     def metric_weights(self, weights: Mapping[str, float] | None = None) -> Array | None:
         """:meth:`weights_for` over every layout column (None: all ones, a metre model unweighted)."""
