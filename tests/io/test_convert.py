@@ -25,7 +25,7 @@ def run(*args):
 
 def test_frames_to_hardpoints_to_frames(tmp_path):
     asm = tmp_path / "assembled.yaml"
-    assert run("assemble", EXAMPLES / "slider_crank.yaml", "-o", asm, "--json").exit_code == 0
+    assert run("assemble", EXAMPLES / "slider_crank.yaml", "-o", asm, "--json", "--method", "paper").exit_code == 0
     r = run("convert", asm, "--to", "hardpoints", "-o", tmp_path / "hp.yaml")
     assert r.exit_code == 0, r.output
     assert r.stderr == ""  # assembled: no warning

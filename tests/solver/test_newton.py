@@ -223,7 +223,7 @@ def test_kernels_compile_without_reference_counting():
     if kernel.keywords.get("_nrt", True):
         pytest.skip("this numba has no _nrt option: kernels are plain njit functions")
     for f in (kernels.evaluate, kernels.forward_kinematics, kernels.retract, newton.newton_step, newton.solve,
-              newton.follow):  # fmt: skip
+              newton.follow, newton.displacement, newton.flipped, newton.rigid_signs, newton.optimality):  # fmt: skip
         assert f.targetoptions.get("_nrt") is False, f.__name__
 
 

@@ -26,6 +26,12 @@ def check_tol(tol: float, option: str = "--tol") -> None:
         raise AddressError(f"{option} {tol!r}: expected a positive finite number (e.g. 1e-10)")
 
 
+def check_method(method: str) -> None:
+    """``--method``: ``least-change`` or ``paper`` (``kinprop.engine.METHODS``)."""
+    if method not in ("least-change", "paper"):
+        raise AddressError(f"--method {method!r}: expected least-change or paper")
+
+
 def check_int(option: str, value: int, low: int, high: int) -> None:
     """``low <= value <= high``."""
     if not low <= value <= high:

@@ -74,6 +74,7 @@ def run_propagation(
     continuation: bool | None,
     output: Path | None,
     as_json: bool,
+    method: str = "least-change",
 ) -> Propagation:
     """:func:`solve_propagation` for the CLI: returns the propagation to report. When
     continuation cannot assemble the change either, prints the diagnosis (with ``--json``:
@@ -94,6 +95,7 @@ def run_propagation(
             weights=weights,
             continuation=continuation,
             on_fallback=say_fallback,
+            method=method,
         )
     if res is None:
         return prop

@@ -23,6 +23,7 @@ from kinprop.cli.app import (
 from kinprop.cli.checks import (
     MAX_ITER,
     check_int,
+    check_method,
     check_outputs,
     check_set_not_free,
     check_suffix,
@@ -41,6 +42,15 @@ from kinprop.propagation.hardpoints import free_addresses, free_weights, is_glob
 
 Tol = Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL (the paper used 1e-3)")]
 MaxIter = Annotated[int, typer.Option("--max-iter", help="maximum Newton iterations")]
+Method = Annotated[
+    str,
+    typer.Option(
+        "--method",
+        help="with freedom left: least-change (the assembly closest to the start, in metres and radians, scaled "
+        "by --weight) or paper (the end point of the paper's generalized-inverse iteration; with --tol 1e-3 "
+        "its tables)",
+    ),
+]
 Output = Annotated[Path | None, typer.Option("-o", "--output", help="write the resulting model (full precision)")]
 Json = Annotated[bool, typer.Option("--json", help="print one JSON object instead of tables")]
 Csv = Annotated[
@@ -151,12 +161,15 @@ def assemble(
     as_json: Json = False,
     csv: Csv = None,
     plot: Plot = None,
+    method: Method = "least-change",
 ) -> None:
-    """Solve for the joint coordinates from the model's estimates."""
+    """Solve for the joint coordinates from the model's estimates (with freedom left: the
+    assembly closest to them)."""
     check_report_options(model, output, csv, plot, tol, max_iter)
+    check_method(method)
     m = load_model_cli(model)
     with shown_warnings():
-        prop = propagate(m, {}, tuple(free or ["q"]), tol=tol, max_iter=max_iter)
+        prop = propagate(m, {}, tuple(free or ["q"]), tol=tol, max_iter=max_iter, method=method)
     report(prop, f"assemble {model}", output, as_json, csv, plot, source=model)
 
 
@@ -189,10 +202,12 @@ def propagate_cmd(
         typer.Option("--target", help="OUTPUT[@COND]=VALUE[UNIT], e.g. metric:camber@travel=50mm=-1.5deg"),
     ] = None,
     quiet: Annotated[bool, typer.Option("-q", "--quiet", help="print only the outcome line (no table)")] = False,
+    method: Method = "least-change",
 ) -> None:
     """Change design variables and re-assemble, moving only the free variables; with
     --target, find the smallest change of the --free design variables meeting the targets."""
     check_report_options(model, output, csv, plot, tol, max_iter)
+    check_method(method)
     given = parse_assignments("--set", set_)
     check_set_not_free(given, free)
     weights = parse_weights(weight)
@@ -220,5 +235,6 @@ def propagate_cmd(
         continuation=continuation,
         output=output,
         as_json=as_json,
+        method=method,
     )
     report(prop, f"propagate {model}", output, as_json, csv, plot, source=model, quiet=quiet)

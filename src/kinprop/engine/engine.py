@@ -51,6 +51,12 @@ KAPPA, JUMP_ATOL, TRUST, MIN_STEP, MAX_SUBSTEPS = 0.5, 1e-9, 0.35, 1e-6, 200
 #: at most this many Newton iterations per solve; a solve asked for tol <= POLISH_TOL takes one
 #: more step after converging (kept when it lowers the residual: results to round-off)
 MAX_ITER, POLISH_TOL = 10_000, 1e-8
+#: floor of the optimality residual's tolerance (SI: metres, radians): its round-off
+OPT_FLOOR = 1e-12
+#: what a solve returns when the free set leaves freedom (docs/analysis/weights.md):
+#: ``least-change`` the assembly closest to the start in the SI metric (the default), ``paper``
+#: the end point of the paper's generalized-inverse iteration (Zou et al. 1997, eq. 5.2-5.3)
+METHODS = ("least-change", "paper")
 _FIELD_SIDE = {"s_i": 0, "s_j": 1, "C_i": 0, "C_j": 1}
 
 
@@ -150,21 +156,32 @@ def notes(status: Status, flags: int, substeps: int) -> list[str]:
                    "solution, so it may be another assembly branch than the estimates suggest")  # fmt: skip
     if status is Status.CONVERGED and flags & newton.SUBDIVIDED:
         why = " (a full step left the start's branch)" if flags & (newton.JUMPED | newton.SIGN_FLIP) else ""
+        if flags & newton.FLIPPED:
+            why = " (a full step turned a cut joint onto a pose the joint cannot take)"
         out.append(f"the change was followed in {substeps} sub-steps to stay on the start's branch{why}")
     return out
 
 
 def message(status: Status, iterations: int, residual: float, tol: float, requested_tol: float, fraction: float = 1.0,
-            substeps: int = 1) -> str:  # fmt: skip
+            substeps: int = 1, flags: int = 0, optimality: float = 0.0) -> str:  # fmt: skip
     """The one message table of :class:`Status` (every solve, batch row and sweep step says its
-    outcome with it). ``residual`` is the scaled ``||Phi||`` (:attr:`Engine.row_scale`: metres)."""
+    outcome with it). ``residual`` is the scaled ``||Phi||`` (:attr:`Engine.row_scale`: metres);
+    ``optimality`` the optimality residual (SI; docs/analysis/weights.md), shown when not 0."""
     bound = (
         f"{tol:.3g} (round-off floor at this model's length scale; tol {requested_tol:g})"
         if tol > requested_tol
         else f"{tol:g}"
     )
     if status is Status.CONVERGED:
-        return f"converged in {iterations} iterations: ||Phi|| = {residual:.3g} < {bound}"
+        opt = f", optimality {optimality:.3g}" if optimality else ""
+        return f"converged in {iterations} iterations: ||Phi|| = {residual:.3g} < {bound}{opt}"
+    if flags & newton.LEAST_CHANGE_FAILED and not flags & newton.FLIPPED:
+        return (f"assembled (||Phi|| = {residual:.3g}) but the closest assembly to the start was not reached in "
+                f"{iterations} iterations (optimality {optimality:.3g}); method='paper' returns the iteration's own "
+                "end point")  # fmt: skip
+    if status is Status.INFEASIBLE and flags & newton.FLIPPED and fraction == 0.0:
+        return ("the solve converged onto a root with a cut joint turned (its axes reversed): a pose the joint "
+                "itself cannot take; better estimates, or the default branch following")  # fmt: skip
     if status is Status.NO_FREE:
         return "no free variables: nothing can move to satisfy the constraints"
     if status is Status.DIVERGED:
@@ -199,6 +216,12 @@ class Solution:
     fraction: float = 1.0
     substeps: int = 1
     flags: int = 0
+    #: optimality residual (SI: metres, radians; weighted): the length of the least-change
+    #: correction at the returned point, 0 at the assembly closest to the start (and when the
+    #: free set leaves no freedom); see docs/analysis/weights.md
+    optimality: float = 0.0
+    #: ``least-change`` or ``paper`` (:data:`METHODS`)
+    method: str = "least-change"
 
     @property
     def subdivided(self) -> bool:
@@ -217,7 +240,7 @@ class Solution:
     @property
     def message(self) -> str:
         return message(self.status, self.iterations, self.residual, self.tol, self.requested_tol, self.fraction,
-                       self.substeps)  # fmt: skip
+                       self.substeps, self.flags, self.optimality)  # fmt: skip
 
     @cached_property
     def design(self) -> Design:
@@ -232,7 +255,8 @@ class Solution:
         return self.engine.get(self.state, address)
 
     def __repr__(self) -> str:
-        return f"<Solution {self.status.value}: {self.iterations} iterations, ||Phi|| = {self.residual:.3g}>"
+        return (f"<Solution {self.status.value}: {self.iterations} iterations, ||Phi|| = {self.residual:.3g}, "
+                f"optimality {self.optimality:.3g}>")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -249,6 +273,8 @@ class BatchSolution:
     substeps: Array | None = None
     tol: float = 0.0
     requested_tol: float = 0.0
+    #: per-variant optimality residual (:attr:`Solution.optimality`)
+    optimality: Array | None = None
 
     @property
     def converged(self) -> Array:
@@ -261,7 +287,9 @@ class BatchSolution:
         """Row ``k``'s outcome from the one message table (:func:`message`)."""
         return message(self.status(k), int(self.iterations[k]), float(self.residual[k]), self.tol, self.requested_tol,
                        1.0 if self.fraction is None else float(self.fraction[k]),
-                       1 if self.substeps is None else int(self.substeps[k]))  # fmt: skip
+                       1 if self.substeps is None else int(self.substeps[k]),
+                       0 if self.flags is None else int(self.flags[k]),
+                       0.0 if self.optimality is None else float(self.optimality[k]))  # fmt: skip
 
     def notes(self, k: int) -> list[str]:
         return notes(self.status(k), 0 if self.flags is None else int(self.flags[k]),
@@ -297,7 +325,8 @@ class Engine:
         self.reference: State | None = (
             self.pack(reference.design, reference.coordinates).frozen() if reference else None
         )
-        #: characteristic length L of the compiled model (largest body position, s' or length, >= 1)
+        #: characteristic length L of the compiled model (largest body position, s' or length; at
+        #: least 1 m in the model's unit)
         self.length_scale = self._length_scale(self.reference) if reference else None
 
     def rebased(self, reference: Model) -> Engine:
@@ -309,8 +338,10 @@ class Engine:
             raise ValueError("the reference model has another mechanism than the engine")
         new = object.__new__(Engine)
         new.__dict__.update(self.__dict__)
-        for key in ("col_scale", "row_scale", "_reference_assembled"):
+        for key in ("col_scale", "row_scale", "_reference_assembled", "unit", "si_scale", "_unit_metric"):
             new.__dict__.pop(key, None)
+        if new.unit != self.unit:  # the plans hold the rows' SI scale
+            new._plans = {}
         new._reference_signs = {}
         new.model = reference
         new.reference = new.pack(reference.design, reference.coordinates).frozen()
@@ -366,20 +397,55 @@ class Engine:
         plan = self._plans.get(key)
         if plan is None:
             rows, cols = self.pattern
-            plan = build_plan(self.n_rows, self.n_columns, rows, cols, free, self._variable_of, weights)
+            plan = build_plan(self.n_rows, self.n_columns, rows, cols, free, self._variable_of, weights, self.row_scale)
             self._plans[key] = plan
         return plan
 
     def weights_for(self, free: Array, weights: Mapping[str, float] | None) -> Array | None:
-        """Per-free-column weights of a weighted min-norm step from ``{address or group: w}``."""
-        if not weights:
-            return None
+        """Per-free-column weights ``w_k / si_k^2`` of the step's metric ``sum (si_k dx_k)^2 / w_k``
+        (:attr:`si_scale`: changes measured in metres and radians, so that a model in mm and in m
+        take the same step) from the user's ``{address or group: w}``; None: all ones."""
+        full = self.metric_weights(weights) if weights else self._unit_metric
+        return None if full is None else full[free]
+
+    @cached_property
+    def _unit_metric(self) -> Array | None:
+        """:meth:`metric_weights` without user weights (None for a metre model), computed once."""
+        return self.metric_weights(None)
+
+    def metric_weights(self, weights: Mapping[str, float] | None = None) -> Array | None:
+        """:meth:`weights_for` over every layout column (None: all ones, a metre model unweighted)."""
         full = np.ones(self.n_columns)
-        for sel, val in weights.items():
+        for sel, val in (weights or {}).items():
             if not (isinstance(val, int | float) and np.isfinite(val) and val > 0):
                 raise AddressError(f"weight for {sel!r} must be positive, found {val}")
             full[self.columns([sel])] = float(val)
-        return full[free]
+        full /= self.si_scale**2
+        return None if np.all(full == 1.0) else full
+
+    @cached_property
+    def si_scale(self) -> Array:
+        """SI units per solver unit of every layout column: U (metres per model length unit) for
+        lengths (s', link lengths, slides, a T-D joint's own coordinate), 1 for angles (radians),
+        Euler parameters and orientations (rotation vectors); a coupling coefficient ``c_k``
+        ``U_a / U_b^k`` (``q_a = c0 + c1 q_b + ...`` with U of a slide, 1 of an angle)."""
+        U = self.unit
+        si = np.ones(self.n_columns)
+        for v in self.layout.variables:
+            if v.group in ("s", "l"):
+                si[v.columns] = U
+            elif v.group == "q":
+                jt = self.mechanism.joint(v.joint).jtype
+                tree = v.joint in self._tree
+                angular = set(jt.angle_indices) | (set(range(jt.euler.start, jt.euler.stop)) if jt.euler else set())
+                for k in range(v.size):
+                    if not (tree and k in angular):
+                        si[v.start + k] = U
+            elif v.group == "coef":
+                cp = next(c for c in self.mechanism.couplings if c.name == v.joint)
+                ua, ub = (1.0 if self.mechanism.joint(n).jtype.angle_indices else U for n in (cp.joint_a, cp.joint_b))
+                si[v.columns] = ua / ub ** np.arange(v.size)
+        return si
 
     # --- state -------------------------------------------------------------------------------
     def default_state(self) -> State:
@@ -566,7 +632,9 @@ class Engine:
 
     def _length_scale(self, state: State) -> float:
         r = self.poses(state)[0]
-        vals = [1.0, float(np.max(np.linalg.norm(r, axis=1), initial=0.0))]
+        # at least one metre (in the model's unit): the scale, and with it the branch tests and the
+        # round-off floor, do not depend on the unit a small mechanism is written in
+        vals = [1.0 / self.unit, float(np.max(np.linalg.norm(r, axis=1), initial=0.0))]
         for k, j in enumerate(self.mechanism.joints):
             for side, fld in ((0, "s_i"), (1, "s_j")):
                 if fld in j.fields:
@@ -630,16 +698,20 @@ class Engine:
         return ROUNDOFF * float(np.finfo(float).eps) * (self.unit * L) ** 2
 
     def settings(self, tol: float = 1e-10, max_iter: int = 50, *, branch: bool = True, divergence: float = 1e6,
-                 state: State | None = None) -> newton.Settings:  # fmt: skip
+                 state: State | None = None, method: str = "least-change") -> newton.Settings:  # fmt: skip
         """The compiled loops' settings (caps: :data:`MAX_SUBSTEPS` sub-steps per change, the
-        smallest sub-step :data:`MIN_STEP` of the change)."""
+        smallest sub-step :data:`MIN_STEP` of the change). ``method``: :data:`METHODS`; the
+        optimality residual's tolerance is ``max(tol, OPT_FLOOR)`` (SI units)."""
         if not (np.isfinite(tol) and tol > 0):
             raise ValueError(f"tolerance must be a positive number, found {tol}")
         if not (isinstance(max_iter, int | np.integer) and 0 <= max_iter <= MAX_ITER):
             raise ValueError(f"max_iter must be an integer in 0..{MAX_ITER}, found {max_iter}")
+        if method not in METHODS:
+            raise ValueError(f"method must be one of {', '.join(METHODS)}, found {method!r}")
         target = max(tol, self.roundoff_floor(state))
         return newton.Settings(target, int(max_iter), divergence, KAPPA, JUMP_ATOL, TRUST, MIN_STEP if branch else 1.0,
-                               MAX_SUBSTEPS if branch else 1, bool(tol <= POLISH_TOL), bool(branch))  # fmt: skip
+                               MAX_SUBSTEPS if branch else 1, bool(tol <= POLISH_TOL), bool(branch),
+                               method == "least-change", max(tol, OPT_FLOOR))  # fmt: skip
 
     # --- solving -----------------------------------------------------------------------------
     def solve(
@@ -655,33 +727,41 @@ class Engine:
         branch: bool = True,
         changes: Mapping[str, Array] | None = None,
         assembled: bool | None = None,
+        method: str = "least-change",
     ) -> Solution:
         """Solve from ``start`` (copied) moving only the ``free`` columns (groups/addresses or an
         array of columns, minus the ``exclude`` variable keys) for the design of ``target``
         (default: ``start``'s own). With ``branch`` (the default) the change is followed on the
         start's branch (:func:`kinprop.solver.newton.follow`); ``branch=False`` is the paper's
-        plain Newton. ``assembled``: whether ``start`` is an assembly (None: find out)."""
+        plain Newton. ``assembled``: whether ``start`` is an assembly (None: find out).
+
+        When the free set leaves freedom the result is the assembly closest to ``start`` in the
+        metric ``sum (si_k dx_k)^2 / w_k`` (:meth:`weights_for`), its optimality residual in
+        ``Solution.optimality``; ``method="paper"``: the end point of the paper's iteration."""
         cols = free if isinstance(free, np.ndarray) else self.columns(free, exclude)
         if assembled is None and start is self.reference:
             assembled = self._reference_assembled
         w = self.weights_for(cols, weights)
         plan = self.plan(cols, w)
-        cfg = self.settings(tol, max_iter, branch=branch, state=start)
+        cfg = self.settings(tol, max_iter, branch=branch, state=start, method=method)
         st = start.copy()
         goal = (target if target is not None else start).writable()
-        hist = np.zeros(max_iter + 1)
+        hist = np.zeros(2 * max_iter + 2)
         # the det sign of the free Jacobian at the compiled model's assembled state, per plan:
         # computed by the first solve from it, then reused (one evaluation and factorisation less)
         ref_key = self._plan_key(cols, w) if start is self.reference and assembled else None
         sign0 = self._reference_signs.get(ref_key, newton.UNKNOWN_SIGN) if ref_key else newton.UNKNOWN_SIGN
-        code, it, frac, subs, norm, flags, hlen, sign_start, _ = newton.follow_one(
+        code, it, frac, subs, norm, flags, hlen, sign_start, _, opt = newton.follow_one(
             self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, goal.Q, goal.S, goal.C, goal.L,
             -1 if assembled is None else int(assembled), self.row_scale, self.col_scale, cfg, hist,
             sign0)  # fmt: skip
+        if flags & newton.FLIPPED and not flags & newton.SUBDIVIDED:  # plain Newton landed on a turned cut joint
+            code, frac = newton.INFEASIBLE, 0.0
         if ref_key is not None and sign_start != newton.UNKNOWN_SIGN and not flags & newton.FROM_ESTIMATES:
             self._reference_signs[ref_key] = int(sign_start)
         return Solution(self, start, st, STATUSES[code], int(it), float(norm), hist[: min(hlen, hist.size)], cols,
-                        cfg.tol, dict(changes or {}), tol, float(frac), int(subs), int(flags))  # fmt: skip
+                        cfg.tol, dict(changes or {}), tol, float(frac), int(subs), int(flags), float(opt),
+                        method)  # fmt: skip
 
     def apply(self, start: State, changes: Mapping[str, Any]) -> tuple[State, dict[str, Array], set[str]]:
         """A copy of ``start`` with ``changes`` (address -> value) written; returns it, the
@@ -740,10 +820,13 @@ class Engine:
         tol: float = 1e-10,
         max_iter: int = 50,
         branch: bool = True,
+        method: str = "least-change",
     ) -> Solution:
         """Apply ``changes`` by address to ``start`` (default: the compiled model's state) and
         re-assemble moving only ``free`` (groups ``q s C l`` and/or addresses), on the start's
-        branch; the changed variables are never free (PAPER-NOTES 7)."""
+        branch; the changed variables are never free (PAPER-NOTES 7). With freedom left, the
+        assembly closest to the changed start (``method="paper"``: the paper's iteration's end
+        point; :meth:`solve`)."""
         base = start.state if isinstance(start, Solution) else start if start is not None else self.reference
         if base is None:
             raise ValueError("this engine was compiled from a Mechanism: pass start=engine.pack(design, coordinates)")
@@ -755,7 +838,7 @@ class Engine:
         if cols is None:
             cols = self._free_cache[key] = self.free_columns(free, done)
         return self.solve(base, cols, target=goal, weights=weights, tol=tol, max_iter=max_iter, branch=branch,
-                          changes=done, assembled=assembled)  # fmt: skip
+                          changes=done, assembled=assembled, method=method)  # fmt: skip
 
     def solve_batch(
         self,
@@ -768,6 +851,7 @@ class Engine:
         max_iter: int = 50,
         branch: bool = True,
         threads: bool | None = None,
+        method: str = "least-change",
     ) -> BatchSolution:
         """Follow every variant of a batched state (leading axis) from ``start`` (default: the
         compiled model's state) to its own design, each on the start's branch; ``threads``
@@ -776,15 +860,15 @@ class Engine:
         if base is None:
             raise ValueError("this engine was compiled from a Mechanism: pass start=engine.pack(design, coordinates)")
         cols = free if isinstance(free, np.ndarray) else self.columns(free, exclude)
-        plan = self.plan(cols)
-        cfg = self.settings(tol, max_iter, branch=branch, state=base)
+        plan = self.plan(cols, self.weights_for(cols, None))
+        cfg = self.settings(tol, max_iter, branch=branch, state=base, method=method)
         targets = targets.writable()
         N = targets.Q.shape[0]
         shared = base.Q.ndim == 1  # one start for every variant: copied into each by the kernel
         starts = State(*(getattr(base, a)[None] for a in "QSCL")) if shared else base
         starts = starts.writable()
         st = State(*(np.empty_like(getattr(targets, a)) for a in "QSCL"))
-        out = np.zeros((N, 6))
+        out = np.zeros((N, 7))
         # whether the start is assembled: known here for one start, else each variant's own test
         assembled = int(np.linalg.norm(self.residual(base) * self.row_scale) < cfg.tol) if shared else -1
         args = (self.tables, plan, self.nnz, starts.Q, starts.S, starts.C, starts.L, targets.Q, targets.S, targets.C,
@@ -799,7 +883,8 @@ class Engine:
         else:
             newton.follow_batch(*args)
         return BatchSolution(st, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4], out[:, 2],
-                             out[:, 5].astype(np.int64), out[:, 3].astype(np.int64), cfg.tol, tol)  # fmt: skip
+                             out[:, 5].astype(np.int64), out[:, 3].astype(np.int64), cfg.tol, tol,
+                             out[:, 6])  # fmt: skip
 
     def solve_sequence(
         self,
@@ -811,6 +896,7 @@ class Engine:
         tol: float = 1e-10,
         max_iter: int = 50,
         branch: bool = True,
+        method: str = "least-change",
     ) -> tuple[Array, BatchSolution]:
         """Drive the coordinate ``addresses`` through the rows of ``values``, each step followed
         from the last good one on the start's branch (a failed step is recorded and the next
@@ -822,18 +908,18 @@ class Engine:
             raise AddressError("a sequence drives coordinates (JOINT.q or JOINT.q[k])")
         set_cols = np.array([t.start + (t.index or 0) for t in targets], np.int64)
         cols = free if isinstance(free, np.ndarray) else self.columns(free, {t.key for t in targets})
-        plan = self.plan(cols)
-        cfg = self.settings(tol, max_iter, branch=branch, state=start)
+        plan = self.plan(cols, self.weights_for(cols, None))
+        cfg = self.settings(tol, max_iter, branch=branch, state=start, method=method)
         st = start.copy()
         values = np.ascontiguousarray(np.reshape(values, (len(values), len(addresses))), dtype=float)
         n = values.shape[0]
         steps = State(*(np.zeros((n, *getattr(st, a).shape)) for a in "QSCL"))
-        out = np.zeros((n, 6))
+        out = np.zeros((n, 7))
         newton.follow_sequence(self.tables, plan, self.nnz, st.Q, st.S, st.C, st.L, set_cols, values, self.row_scale,
                                self.col_scale, cfg, steps.Q, steps.S, steps.C, steps.L, out)  # fmt: skip
         return steps.Q, BatchSolution(steps, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4],
                                       out[:, 2], out[:, 5].astype(np.int64), out[:, 3].astype(np.int64), cfg.tol,
-                                      tol)  # fmt: skip
+                                      tol, out[:, 6])  # fmt: skip
 
     # --- motion: velocities and accelerations (kinprop.engine.motion) ------------------------
     def motion(
@@ -856,4 +942,4 @@ def compile(model: Model | Mechanism) -> Engine:
     return Engine(model)
 
 
-__all__ = ["BatchSolution", "Engine", "JointFrames", "Kinematics", "Solution", "State", "Status", "compile"]
+__all__ = ["METHODS", "BatchSolution", "Engine", "JointFrames", "Kinematics", "Solution", "State", "Status", "compile"]

@@ -123,6 +123,7 @@ def solve_propagation(
     weights: Mapping[str, float] | None,
     continuation: bool | None,
     on_fallback: Callable[[Propagation], None] | None = None,
+    method: str = "least-change",
 ) -> tuple[Propagation, ContinuationResult | None, bool]:
     """One engine solve of the change, on the start's branch; its diagnosis when it failed
     (``continuation`` None or True) or always (True). No second solve: the diagnosis is a
@@ -133,7 +134,8 @@ def solve_propagation(
     ``on_fallback(prop)`` is called when the solve failed and the diagnosis follows.
     """
     engine = compile_engine(model)
-    sol = solve_changes(engine, model, changes, free, tol=tol, max_iter=max_iter, weights=weights, units="solver")
+    sol = solve_changes(engine, model, changes, free, tol=tol, max_iter=max_iter, weights=weights, units="solver",
+                        method=method)  # fmt: skip
     prop = propagation_of(engine, model, sol, free)
     if continuation is False or (continuation is None and (sol.converged or not changes)):
         return prop, None, True

@@ -58,6 +58,7 @@ def propagation_json(prop: Propagation) -> dict[str, Any]:
         "status": r.status,
         "iterations": r.iterations,
         "residual": r.residual,
+        "optimality_residual": r.optimality,
         "residual_history": list(r.residual_history),
         "coordinates": coordinates_json(prop.after),
         "design": design_json(prop.after),

@@ -142,3 +142,39 @@ class JointType:
     @property
     def n_constraints(self) -> int:
         return sum(c.rows for c in self.constraints())
+
+    @property
+    def rigid_axes(self) -> tuple[tuple[int, int], ...]:
+        """Axis pairs ``(a, b)`` with ``x''_a(i) . x''_b(j) = +1`` at every placement the joint
+        itself can take (entries of ``A''(q)`` that are 1 for every q: a revolute's z''-z'', all
+        three of a translational joint's). Its cut form's dot-1 rows also hold with such an
+        axis reversed (a revolute with ``z''_j = -z''_i``, a slide turned by pi): a root the joint
+        cannot reach, which the solver refuses (``kinprop.solver.newton.follow``). Found by
+        evaluating the tree form at a few placements; cut-only types (defined by their
+        constraints) have none."""
+        return _rigid_axes(type(self), self.tree, self.n_coordinates, self.euler)
+
+
+_RIGID_SAMPLES = 4
+
+
+def _rigid_axes(cls: type, tree: bool, n: int, euler: slice | None) -> tuple[tuple[int, int], ...]:
+    key = (cls, tree, n)
+    if key not in _RIGID_CACHE:
+        out: tuple[tuple[int, int], ...] = ()
+        if tree:
+            rng = np.random.default_rng(0)
+            fixed = np.ones((3, 3), bool)
+            for _ in range(_RIGID_SAMPLES):
+                q = rng.uniform(-2.0, 2.0, n)
+                if euler is not None:
+                    q[euler] /= np.linalg.norm(q[euler])
+                A, d = np.empty((3, 3)), np.empty(3)
+                cls.placement_kernel(q, A, d)
+                fixed &= np.abs(A - 1.0) < 1e-12
+            out = tuple((int(a), int(b)) for a, b in zip(*np.nonzero(fixed), strict=True))
+        _RIGID_CACHE[key] = out
+    return _RIGID_CACHE[key]
+
+
+_RIGID_CACHE: dict[tuple, tuple[tuple[int, int], ...]] = {}

@@ -20,7 +20,9 @@ Every table has one row per item and named column constants, used by the kernels
 * ``column`` per layout column: ``V_KIND`` (``VAR_Q``, ``VAR_S``, ``VAR_C``, ``VAR_L``),
   ``V_JOINT``, ``V_SIDE`` (0: ``_i``, 1: ``_j``), ``V_COMPONENT``; a coupling coefficient is a
   ``VAR_L`` column whose ``V_JOINT`` is its slot in ``L``;
-* ``fixed``, ``r0``, ``A0`` per body: fixed flag and pose of fixed bodies.
+* ``fixed``, ``r0``, ``A0`` per body: fixed flag and pose of fixed bodies;
+* ``rigid`` per axis pair a cut joint keeps parallel (``JointType.rigid_axes``): ``R_JOINT``,
+  ``R_AXIS_I``, ``R_AXIS_J``.
 
 State of one variant (the design variables and coordinates as arrays): ``Q`` (layout q
 columns), ``S`` (nj, 2, 3) = s'_i, s'_j; ``C`` (nj, 2, 3, 3) = C_i, C_j; ``L`` (nj + 5 nc,) the
@@ -47,6 +49,7 @@ P_TREE, P_SIDE = range(2)
 E_ROW, E_COL = range(2)
 V_KIND, V_JOINT, V_SIDE, V_COMPONENT = range(4)
 CP_ROW, CP_QA, CP_QB, CP_L0, CP_COL = range(5)
+R_JOINT, R_AXIS_I, R_AXIS_J = range(3)
 VAR_Q, VAR_S, VAR_C, VAR_L = range(4)
 #: design fields in the order of the J_COL_* columns and of the state's side axis
 FIELDS = ("s_i", "s_j", "C_i", "C_j", "length")
@@ -66,6 +69,9 @@ class Tables(NamedTuple):
     A0: Array
     coupling: Array
     coupling_q0: Array
+    #: per axis pair a cut joint keeps parallel (``JointType.rigid_axes``): ``R_JOINT``,
+    #: ``R_AXIS_I``, ``R_AXIS_J`` (the solver keeps ``x''_a(i) . x''_b(j)`` on the start's side)
+    rigid: Array
 
 
 class RowBlock(NamedTuple):
@@ -154,6 +160,7 @@ def build_tables(mech: Mechanism, topo: Topology, layout: VariableLayout, blocks
         for cp in mech.couplings
     ]  # fmt: skip
     coupling_q0 = [[cp.q_a0, cp.q_b0] for cp in mech.couplings]
+    rigid = [[jidx[name], a, b] for name in topo.cut_joints for a, b in mech.joint(name).jtype.rigid_axes]
     nb = len(mech.bodies)
     fixed = np.array([int(b.fixed) for b in mech.bodies], dtype=np.int64)
     r0, A0 = np.zeros((nb, 3)), np.tile(np.eye(3), (nb, 1, 1))
@@ -165,7 +172,7 @@ def build_tables(mech: Mechanism, topo: Topology, layout: VariableLayout, blocks
         return np.ascontiguousarray(np.array(x, dtype=dtype).reshape(-1, width))
 
     out = Tables(joint, tree, arr(cut, 7), arr(basic, 2), arr(axes, 6, float), arr(path, 2), arr(euler, 2),
-                 column, fixed, r0, A0, arr(coupling, 5), arr(coupling_q0, 2, float))  # fmt: skip
+                 column, fixed, r0, A0, arr(coupling, 5), arr(coupling_q0, 2, float), arr(rigid, 3))  # fmt: skip
     for a in out:
         a.setflags(write=False)
     return out

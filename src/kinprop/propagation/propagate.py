@@ -156,7 +156,7 @@ def result_of(engine: Engine, sol: Solution) -> tuple[SolveResult, float]:
     design, coords = sol.design, sol.coordinates
     res = SolveResult(sol.converged, sol.iterations, sol.residual, [float(h) for h in sol.history],
                       rank_of(sv, RANK_RTOL), int(sol.free.size), engine.n_rows, sv, sol.message, (design, coords), J,
-                      sol.status.value, tuple(sol.notes), sol.fraction)  # fmt: skip
+                      sol.status.value, tuple(sol.notes), sol.fraction, sol.optimality)  # fmt: skip
     ratio = conditioning(engine.row_blocks, Jf) if sol.converged and sol.free.size else float("nan")
     return res, ratio
 
@@ -234,6 +234,7 @@ def propagate(
     engine: Engine | None = None,
     branch: bool = True,
     units: str = "model",
+    method: str = "least-change",
 ) -> Propagation:
     """Apply ``changes`` (address -> value, in the model's units; ``units="solver"``: radians)
     and re-assemble, moving only ``free`` variables, on the start's assembly branch (``branch=False``: the paper's plain
@@ -244,11 +245,14 @@ def propagate(
     ``changes`` may use global addresses ``hardpoint:J.i=x,y,z``, ``hardpoint:J``, ``axis:J``
     (:mod:`kinprop.propagation.hardpoints`), converted exactly at the model's current assembly.
     ``weights`` maps addresses or groups to positive weights of a weighted
-    minimum-norm step (a larger weight lets a variable move more).
+    minimum-norm step (a larger weight lets a variable move more). When the free set leaves
+    freedom the result is the assembly closest to the changed start, changes measured in metres
+    and radians and scaled by ``weights`` (docs/analysis/weights.md); ``method="paper"``: the end
+    point of the paper's generalized-inverse iteration (with ``tol=1e-3``, its tables).
     """
     eng = engine_for(model, engine)
     sol = solve_changes(eng, model, changes, free, tol=tol, max_iter=max_iter, weights=weights, branch=branch,
-                        units=units)  # fmt: skip
+                        units=units, method=method)  # fmt: skip
     prop = propagation_of(eng, model, sol, free)
     moved_pivots = pivot_updates(eng, changes or {})
     if moved_pivots:  # the result carries its moved pivots (fixed-body points, not variables)
@@ -267,6 +271,7 @@ def solve_changes(
     weights: Mapping[str, float] | None = None,
     branch: bool = True,
     units: str = "model",
+    method: str = "least-change",
 ) -> Solution:
     """The engine solution of :func:`propagate` (its arguments; ``engine`` compiled from the
     model's mechanism): changes converted to solver units and global addresses resolved at the
@@ -284,6 +289,7 @@ def solve_changes(
         tol=tol,
         max_iter=max_iter,
         branch=branch,
+        method=method,
     )
 
 
@@ -309,11 +315,14 @@ def assemble(
     max_iter: int = 50,
     engine: Engine | None = None,
     branch: bool = True,
+    method: str = "least-change",
 ) -> Propagation:
     """Solve for an assembled configuration from the model's estimates (no design change): a
     Newton homotopy from the estimates, so the assembly found is the one they point at. It takes
-    no values; the result reports model units like :func:`propagate`'s."""
-    return propagate(model, {}, free, tol=tol, max_iter=max_iter, engine=engine, branch=branch, units="solver")
+    no values; the result reports model units like :func:`propagate`'s. With freedom left: the
+    assembly closest to the estimates (``method="paper"``: the paper's iteration's end point)."""
+    return propagate(model, {}, free, tol=tol, max_iter=max_iter, engine=engine, branch=branch, units="solver",
+                     method=method)  # fmt: skip
 
 
 def roundoff_floor(model: Model, engine: Engine | None = None) -> float:

@@ -69,14 +69,15 @@ class Sensitivity:
 
 
 def weight_vector(model: Model, weights: Mapping[str, float] | None, engine: Engine | None = None) -> Array:
-    """Per-column weights over the whole layout (1 where not given); must be positive."""
-    layout = engine_for(model, engine).layout
-    wfull = np.ones(layout.n)
+    """Per-column weights of the propagation's metric over the whole layout: the user's (1
+    where not given; must be positive) over the SI scale squared (``Engine.metric_weights``:
+    changes in metres and radians), so a sensitivity is the derivative of the propagation."""
+    eng = engine_for(model, engine)
     for sel, w in (weights or {}).items():
         if not float(w) > 0:
             raise AddressError(f"weight for {sel!r} must be positive, found {w}")
-        wfull[layout.columns([sel])] = float(w)
-    return wfull
+    full = eng.metric_weights({k: float(v) for k, v in (weights or {}).items()})
+    return np.ones(eng.layout.n) if full is None else full
 
 
 def design_sensitivity(

@@ -309,18 +309,19 @@ def compare_column(prop: Propagation, col: PaperColumn) -> list[Comparison]:
 def reproduce(
     table: PaperTable, tol: float = 1e-3, examples: Path | None = None
 ) -> list[tuple[PaperColumn, Propagation]]:
-    """Run the paper's propagations with its stopping rule ``||Phi|| < tol``."""
+    """Run the paper's propagations: its iteration (``method="paper"``) with its stopping rule
+    ``||Phi|| < tol``."""
     model: Model = load_model((examples or examples_dir()) / table.model)
     runs = []
     if table.initial_assembly:
-        first = assemble(model, tol=tol)
+        first = assemble(model, tol=tol, method="paper")
         runs.append((table.columns[0], first))
         model = first.after
         cols = table.columns[1:]
     else:
         cols = table.columns
     for col in cols:
-        runs.append((col, propagate(model, table.change, col.free, tol=tol)))
+        runs.append((col, propagate(model, table.change, col.free, tol=tol, method="paper")))
     return runs
 
 

@@ -17,8 +17,29 @@ from typing import NamedTuple
 import numpy as np
 
 from kinprop.jit import GELSD, JIT, LAPACK_INT, inlined, kernel, njit, prange
-from kinprop.kinematics.kernels import VEC_CALLER, W_MAT, W_VEC, evaluate, evaluate_inlined, retract, workspace
-from kinprop.kinematics.tables import V_COMPONENT, V_JOINT, V_KIND, V_SIDE, VAR_C, VAR_Q, VAR_S
+from kinprop.kinematics.kernels import (
+    VEC_CALLER,
+    W_FRAME_R,
+    W_MAT,
+    W_VEC,
+    evaluate,
+    evaluate_inlined,
+    retract,
+    workspace,
+)
+from kinprop.kinematics.tables import (
+    R_AXIS_I,
+    R_AXIS_J,
+    R_JOINT,
+    V_COMPONENT,
+    V_JOINT,
+    V_KIND,
+    V_SIDE,
+    VAR_C,
+    VAR_L,
+    VAR_Q,
+    VAR_S,
+)
 from kinprop.spatial import exp_so3_into, mm_into, mmT_into
 
 #: relative singular-value threshold for the rank (``s_k > RANK_RTOL * s_max``)
@@ -43,8 +64,10 @@ STATUSES = tuple(Status)
 CONVERGED, NOT_CONVERGED, DIVERGED, NO_FREE, INFEASIBLE, STEP_LIMIT = 0, 1, 2, 3, 4, 5
 #: ``follow`` flags: the change was subdivided / a sub-step left the predicted branch / the
 #: sign of det(Phi_free) flipped on a trial step (a singularity between two configurations) /
-#: the start was not assembled (estimates: assembled at its own design before the change)
-SUBDIVIDED, JUMPED, SIGN_FLIP, FROM_ESTIMATES = 1, 2, 4, 8
+#: the start was not assembled (estimates: assembled at its own design before the change) /
+#: a trial step landed on a root with a cut joint's rigid axis reversed (a pose the joint cannot
+#: take: ``JointType.rigid_axes``) / the least change (closest assembly) was not reached
+SUBDIVIDED, JUMPED, SIGN_FLIP, FROM_ESTIMATES, FLIPPED, LEAST_CHANGE_FAILED = 1, 2, 4, 8, 16, 32
 #: a converged residual below this (scaled, ~ metres) is at round-off already: no polishing step
 POLISHED = 1e-14
 #: ``follow``'s ``start_sign`` when the caller does not know it (it is computed)
@@ -64,6 +87,10 @@ class Settings(NamedTuple):
     max_substeps: int  # cap on the sub-steps of one change (bounded work on any input)
     polish: bool  # one more step after convergence (to round-off) when it lowers the residual
     branch: bool  # keep the start's branch (jump and det-sign tests, subdivision); False: plain Newton
+    #: return the assembly closest to the start (``argmin sum (dx_k / sqrt_weights_k)^2``,
+    #: Phi = 0) when the free set leaves freedom; False: the paper's iteration's own end point
+    least_change: bool
+    opt_tol: float  # on the optimality residual (length of the least-change correction, SI)
 
 
 @kernel
@@ -160,7 +187,7 @@ def min_norm_step(J, rhs, out):
 
 
 #: slots of :func:`buffers`
-B_PHI, B_VALS, B_STORE, B_DX, B_DISP, B_WS, B_DX1, B_LU, B_RHS, B_OUT, B_NONE, B_SV, B_RANK = range(13)
+B_PHI, B_VALS, B_STORE, B_DX, B_DISP, B_WS, B_DX1, B_LU, B_RHS, B_OUT, B_NONE, B_SV, B_RANK, B_U = range(14)
 
 
 @njit
@@ -168,12 +195,12 @@ def buffers(tb, plan, nnz):
     """Work arrays of one solve (slots ``B_*``), allocated once: Phi, entry values, block
     storage, step, displacement, the kinematics workspace, the first step; one block's
     weighted matrix, right side and solution; an empty index array (no sparsity pattern
-    recorded); LAPACK's singular values and rank."""
+    recorded); LAPACK's singular values and rank; the change from the least-change reference."""
     nf, nr = plan.free.shape[0], plan.n_rows
     big = max(nf, nr, 1)
     return np.zeros(nr), np.zeros(nnz), np.zeros(plan.store_ptr[-1]), np.zeros(nf), np.zeros(nf), \
         workspace(tb), np.zeros(nf), np.zeros(plan.store_ptr[-1]), np.zeros(big), np.zeros(nf), \
-        np.zeros(0, np.int64), np.zeros(big), np.zeros(1, LAPACK_INT)  # fmt: skip
+        np.zeros(0, np.int64), np.zeros(big), np.zeros(1, LAPACK_INT), np.zeros(nf)  # fmt: skip
 
 
 @inlined
@@ -241,17 +268,35 @@ def _lu_blocks(plan, Phi, vals, buf, b0):
 
 
 @kernel
-def newton_step(plan, Phi, vals, buf):
+def newton_step(plan, Phi, vals, buf, project):
     """The minimum-norm step over the free columns (block by block, in the plan's order, each
     block's right side including the blocks solved before it) into ``buf[B_DX]`` (free order):
     pivoted LU for square regular blocks, ``dgelsd`` (the SVD pseudo-inverse) for the others.
-    Returns the sign of det of the free Jacobian (product over square blocks; 0: unknown)."""
+    Returns the sign of det of the free Jacobian (product over square blocks; 0: unknown).
+
+    ``project``: the least-change (Gauss-Newton) step from the reference instead, with ``u =
+    x - x_ref`` in ``buf[B_U]``: ``dx = -u - W^1/2 pinv(J W^1/2) (Phi - J u)``, the step to
+    ``argmin ||W^-1/2 (x + dx - x_ref)||`` subject to ``Phi + J dx = 0``; it differs from the
+    plain step only in the blocks with freedom (the SVD ones: a square regular block's
+    solution is unique)."""
     _scatter(plan, vals, buf[B_STORE])
     b, sign = _lu_blocks(plan, Phi, vals, buf, 0)
     while b >= 0:  # a rectangular or singular block: the pseudo-inverse
         sign = 0
         mb, nb = _block_system(plan, Phi, vals, buf, b, True)
         rhs = buf[B_RHS]
+        if project:  # Phi - J u over the block (J unweighted, from the block's storage)
+            store, u, c0, s0 = buf[B_STORE], buf[B_U], plan.col_ptr[b], plan.store_ptr[b]
+            for i in range(mb):
+                for y in range(nb):
+                    rhs[i] -= store[s0 + i * nb + y] * u[plan.block_cols[c0 + y]]
+        M, r0 = buf[B_LU], plan.row_ptr[b]
+        for i in range(mb):  # rows in SI units: the fit and the rank do not depend on the length unit
+            f = plan.row_scale[plan.block_rows[r0 + i]]
+            if f != 1.0:
+                rhs[i] *= f
+                for y in range(nb):
+                    M[y * mb + i] *= f
         for i in range(mb, rhs.shape[0]):
             rhs[i] = 0.0
         if _lstsq(buf[B_LU], mb, nb, rhs, buf[B_SV], buf[B_RANK]) != 0:
@@ -261,8 +306,63 @@ def newton_step(plan, Phi, vals, buf):
         for i in range(nb):
             out[i] = rhs[i]
         _block_out(plan, buf, b, -1.0)
+        if project:
+            dx, u, c0 = buf[B_DX], buf[B_U], plan.col_ptr[b]
+            for y in range(nb):
+                f = plan.block_cols[c0 + y]
+                dx[f] -= u[f]
         b, _ = _lu_blocks(plan, Phi, vals, buf, b + 1)
     return sign
+
+
+@kernel
+def displacement(tb, free, Q, S, C, L, ref, u, ws):
+    """``u = x - x_ref`` over the ``free`` columns (sorted), ``ref = (Q, S, C, L)`` of the
+    reference: differences for q, s', l, coefficients; ``log(C C_ref^T)`` for orientations
+    (the retraction's ``C <- exp(tilde(dxi')) C``, so the gradient of ``|log|^2 / 2`` is the
+    log itself)."""
+    Qr, Sr, Cr, Lr = ref
+    T, w = ws[W_MAT][2], ws[W_VEC][VEC_CALLER + 1]  # after an evaluation: free scratch
+    last = -1
+    for i in range(free.shape[0]):
+        c = free[i]
+        kind, j, side = tb.column[c, V_KIND], tb.column[c, V_JOINT], tb.column[c, V_SIDE]
+        if kind == VAR_Q:
+            u[i] = Q[c] - Qr[c]
+        elif kind == VAR_S:
+            k = tb.column[c, V_COMPONENT]
+            u[i] = S[j, side, k] - Sr[j, side, k]
+        elif kind == VAR_L:
+            u[i] = L[j] - Lr[j]
+        else:
+            key = 2 * j + side
+            if key != last:
+                mmT_into(C[j, side], Cr[j, side], T)
+                log_so3_into(T, w)
+                last = key
+            u[i] = w[tb.column[c, V_COMPONENT]]
+
+
+@kernel
+def rigid_signs(tb, R, out):
+    """Sign (+1, -1) of ``x''_a(i) . x''_b(j)`` of every rigid axis pair (``tb.rigid``) from the
+    global joint frames ``R`` (the workspace's, after an evaluation), into ``out``."""
+    for k in range(tb.rigid.shape[0]):
+        j, a, b = tb.rigid[k, R_JOINT], tb.rigid[k, R_AXIS_I], tb.rigid[k, R_AXIS_J]
+        d = R[j, 0, 0, a] * R[j, 1, 0, b] + R[j, 0, 1, a] * R[j, 1, 1, b] + R[j, 0, 2, a] * R[j, 1, 2, b]
+        out[k] = 1.0 if d >= 0.0 else -1.0
+
+
+@kernel
+def flipped(tb, R, ref):
+    """Whether some cut joint's rigid axis pair has left the side ``ref`` (from
+    :func:`rigid_signs` at the start): a root of its dot-1 rows the joint cannot reach."""
+    for k in range(tb.rigid.shape[0]):
+        j, a, b = tb.rigid[k, R_JOINT], tb.rigid[k, R_AXIS_I], tb.rigid[k, R_AXIS_J]
+        d = R[j, 0, 0, a] * R[j, 1, 0, b] + R[j, 0, 1, a] * R[j, 1, 1, b] + R[j, 0, 2, a] * R[j, 1, 2, b]
+        if d * ref[k] <= 0.0:
+            return True
+    return False
 
 
 @inlined
@@ -279,24 +379,30 @@ def _residual(tb, plan, Q, S, C, L, row_scale, buf):
 
 
 @kernel
-def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
+def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf, ref, project, max_iter):
     """Newton on ``Phi(x) = 0`` from ``Q, S, C, L`` (updated in place), to ``tol``.
 
-    Returns ``(status, iterations, ||row_scale Phi||, |dx_1|, jumped, sign_0, sign_1)``: the
-    first step (the implicit-function predictor; column-scaled, the longest over the plan's
+    Returns ``(status, iterations, ||row_scale Phi||, |dx_1|, jumped, sign_0, sign_1, opt)``:
+    the first step (the implicit-function predictor; column-scaled, the longest over the plan's
     blocks), whether the later corrections took the solution further from the predictor than
     ``kappa |dx_1| + jump_atol`` (a ratio: independent of the mechanism's size) or some block's
     predictor was longer than ``trust`` (per block, an independent sub-mechanism: a large
     mechanism is not subdivided for being large), and the sign of det of the free Jacobian at
     the first and last step taken (0: not square or singular).
     ``history[k]`` receives the residual after k updates (may be shorter than ``max_iter + 1``).
+
+    ``project``: the least-change iteration (Gauss-Newton on ``min ||W^-1/2 (x - x_ref)||``
+    subject to ``Phi(x) = 0``, ``ref`` the reference state; :func:`newton_step`), converged when
+    also ``opt``, the length of that step in the metric, is below ``cfg.opt_tol``: zero exactly
+    at the closest assembly's KKT point, where ``W^-1 (x - x_ref)`` lies in the row space of
+    the free Jacobian. Otherwise ``opt`` is 0 and ``ref`` unused.
     """
     Phi, vals, dx, disp, dx1 = buf[B_PHI], buf[B_VALS], buf[B_DX], buf[B_DISP], buf[B_DX1]
     free = plan.free
     nf = free.shape[0]
-    norm, first = 0.0, 1e-300
+    norm, first, opt = 0.0, 1e-300, 0.0
     it, status = 0, NOT_CONVERGED
-    sign0, sign1 = 0, 0
+    sign0, sign1, sign = 0, 0, 0
     disp[:] = 0.0
     polishing = False
     while True:  # one evaluation per pass: one call site, where evaluate is compiled inline
@@ -314,22 +420,32 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
         norm = r
         if it < history.shape[0]:
             history[it] = norm
+        stepped = False
+        if project and nf > 0:  # the least-change step first: its length is the stopping test
+            displacement(tb, free, Q, S, C, L, ref, buf[B_U], buf[B_WS])
+            sign = newton_step(plan, Phi, vals, buf, True)
+            stepped = True
+            o2 = 0.0
+            for i in range(nf):
+                o2 += (dx[i] / plan.sqrt_weights[i]) ** 2
+            opt = np.sqrt(o2)
         if it == 0:
-            first = max(norm, 1e-300)
+            first = max(norm, opt, 1e-300)
         elif not np.isfinite(norm) or norm > cfg.divergence * first:
             status = DIVERGED
             break
-        if norm < tol:
+        if norm < tol and opt < cfg.opt_tol:
             status = CONVERGED
             if not (cfg.polish and nf > 0 and norm > POLISHED):
                 break
             polishing = True  # one more step to round-off, kept if better
-        elif it >= cfg.max_iter:
+        elif it >= max_iter:
             break
         elif nf == 0:
             status = NO_FREE
             break
-        sign = newton_step(plan, Phi, vals, buf)
+        if not stepped:
+            sign = newton_step(plan, Phi, vals, buf, False)
         if not polishing:
             sign1 = sign
             if it == 0:
@@ -351,7 +467,7 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf):
             p2 += p
             step1 = max(step1, np.sqrt(p))
     jumped = np.sqrt(c2) > cfg.kappa * np.sqrt(p2) + cfg.jump_atol or step1 > cfg.trust
-    return status, it, norm, step1, jumped, sign0, sign1
+    return status, it, norm, step1, jumped, sign0, sign1, opt
 
 
 @kernel
@@ -398,12 +514,31 @@ def copy_state(Q, S, C, L, Qd, Sd, Cd, Ld):
 
 
 @njit
-def follow_buffers(Q, S, C, L):
-    """State-shaped work arrays of :func:`follow` (start, last accepted, rotation paths)."""
+def follow_buffers(tb, Q, S, C, L):
+    """State-shaped work arrays of :func:`follow` (start, last accepted, rotation paths, free
+    masks, the least-change reference, the rigid axis pairs' signs at the start)."""
     nj = S.shape[0]
     return (Q.copy(), S.copy(), C.copy(), L.copy(), Q.copy(), S.copy(), C.copy(), L.copy(), np.zeros((nj, 2, 3)),
             np.zeros((nj, 2), np.bool_), np.zeros(Q.shape[0], np.bool_), np.zeros((nj, 2, 3), np.bool_),
-            np.zeros((nj, 2), np.bool_), np.zeros(L.shape[0], np.bool_))  # fmt: skip
+            np.zeros((nj, 2), np.bool_), np.zeros(L.shape[0], np.bool_), Q.copy(), S.copy(), C.copy(), L.copy(),
+            np.ones(tb.rigid.shape[0]))  # fmt: skip
+
+
+@kernel
+def optimality(tb, plan, Q, S, C, L, ref, buf):
+    """The optimality residual at a state (the length of the least-change step from ``ref``,
+    :func:`solve`); no step taken."""
+    Phi, vals, ws, none = buf[B_PHI], buf[B_VALS], buf[B_WS], buf[B_NONE]
+    nf = plan.free.shape[0]
+    if nf == 0:
+        return 0.0
+    evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, none, none)
+    displacement(tb, plan.free, Q, S, C, L, ref, buf[B_U], ws)
+    newton_step(plan, Phi, vals, buf, True)
+    o2, dx = 0.0, buf[B_DX]
+    for i in range(nf):
+        o2 += (dx[i] / plan.sqrt_weights[i]) ** 2
+    return np.sqrt(o2)
 
 
 @kernel
@@ -413,7 +548,7 @@ def _sign_at(tb, plan, Q, S, C, L, buf):
     if plan.free.shape[0] == 0:
         return 0
     evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, none, none)
-    return newton_step(plan, Phi, vals, buf)
+    return newton_step(plan, Phi, vals, buf, False)
 
 
 @kernel
@@ -432,32 +567,52 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
     (flagged when det changed sign on the way), then the change is followed. Returns
     ``(status, iterations, fraction reached, sub-steps, ||scaled residual||, flags, entries of
     history written, det sign at the start, det sign at the last accepted step)`` (the history
-    holds the assembly's residuals, then the last sub-step's). ``start_sign``: the start's det
-    sign when the caller knows it (an assembled start it solved from before with this plan).
+    holds the assembly's residuals, then the last sub-step's, then the least-change finish's).
+    ``start_sign``: the start's det sign when the caller knows it (an assembled start it solved
+    from before with this plan).
+
+    A converged trial step is also refused (flag ``FLIPPED``) when a cut joint's rigid axis pair
+    (``tb.rigid``) is on the other side than at the start: a root of the joint's dot-1 rows the
+    joint itself cannot reach (a slide turned by pi; :func:`flipped`). With ``cfg.least_change``
+    and a free set that leaves freedom, the followed point is then moved to the assembly closest
+    to the start (the original, changed start: ``argmin ||W^-1/2 (x - x_start)||``, Phi = 0) by
+    the least-change iteration of :func:`solve`; when that fails (or flips) the followed point
+    is kept with status ``NOT_CONVERGED`` and flag ``LEAST_CHANGE_FAILED``. The last returned
+    value is the optimality residual (0 without freedom).
     """
     nj = S.shape[0]
     Q0, S0, C0, L0, Qs, Ss, Cs, Ls = fbuf[0], fbuf[1], fbuf[2], fbuf[3], fbuf[4], fbuf[5], fbuf[6], fbuf[7]
     W, turn = fbuf[8], fbuf[9]
+    ref, rs = (fbuf[14], fbuf[15], fbuf[16], fbuf[17]), fbuf[18]
     copy_state(Q, S, C, L, Q0, S0, C0, L0)
+    copy_state(Q, S, C, L, ref[0], ref[1], ref[2], ref[3])
     ws = buf[B_WS]
-    if cfg.branch and assembled < 0:  # is the start assembled? (no Jacobian entries needed)
+    nrigid = tb.rigid.shape[0]
+    if (cfg.branch and assembled < 0) or nrigid > 0:  # is the start assembled? (no Jacobian entries needed)
         Phi, vals, none = buf[B_PHI], buf[B_VALS], buf[B_NONE]
         evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need_none, none, none)
-        r2 = 0.0
-        for i in range(Phi.shape[0]):
-            r2 += (Phi[i] * row_scale[i]) ** 2
-        assembled = 1 if np.sqrt(r2) < cfg.tol else 0
+        if nrigid > 0:
+            rigid_signs(tb, ws[W_FRAME_R], rs)
+        if cfg.branch and assembled < 0:
+            r2 = 0.0
+            for i in range(Phi.shape[0]):
+                r2 += (Phi[i] * row_scale[i]) ** 2
+            assembled = 1 if np.sqrt(r2) < cfg.tol else 0
     single = not cfg.branch
     flags, its0 = 0, 0
     if cfg.branch and assembled == 0:
         # not assembled (estimates): assemble at the start's own design first (the assembly the
         # estimates point at; flagged when det changed sign on the way), then follow the change
-        st, it, nr, _, _, s0, s1 = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, history, buf)
+        st, it, nr, _, _, s0, s1, _ = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, history, buf,
+                                            ref, False, cfg.max_iter)  # fmt: skip
         flags |= FROM_ESTIMATES
         if s0 != 0 and s1 != 0 and s0 != s1:
             flags |= SIGN_FLIP
+        if st == CONVERGED and nrigid > 0 and flipped(tb, ws[W_FRAME_R], rs):
+            flags |= FLIPPED
+            st = INFEASIBLE
         if st != CONVERGED and st != NO_FREE:
-            return st, it, 0.0, 1, nr, flags, it + 1, UNKNOWN_SIGN, UNKNOWN_SIGN
+            return st, it, 0.0, 1, nr, flags, it + 1, UNKNOWN_SIGN, UNKNOWN_SIGN, 0.0
         its0 = it
         copy_state(Q, S, C, L, Q0, S0, C0, L0)
     # the change is what differs between start and target outside the free columns (the free
@@ -520,7 +675,8 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
                     exp_so3_into(w, E)
                     mm_into(E, C0[j, side], C[j, side])
         hist = history[min(its0, history.shape[0]) :]  # after the assembly's residuals
-        st, it, nr, _, jump, s0, s1 = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, hist, buf)
+        st, it, nr, _, jump, s0, s1, _ = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, hist, buf,
+                                               ref, False, cfg.max_iter)  # fmt: skip
         last = st
         its += it
         hlen = min(its0, history.shape[0]) + it + 1
@@ -531,18 +687,22 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
             break
         # the sign at the last step taken (next to the solution) against the accepted state's
         flip = sign_ref != 0 and s1 != 0 and sign_ref != s1
+        # a cut joint turned onto a root it cannot reach (its rigid axes reversed)
+        cut_flip = st == CONVERGED and nrigid > 0 and flipped(tb, ws[W_FRAME_R], rs)
+        if cut_flip:
+            flags |= FLIPPED
         if single:  # plain Newton: one solve, its outcome
             status = st
             t = 1.0 if st == CONVERGED else 0.0
             break
-        if st == CONVERGED and not jump and not flip:
+        if st == CONVERGED and not jump and not flip and not cut_flip:
             t = tn
             if s1 != 0:
                 sign_ref = s1
             if it <= 3:
                 h = min(2.0 * h, 1.0)
             continue
-        if jump and st == CONVERGED:
+        if (jump or cut_flip) and st == CONVERGED:
             flags |= JUMPED
         if flip:
             flags |= SIGN_FLIP
@@ -557,12 +717,31 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
             break
     if status != CONVERGED and t == 0.0 and not flags & (JUMPED | SIGN_FLIP) and last != CONVERGED:
         status = last  # nothing of the change could be solved at all: say why (not a branch matter)
-    return status, its, t, subs, norm, flags, hlen, sign_start, sign_ref
+    opt = 0.0
+    nf = plan.free.shape[0]
+    if status == CONVERGED and nf > 0 and (not plan.square or sign_ref == 0):  # the free set leaves freedom
+        if cfg.least_change:  # the closest assembly to the start, from the followed point
+            copy_state(Q, S, C, L, Qs, Ss, Cs, Ls)
+            h0 = min(max(hlen - 1, 0), history.shape[0])
+            st, it, nr, _, _, _, _, opt = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol,
+                                                history[h0:], buf, ref, True, cfg.max_iter)  # fmt: skip
+            its += it
+            hlen = h0 + it + 1
+            if st == CONVERGED and not (nrigid > 0 and flipped(tb, ws[W_FRAME_R], rs)):
+                norm = nr
+            else:
+                flags |= LEAST_CHANGE_FAILED
+                status = NOT_CONVERGED
+                copy_state(Qs, Ss, Cs, Ls, Q, S, C, L)
+        else:  # the paper's iteration: its end point, with the optimality residual reported
+            opt = optimality(tb, plan, Q, S, C, L, ref, buf)
+    return status, its, t, subs, norm, flags, hlen, sign_start, sign_ref, opt
 
 
 @kernel
 def _store(out, k, r):
     out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4], out[k, 5] = r[0], r[1], r[2], r[3], r[4], r[5]
+    out[k, 6] = r[9]
 
 
 @njit
@@ -571,7 +750,7 @@ def follow_one(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, 
     """:func:`follow` with its own buffers."""
     buf = buffers(tb, plan, nnz)
     return follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale, cfg, buf,
-                  follow_buffers(Q, S, C, L), history, start_sign)  # fmt: skip
+                  follow_buffers(tb, Q, S, C, L), history, start_sign)  # fmt: skip
 
 
 @njit
@@ -582,7 +761,7 @@ def _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, ass
     aims at the design of ``Q1[v], ...`` and ends in ``Qo[v], ...``. A shared assembled start's
     det sign is computed once (else each variant's, by :func:`follow`)."""
     buf = buffers(tb, plan, nnz)
-    fbuf = follow_buffers(Q[0], S[0], C[0], L[0])
+    fbuf = follow_buffers(tb, Q[0], S[0], C[0], L[0])
     hist = np.zeros(0)
     shared = Q.shape[0] == 1
     sign = UNKNOWN_SIGN
@@ -600,7 +779,7 @@ def _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, ass
 def follow_batch(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, assembled, row_scale, col_scale, cfg,
                  out):  # fmt: skip
     """:func:`follow` for every variant of a leading batch axis (see :func:`_follow_range`);
-    ``out[v]`` = (status, iterations, fraction, sub-steps, residual, flags)."""
+    ``out[v]`` = (status, iterations, fraction, sub-steps, residual, flags, optimality residual)."""
     _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, assembled, row_scale, col_scale, cfg,
                   out, 0, Q1.shape[0])  # fmt: skip
 
@@ -626,9 +805,10 @@ def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, row_scale, col_
     from the last good one (a failed step leaves the state at the last good step: the next
     step restarts from there, on the same branch). ``Qout[s]``, ``Sout[s]``, ``Cout[s]``,
     ``Lout[s]`` hold the state after step ``s`` (NaN when it failed: free design variables
-    move too); ``out[s]`` = (status, iterations, fraction, sub-steps, residual, flags)."""
+    move too); ``out[s]`` = (status, iterations, fraction, sub-steps, residual, flags,
+    optimality residual)."""
     buf = buffers(tb, plan, nnz)
-    fbuf = follow_buffers(Q, S, C, L)
+    fbuf = follow_buffers(tb, Q, S, C, L)
     hist = np.zeros(0)
     Qg, Sg, Cg, Lg = Q.copy(), S.copy(), C.copy(), L.copy()
     Q1 = Q.copy()

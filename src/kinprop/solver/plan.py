@@ -47,6 +47,11 @@ class Plan(NamedTuple):
     coupling_row: Array  # their local row within the block
     coupling_free: Array  # their free index (solved in an earlier block)
     coupling_ptr: Array
+    #: every block square: a regular free Jacobian leaves no freedom (the Newton step is unique)
+    square: bool
+    #: per row of Phi: its scale to SI (``Engine.row_scale``), applied to a pseudo-inverse block's
+    #: rows, so that its least-squares fit and rank do not depend on the model's length unit
+    row_scale: Array
 
     @property
     def n_blocks(self) -> int:
@@ -82,10 +87,18 @@ def _order_square(rows: Array, cols: Array, r_loc: Array, c_loc: Array) -> list[
 
 
 def build_plan(
-    m: int, n: int, rows: Array, cols: Array, free: Array, column_variable: Array, weights: Array | None = None
+    m: int,
+    n: int,
+    rows: Array,
+    cols: Array,
+    free: Array,
+    column_variable: Array,
+    weights: Array | None = None,
+    row_scale: Array | None = None,
 ) -> Plan:
     """The plan for ``free`` columns (sorted) of an ``m x n`` Jacobian with entries at
-    ``rows``/``cols``; ``column_variable`` maps a column to its variable's first column."""
+    ``rows``/``cols``; ``column_variable`` maps a column to its variable's first column;
+    ``weights`` (per free column) of the step's metric, ``row_scale`` (per row) of its fit."""
     free = np.ascontiguousarray(free, dtype=np.int64)
     nf = free.size
     fidx = -np.ones(n, dtype=np.int64)
@@ -149,4 +162,6 @@ def build_plan(
     rows_b, cols_b = [r for r, _ in blocks], [c for _, c in blocks]
     return Plan(m, free, sw, need, np.zeros(n, dtype=np.int8), slot, cat(rows_b), ptr(rows_b), cat(cols_b), ptr(cols_b),
                 store_ptr,
-                c_entry.astype(np.int64), c_row.astype(np.int64), c_free.astype(np.int64), c_ptr)  # fmt: skip
+                c_entry.astype(np.int64), c_row.astype(np.int64), c_free.astype(np.int64), c_ptr,
+                bool(all(r.size == c.size for r, c in blocks if c.size)),
+                np.ones(m) if row_scale is None else np.ascontiguousarray(row_scale, dtype=float))  # fmt: skip

@@ -30,6 +30,9 @@ class SolveResult:
     notes: tuple[str, ...] = ()
     #: fraction of the change followed on the start's branch (1 when converged)
     fraction: float = 1.0
+    #: optimality residual (SI, weighted; 0 at the assembly closest to the start or without
+    #: freedom): ``kinprop.engine.Solution.optimality``
+    optimality: float = 0.0
 
     @property
     def status(self) -> str:
