@@ -72,7 +72,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "kinprop.cli.sensitivity",
         "Derivatives of outputs (default: the free variables) with respect to design variables.",
     ),
-    "assemble": ("kinprop.cli.solve", "Solve for the joint coordinates from the model's estimates."),
+    "assemble": (
+        "kinprop.cli.solve",
+        "Solve for the joint coordinates from the model's estimates (with freedom left: the assembly closest to them).",
+    ),
     "propagate": (
         "kinprop.cli.solve",
         "Change design variables and re-assemble, moving only the free variables; with --target, find the "
