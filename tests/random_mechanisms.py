@@ -320,3 +320,19 @@ def suite_mechanisms(count: int = 24, base_seed: int = 1000) -> list[RandomMecha
         ]
         out.append(random_mechanism(seed, tree, cuts, n_fixed=2))
     return out
+
+
+def assembled_set(count: int = 40) -> list[RandomMechanism]:
+    """Seeds ``0 .. count-1``: five tree joints cycling through the tree types, two cut joints
+    through the cut types and loop kinds, 0-2 couplings, assembled (the motion and statics
+    tests' common set)."""
+    return [
+        random_mechanism(
+            seed,
+            [TREE_TYPES[(seed + m) % len(TREE_TYPES)] for m in range(5)],
+            [(CUT_TYPES[(3 * seed + m) % len(CUT_TYPES)], LOOP_KINDS[(seed + m) % 3]) for m in range(2)],
+            assembled=True,
+            couplings=seed % 3,
+        )
+        for seed in range(count)
+    ]

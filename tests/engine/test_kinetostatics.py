@@ -19,18 +19,9 @@ from kinprop.engine.statics import _cut_partials, generalized_forces, statics_st
 from kinprop.kinematics.tables import E_COL, E_ROW, J_NQ, J_QCOL, K_JOINT, K_ROW0, T_CHILD, T_JOINT, T_REVERSED
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from random_mechanisms import CUT_TYPES, LOOP_KINDS, TREE_TYPES, random_mechanism
+from random_mechanisms import assembled_set
 
-RANDOM = [
-    random_mechanism(
-        seed,
-        [TREE_TYPES[(seed + m) % len(TREE_TYPES)] for m in range(5)],
-        [(CUT_TYPES[(3 * seed + m) % len(CUT_TYPES)], LOOP_KINDS[(seed + m) % 3]) for m in range(2)],
-        assembled=True,
-        couplings=seed % 3,
-    )
-    for seed in range(40)
-]
+RANDOM = assembled_set(40)
 
 
 def _drivable(engine: kp.Engine, st: kp.State) -> list[int]:

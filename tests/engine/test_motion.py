@@ -18,7 +18,7 @@ import kinprop as kp
 from kinprop.analysis.motion import motion
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from random_mechanisms import CUT_TYPES, LOOP_KINDS, TREE_TYPES, random_mechanism
+from random_mechanisms import CUT_TYPES, TREE_TYPES, assembled_set
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 D = math.pi / 180.0
@@ -144,16 +144,7 @@ def _drivable(engine: kp.Engine, st: kp.State) -> list[int]:
     return [int(c) for c in piv[:k]]
 
 
-RANDOM = [
-    random_mechanism(
-        seed,
-        [TREE_TYPES[(seed + m) % len(TREE_TYPES)] for m in range(5)],
-        [(CUT_TYPES[(3 * seed + m) % len(CUT_TYPES)], LOOP_KINDS[(seed + m) % 3]) for m in range(2)],
-        assembled=True,
-        couplings=seed % 3,
-    )
-    for seed in range(40)
-]
+RANDOM = assembled_set(40)
 
 
 @pytest.mark.parametrize("rm", RANDOM, ids=lambda rm: f"seed{rm.seed}")
