@@ -72,10 +72,13 @@ sys.stdout.write(json.dumps(out))
 """
 
 
-def run_kinprop_cases(cases: Sequence[Sequence[object]], timeout: int = 90) -> list[subprocess.CompletedProcess[str]]:
+def run_kinprop_cases(
+    cases: Sequence[Sequence[object]], timeout: int = 90, env: dict[str, str] | None = None
+) -> list[subprocess.CompletedProcess[str]]:
     """Each of ``cases`` (argument lists) as ``kinprop ARGS``, all in ONE fresh process limited
-    to :data:`MEMORY_LIMIT`, each case stopped after ``timeout`` seconds (exit code None): a
-    bounded run without an interpreter, the library's imports and its kernels per case."""
+    to :data:`MEMORY_LIMIT` (with ``env`` added to its environment), each case stopped after
+    ``timeout`` seconds (exit code None): a bounded run without an interpreter, the library's
+    imports and its kernels per case."""
     p = subprocess.run(
         [sys.executable, "-c", _CASES_CHILD, str(timeout)],
         input=json.dumps([[str(a) for a in args] for args in cases]),
@@ -83,7 +86,7 @@ def run_kinprop_cases(cases: Sequence[Sequence[object]], timeout: int = 90) -> l
         text=True,
         timeout=timeout * len(cases) + 120,
         preexec_fn=_limit_memory,
-        env={k: v for k, v in os.environ.items() if k != "FORCE_COLOR"},
+        env={k: v for k, v in os.environ.items() if k != "FORCE_COLOR"} | (env or {}),
     )
     assert p.returncode == 0, p.stderr[-3000:]
     return [
