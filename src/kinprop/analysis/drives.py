@@ -34,6 +34,7 @@ from kinprop.analysis.targets import (
 )
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
+from kinprop.engine.units import RADIANS_PER
 from kinprop.errors import AddressError, ConvergenceError
 from kinprop.model import Model
 from kinprop.propagation.propagate import engine_for
@@ -53,7 +54,7 @@ def _key(cs: Sequence[Condition]) -> tuple:
 def _to_model_units(model: Model, spec: TargetSpec, value: float, engine: Engine) -> float:
     """A configuration output (internal: metric angles deg, joint angles rad) in model units."""
     if _kind(model, spec.output) == "deg":
-        return value if model.units.get("angle") == "deg" else float(np.radians(value))
+        return value if model.units.get("angle") == "deg" else value * RADIANS_PER["deg"]
     return value * derivative_scale(model, spec.output, engine)
 
 

@@ -253,7 +253,7 @@ def _config_outputs(model: Model, engine: Engine, names: list[str]) -> Callable[
     return outputs
 
 
-_DEG = 180.0 / math.pi
+_DEG = 1.0 / RADIANS_PER["deg"]  # metrics are computed in degrees
 _XYZ = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
 
 
@@ -430,9 +430,9 @@ class TargetPropagation:
         for spec, t in zip(self.specs, self.result.targets, strict=True):
             k, kind = 1.0, _kind(self.model, spec.output)
             if kind == "rad" and deg and spec.slope is None:
-                k = 180 / math.pi
+                k = 1.0 / RADIANS_PER["deg"]
             elif kind in ("deg", "gain") and not deg:  # a metric angle (degrees inside) in a radian model
-                k = math.pi / 180
+                k = RADIANS_PER["deg"]
             row = {"target": spec.text, "output": spec.output, "unit": self.unit(spec)}
             rows.append(row | {n: t[n] * k for n in ("value", "before", "achieved", "residual")})
         return rows

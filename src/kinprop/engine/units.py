@@ -84,6 +84,16 @@ def angle_indices(model: Model, joint: str, engine: HasUnits | None = None) -> l
     return list(_table(model, engine).angles.get(joint, ()))
 
 
+def tree_coordinates(q: object, angles: tuple[int, ...] | list[int], angle_unit: str, to_solver: bool) -> Array:
+    """A tree joint's coordinates between a file's angle unit and radians: its ``angles``
+    components (``JointType.angle_indices``) scaled by :data:`RADIANS_PER` (a copy)."""
+    out = np.array(q, dtype=float)
+    idx = list(angles)
+    if idx and RADIANS_PER[angle_unit] != 1.0:
+        out[idx] = out[idx] * RADIANS_PER[angle_unit] if to_solver else out[idx] / RADIANS_PER[angle_unit]
+    return out
+
+
 def _degrees(model: Model) -> bool:
     return model.units.get("angle") == "deg"
 
@@ -286,4 +296,5 @@ __all__ = [
     "from_solver_units",
     "joint_values_to_model_units",
     "to_solver_units",
+    "tree_coordinates",
 ]
