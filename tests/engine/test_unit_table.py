@@ -45,3 +45,14 @@ def test_the_angle_table_is_resolved_once_per_engine(examples, monkeypatch):
         assert address_unit(model, "O2.q", eng) == "deg" and address_unit(model, "B.s_i[0]", eng) == "m"
     assert calls == []
     np.testing.assert_array_equal(to_solver_units(model, "B.s_i", [0.4, 0, 0], eng), [0.4, 0, 0])
+
+
+def test_without_an_engine_the_table_is_resolved_once_per_mechanism(examples, monkeypatch):
+    model = kp.load_model(examples / "fourbar.yaml")
+    calls = []
+    real = units.build_topology
+    monkeypatch.setattr(units, "build_topology", lambda m: calls.append(m) or real(m))
+    units._TABLES.clear()
+    for _ in range(3):
+        assert float(from_solver_units(model, "O2.q", [math.pi / 2])[0]) == pytest.approx(90.0, rel=1e-15)
+    assert len(calls) == 1

@@ -24,6 +24,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Protocol
+from weakref import WeakKeyDictionary
 
 import numpy as np
 
@@ -73,10 +74,19 @@ class UnitTable:
         return cls(angles, euler, n)
 
 
+#: tables resolved without an engine, once per mechanism (kept while the mechanism lives)
+_TABLES: WeakKeyDictionary[Mechanism, UnitTable] = WeakKeyDictionary()
+
+
 def _table(model: Model, engine: HasUnits | None) -> UnitTable:
-    """The engine's table (compiled from the model's mechanism) when given, else resolved here
-    (a topology per call: hot paths pass their engine)."""
-    return engine.unit_table if engine is not None else UnitTable.of(model.mechanism)
+    """The engine's table (compiled from the model's mechanism) when given, else the
+    mechanism's, resolved once."""
+    if engine is not None:
+        return engine.unit_table
+    table = _TABLES.get(model.mechanism)
+    if table is None:
+        table = _TABLES[model.mechanism] = UnitTable.of(model.mechanism)
+    return table
 
 
 def angle_indices(model: Model, joint: str, engine: HasUnits | None = None) -> list[int]:
