@@ -22,7 +22,7 @@ A target spec (CLI ``--target``, Python ``propagate_targets(model, [...])``)::
 * ``WEIGHT`` (default 1) multiplies the target's residual in the least-squares compromise when
   targets conflict (a miss of 1/WEIGHT units counts as one).
 
-:func:`propagate_targets` solves by :func:`kinprop.propagation.targets.solve_targets` (the
+:func:`propagate_targets` solves by :func:`kinprop.engine.targets.solve_targets` (the
 minimum-(weighted-)norm change of the ``free`` design variables: ``hardpoint:J[.i|.j]``,
 ``axis:J``, ``J.s_i``, ``J.length``, groups ``s C l``). Output Jacobians are analytic for
 points, hardpoints, distances, coordinates, design variables and the camber, toe and
@@ -54,6 +54,7 @@ from kinprop.analysis.metrics import (
 )
 from kinprop.analysis.outputs import _distance_ends, expand_outputs, output_function
 from kinprop.engine import Engine, State, Status
+from kinprop.engine.targets import Configuration, Row, TargetResult, output_jacobian, solve_targets
 from kinprop.engine.units import METRES_PER, RADIANS_PER, changes_to_internal, check_units
 from kinprop.errors import AddressError
 from kinprop.model import Model
@@ -62,7 +63,6 @@ from kinprop.propagation.hardpoints import body_rotation, free_addresses, free_w
 from kinprop.propagation.point_jacobians import PointJacobians, PointSpec
 from kinprop.propagation.poses import joint_values
 from kinprop.propagation.propagate import Propagation, engine_for, propagation_of
-from kinprop.propagation.targets import Configuration, Row, TargetResult, output_jacobian, solve_targets
 from kinprop.spatial import Array
 
 _NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/]*)\s*$")
@@ -527,7 +527,7 @@ def propagate_targets(
     units (``units="solver"``: radians). Target values carry their own unit (module docstring).
     ``weights``: ``{address or group: w}``, a larger weight lets a variable move more.
     ``analytic``: analytic output Jacobians where available (False: central differences of the
-    output map for every output; :mod:`kinprop.propagation.targets`).
+    output map for every output; :mod:`kinprop.engine.targets`).
     """
     eng = engine_for(model, engine)
     start = eng.state_of(model)

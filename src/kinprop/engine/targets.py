@@ -49,7 +49,7 @@ from typing import Any
 
 import numpy as np
 
-from kinprop.engine import Engine, Solution, State, Status
+from kinprop.engine.engine import Engine, Solution, State, Status
 from kinprop.errors import AddressError
 from kinprop.spatial import Array, log_so3
 

@@ -248,8 +248,8 @@ def test_design_weights_shift_the_change_between_hardpoints():
 def test_output_jacobian_of_a_hardpoint_is_the_body_rotation():
     """The output map's central difference against the analytic d(r + A s')/ds' = A."""
     from kinprop import compile
+    from kinprop.engine.targets import output_jacobian
     from kinprop.propagation.hardpoints import body_rotation
-    from kinprop.propagation.targets import output_jacobian
 
     model = solved("double_wishbone.yaml")
     eng = compile(model)
@@ -305,7 +305,7 @@ def _tangent(engine, state):
 def test_analytic_output_jacobians_match_central_differences_of_the_output_map():
     from kinprop import compile, propagate
     from kinprop.analysis.targets import _config_jacobian, _config_outputs
-    from kinprop.propagation.targets import output_jacobian
+    from kinprop.engine.targets import output_jacobian
 
     model = solved("double_wishbone.yaml")
     eng = compile(model)
