@@ -221,6 +221,14 @@ FreeOption = Annotated[
     list[str] | None,
     typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l coef inputs) or addresses; default q"),
 ]
+HoldOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--hold",
+        metavar="JOINT",
+        help="hold JOINT's coordinates as a declared input is held (repeat; --free JOINT.q frees it again)",
+    ),
+]
 WeightOption = Annotated[
     list[str] | None, typer.Option("--weight", metavar="ADDRESS=W", help="ADDRESS_OR_GROUP=W: larger moves more")
 ]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
@@ -11,6 +12,7 @@ from rich.table import Table
 from kinprop.cli.app import (
     EXIT_NOT_CONVERGED,
     FreeOption,
+    HoldOption,
     WeightOption,
     app,
     err,
@@ -39,6 +41,7 @@ from kinprop.io.units import changes_to_internal
 from kinprop.io.writer import atomic_write, dump_model_like
 from kinprop.propagation import Propagation, propagate
 from kinprop.propagation.hardpoints import free_addresses, free_weights, is_global, resolve_changes
+from kinprop.propagation.propagate import hold as hold_joints
 
 Tol = Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL (the paper used 1e-3)")]
 MaxIter = Annotated[int, typer.Option("--max-iter", help="maximum Newton iterations")]
@@ -186,6 +189,7 @@ def propagate_cmd(
         ),
     ] = None,
     free: FreeOption = None,
+    hold: HoldOption = None,
     weight: WeightOption = None,
     tol: Tol = 1e-10,
     max_iter: MaxIter = 50,
@@ -211,7 +215,10 @@ def propagate_cmd(
     given = parse_assignments("--set", set_)
     check_set_not_free(given, free)
     weights = parse_weights(weight)
-    m = load_model_cli(model)
+    if hold and target:
+        raise ValueError("--hold with --target: hold joints by declaring them in the model's inputs: instead")
+    m = held = load_model_cli(model)
+    m = hold_joints(m, hold or [])  # held like declared inputs, for this run only
     changes = changes_to_internal(m, {k: v for k, v in given.items() if not is_global(k)})
     changes |= {k: v for k, v in given.items() if is_global(k)}
     if target:
@@ -237,4 +244,7 @@ def propagate_cmd(
         as_json=as_json,
         method=method,
     )
+    if hold:  # the written model declares the file's own inputs, not this run's --hold
+        prop = replace(prop, before=replace(prop.before, mechanism=held.mechanism),
+                       after=replace(prop.after, mechanism=held.mechanism), engine=None)  # fmt: skip
     report(prop, f"propagate {model}", output, as_json, csv, plot, source=model, quiet=quiet)

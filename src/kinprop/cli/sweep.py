@@ -17,6 +17,7 @@ from kinprop.analysis.sweep import parse_drive, plot_sweep, sweep
 from kinprop.cli.app import (
     EXIT_NOT_CONVERGED,
     FreeOption,
+    HoldOption,
     app,
     err,
     handles_user_errors,
@@ -38,6 +39,7 @@ from kinprop.cli.checks import (
 from kinprop.io.arguments import parse_assignments
 from kinprop.io.commands import label_units, sweep_json
 from kinprop.io.units import changes_to_internal
+from kinprop.propagation.propagate import hold
 
 #: show a progress bar from this many steps on
 PROGRESS_FROM = 50
@@ -142,12 +144,14 @@ def sweep_cmd(
         typer.Option("--set", metavar="ADDRESS=VALUE", help="ADDRESS=VALUE design change applied at step 0"),
     ] = None,
     free: FreeOption = None,
+    hold_: HoldOption = None,
     outputs: Annotated[
         list[str] | None,
         typer.Option(
             "--out",
             metavar="NAME",
-            help="output names (point:BODY.NAME, metric:WHEEL.camber, J.q ...); default: named points and metrics",
+            help="output names (point:BODY.NAME, body:BODY (its pose), distance:A,B, metric:WHEEL.camber, J.q ...); "
+            "default: named points and metrics",
         ),
     ] = None,
     output: Annotated[
@@ -190,7 +194,7 @@ def sweep_cmd(
         require("pyarrow")
     if plot is not None:
         require("matplotlib")
-    m = load_model_cli(model)
+    m = hold(load_model_cli(model), hold_ or [])  # held like declared inputs
     drives = [parse_drive(m, d) for d in drive]
     changes = changes_to_internal(m, given)
     if x is not None:

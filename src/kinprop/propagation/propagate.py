@@ -213,6 +213,29 @@ def check_coordinates_movable(engine: Engine, start: State, changes: Mapping[str
                 )
 
 
+def hold(model: Model, joints: Sequence[str], where: str = "--hold") -> Model:
+    """``model`` with ``joints`` (``J`` or ``J.q[k]``) held like its declared inputs: added to
+    ``mechanism.inputs``, so the group ``q`` leaves them where they are and ``--free J.q``
+    frees them again. For a model without ``inputs:`` (an imported MJCF), this holds two
+    joints without listing every other one as free. Raises :class:`AddressError` naming
+    ``where`` for an unknown joint or one that has no coordinates of its own (a cut joint)."""
+    if not joints:
+        return model
+    mech = model.mechanism
+    tree = compile(mech).topology.tree_joints
+    for name in joints:
+        joint = name.split(".q")[0].split("[")[0]
+        if joint not in mech.joint_names:
+            raise AddressError(f"{where} {name!r}: unknown joint; joints are {', '.join(mech.joint_names)}")
+        if joint not in tree or mech.joint(joint).jtype.n_coordinates == 0:
+            raise AddressError(
+                f"{where} {name!r}: {joint} has no coordinates of its own to hold (a cut or fixed joint); "
+                "hold a joint of the spanning tree"
+            )
+    inputs = tuple(dict.fromkeys([*mech.inputs, *joints]))
+    return replace(model, mechanism=replace(mech, inputs=inputs))
+
+
 def apply_changes(
     model: Model, changes: Mapping[str, object], engine: Engine | None = None
 ) -> tuple[Model, dict[str, Array], set[str]]:

@@ -29,6 +29,9 @@ from kinprop.joints import joint_type
 from kinprop.model import Joint, Model, parse_address
 from kinprop.spatial import Array
 
+#: the angle components of a body pose output (``body:B[roll]``, kinprop.analysis.outputs)
+BODY_ANGLES = ("[roll]", "[pitch]", "[yaw]")
+
 
 def _tree_joints(model: Model, engine: Engine | None) -> Container[str]:
     """The tree joints: from ``engine`` (compiled from the model's mechanism) when given, else
@@ -142,12 +145,15 @@ def changes_to_model_units(
 def address_unit(model: Model, name: str, engine: Engine | None = None) -> str:
     """The unit, in the model's units, of an address or a layout column label: ``J01.q`` ->
     ``deg`` (a revolute in a degree model), ``J03.q`` -> ``m`` (a slide), ``J12.s_j[0]``,
-    ``J12.length``, ``point:...``, ``hardpoint:...`` -> the length unit, ``J.C_i`` -> ``""`` (a
-    rotation matrix), Euler parameters -> ``""``; anything else ``""`` (metric names:
+    ``J12.length``, ``point:...``, ``hardpoint:...``, ``distance:...``, ``body:B[x]`` -> the
+    length unit, ``body:B[roll]`` -> the angle unit, ``J.C_i`` -> ``""`` (a rotation matrix),
+    Euler parameters -> ``""``; anything else ``""`` (metric names:
     :func:`kinprop.analysis.units.unit_of`)."""
     length, angle = model.units.get("length", "m"), model.units.get("angle", "rad")
-    if name.startswith(("point:", "hardpoint:")):
+    if name.startswith(("point:", "hardpoint:", "distance:")):
         return length
+    if name.startswith("body:"):  # a pose component (kinprop.analysis.outputs)
+        return angle if name.endswith(BODY_ANGLES) else length if name.endswith("]") else ""
     try:
         addr = parse_address(name)
     except Exception:
@@ -192,8 +198,10 @@ def address_scale(model: Model, name: str, engine: Engine | None = None) -> floa
     """Factor from solver units to the model's units of an address's value or of a derivative
     by it: ``180/pi`` for a joint angle or a ``C`` column (per radian of body-frame rotation)
     in a degree model, else 1."""
-    if not _degrees(model) or name.startswith(("point:", "hardpoint:")):
+    if not _degrees(model) or name.startswith(("point:", "hardpoint:", "distance:")):
         return 1.0
+    if name.startswith("body:"):
+        return 180.0 / math.pi if name.endswith(BODY_ANGLES) else 1.0
     try:
         addr = parse_address(name)
     except Exception:
