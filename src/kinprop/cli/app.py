@@ -368,13 +368,15 @@ def load_model_cli(path: Path) -> Model:
     user sees what is happening (a pipe or CI log gets nothing extra)."""
     import warnings
 
+    from kinprop.errors import UnitsWarning
     from kinprop.io.points import JointPointWarning
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", JointPointWarning)
+        warnings.simplefilter("always", UnitsWarning)
         model = _load_model_cli(path)
-    for w in caught:  # a declared point off its joint: one warning line each (issue 20)
-        if issubclass(w.category, JointPointWarning):
+    for w in caught:  # a declared point off its joint (issue 20), a size implausible in its unit: one line each
+        if issubclass(w.category, (JointPointWarning, UnitsWarning)):
             err.print(f"warning: {w.message}", soft_wrap=True, markup=False, highlight=False)
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
@@ -395,7 +397,6 @@ def _load_model_cli(path: Path) -> Model:
             model = load_model(path)
         mech = model.mechanism
         err.print(f"loaded {path}: {len(mech.bodies)} bodies, {len(mech.joints)} joints", soft_wrap=True)
-    warn_scales(model, path)
     return model
 
 
