@@ -163,10 +163,11 @@ def notes(status: Status, flags: int, substeps: int) -> list[str]:
 
 
 def message(status: Status, iterations: int, residual: float, tol: float, requested_tol: float, fraction: float = 1.0,
-            substeps: int = 1, flags: int = 0, optimality: float = 0.0) -> str:  # fmt: skip
+            substeps: int = 1, flags: int = 0, optimality: float = 0.0, max_iter: int = 0) -> str:  # fmt: skip
     """The one message table of :class:`Status` (every solve, batch row and sweep step says its
     outcome with it). ``residual`` is the scaled ``||Phi||`` (:attr:`Engine.row_scale`: metres);
-    ``optimality`` the optimality residual (SI; docs/analysis/weights.md), shown when not 0."""
+    ``optimality`` the optimality residual (SI; docs/analysis/weights.md), shown when not 0;
+    ``max_iter`` the iteration cap of one sub-step (0: not known)."""
     bound = (
         f"{tol:.3g} (round-off floor at this model's length scale; tol {requested_tol:g})"
         if tol > requested_tol
@@ -192,7 +193,8 @@ def message(status: Status, iterations: int, residual: float, tol: float, reques
     if status is Status.STEP_LIMIT:
         return (f"sub-step cap reached ({substeps} sub-steps, at {fraction:.6g} of the change): "
                 "the change is too large or too close to a singular configuration to follow")  # fmt: skip
-    steps = f" in all, over {substeps} sub-steps of at most max_iter each" if substeps > 1 else ""
+    cap = f"each allowed --max-iter {max_iter}" if max_iter else "each allowed --max-iter iterations"
+    steps = f" in all ({substeps} sub-steps of the change, {cap})" if substeps > 1 else ""
     return f"not converged after {iterations} iterations{steps}: ||Phi|| = {residual:.3g} >= {bound}"
 
 
@@ -222,6 +224,8 @@ class Solution:
     optimality: float = 0.0
     #: ``least-change`` or ``paper`` (:data:`METHODS`)
     method: str = "least-change"
+    #: the iteration cap of one sub-step (0: not known)
+    max_iter: int = 0
 
     @property
     def subdivided(self) -> bool:
@@ -240,7 +244,7 @@ class Solution:
     @property
     def message(self) -> str:
         return message(self.status, self.iterations, self.residual, self.tol, self.requested_tol, self.fraction,
-                       self.substeps, self.flags, self.optimality)  # fmt: skip
+                       self.substeps, self.flags, self.optimality, self.max_iter)  # fmt: skip
 
     @cached_property
     def design(self) -> Design:
@@ -275,6 +279,8 @@ class BatchSolution:
     requested_tol: float = 0.0
     #: per-variant optimality residual (:attr:`Solution.optimality`)
     optimality: Array | None = None
+    #: the iteration cap of one sub-step (0: not known)
+    max_iter: int = 0
 
     @property
     def converged(self) -> Array:
@@ -289,7 +295,7 @@ class BatchSolution:
                        1.0 if self.fraction is None else float(self.fraction[k]),
                        1 if self.substeps is None else int(self.substeps[k]),
                        0 if self.flags is None else int(self.flags[k]),
-                       0.0 if self.optimality is None else float(self.optimality[k]))  # fmt: skip
+                       0.0 if self.optimality is None else float(self.optimality[k]), self.max_iter)  # fmt: skip
 
     def notes(self, k: int) -> list[str]:
         return notes(self.status(k), 0 if self.flags is None else int(self.flags[k]),
@@ -761,7 +767,7 @@ class Engine:
             self._reference_signs[ref_key] = int(sign_start)
         return Solution(self, start, st, STATUSES[code], int(it), float(norm), hist[: min(hlen, hist.size)], cols,
                         cfg.tol, dict(changes or {}), tol, float(frac), int(subs), int(flags), float(opt),
-                        method)  # fmt: skip
+                        method, int(cfg.max_iter))  # fmt: skip
 
     def apply(self, start: State, changes: Mapping[str, Any]) -> tuple[State, dict[str, Array], set[str]]:
         """A copy of ``start`` with ``changes`` (address -> value) written; returns it, the
@@ -884,7 +890,7 @@ class Engine:
             newton.follow_batch(*args)
         return BatchSolution(st, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4], out[:, 2],
                              out[:, 5].astype(np.int64), out[:, 3].astype(np.int64), cfg.tol, tol,
-                             out[:, 6])  # fmt: skip
+                             out[:, 6], int(cfg.max_iter))  # fmt: skip
 
     def solve_sequence(
         self,
@@ -919,7 +925,7 @@ class Engine:
                                self.col_scale, cfg, steps.Q, steps.S, steps.C, steps.L, out)  # fmt: skip
         return steps.Q, BatchSolution(steps, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4],
                                       out[:, 2], out[:, 5].astype(np.int64), out[:, 3].astype(np.int64), cfg.tol,
-                                      tol, out[:, 6])  # fmt: skip
+                                      tol, out[:, 6], int(cfg.max_iter))  # fmt: skip
 
     # --- motion: velocities and accelerations (kinprop.engine.motion) ------------------------
     def motion(
