@@ -52,26 +52,17 @@ EXTRAS = {
 }
 
 
-#: every command, in the order ``kinprop --help`` lists them: the module that defines it (on
+#: every command, in the order ``kinprop --help`` lists them, a session's order (look at a
+#: model, solve it, analyse it, share it, other tools' files, the paper): the module that defines it (on
 #: ``app``) and its one-line help, the first paragraph of its docstring (tests/cli/test_startup.py
 #: checks both against the commands themselves)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "check": ("kinprop.cli.check", "Mechanism report: structure, loops, counts, mobility and redundant constraints."),
-    "convert": (
-        "kinprop.cli.convert",
-        "Convert a model between frame style (s', C, q) and hardpoint style (global points and axes), or write "
-        "it as a kinematic MuJoCo MJCF file (--to mjcf; at the model's coordinates).",
-    ),
     "examples": (
         "kinprop.cli.examples",
         "List the example models (the paper's mechanisms and more), or copy them to a directory.",
     ),
-    "paper": ("kinprop.cli.paper", "Reproduce the paper's Table 4 (slider-crank) and Table 1 (McPherson strut)."),
+    "check": ("kinprop.cli.check", "Mechanism report: structure, loops, counts, mobility and redundant constraints."),
     "plot": ("kinprop.cli.plot", "Draw a 3D stick figure of a model (PNG or interactive HTML)."),
-    "sensitivity": (
-        "kinprop.cli.sensitivity",
-        "Derivatives of outputs (default: the free variables) with respect to design variables.",
-    ),
     "assemble": (
         "kinprop.cli.solve",
         "Solve for the joint coordinates from the model's estimates (with freedom left: the assembly closest to them).",
@@ -82,24 +73,34 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "smallest change of the --free design variables meeting the targets.",
     ),
     "sweep": ("kinprop.cli.sweep", "Drive joint coordinates over a range; each step is solved from the previous one."),
-    "loads": (
-        "kinprop.cli.loads",
-        "Joint reactions, member forces (tension positive), spring and damper forces (positive pushing apart) "
-        "and the efforts that hold the inputs, at the model's assembled pose.",
-    ),
-    "import": ("kinprop.cli.importer", "Read another tool's mechanism file and write it as a kinprop model file."),
-    "serve": (
-        "kinprop.cli.serve",
-        "Start the design-propagation workbench in the browser (edit, propagate, sweep, undo).",
-    ),
-    "study": (
-        "kinprop.cli.study",
-        "Run a design study: every variant re-assembled, inputs and results streamed to Parquet.",
+    "sensitivity": (
+        "kinprop.cli.sensitivity",
+        "Derivatives of outputs (default: the free variables) with respect to design variables.",
     ),
     "tolerance": (
         "kinprop.cli.study",
         "Linearised output standard deviations from design-variable tolerances (sensitivity matrix).",
     ),
+    "study": (
+        "kinprop.cli.study",
+        "Run a design study: every variant re-assembled, inputs and results streamed to Parquet.",
+    ),
+    "loads": (
+        "kinprop.cli.loads",
+        "Joint reactions, member forces (tension positive), spring and damper forces (positive pushing apart) "
+        "and the efforts that hold the inputs, at the model's assembled pose.",
+    ),
+    "serve": (
+        "kinprop.cli.serve",
+        "Start the design-propagation workbench in the browser (edit, propagate, sweep, undo).",
+    ),
+    "import": ("kinprop.cli.importer", "Read another tool's mechanism file and write it as a kinprop model file."),
+    "convert": (
+        "kinprop.cli.convert",
+        "Convert a model between frame style (s', C, q) and hardpoint style (global points and axes), or write "
+        "it as a kinematic MuJoCo MJCF file (--to mjcf; at the model's coordinates).",
+    ),
+    "paper": ("kinprop.cli.paper", "Reproduce the paper's Table 4 (slider-crank) and Table 1 (McPherson strut)."),
 }
 
 

@@ -42,6 +42,7 @@ from kinprop.io.writer import atomic_write, dump_model_like
 from kinprop.propagation import Propagation, propagate
 from kinprop.propagation.hardpoints import free_addresses, free_weights, is_global, resolve_changes
 from kinprop.propagation.propagate import hold as hold_joints
+from kinprop.propagation.summary import shown, unit_text
 
 Tol = Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL (the paper used 1e-3)")]
 MaxIter = Annotated[int, typer.Option("--max-iter", help="maximum Newton iterations")]
@@ -63,8 +64,11 @@ Csv = Annotated[
 Plot = Annotated[Path | None, typer.Option("--plot", help="draw before (faded) and after: FILE.png or FILE.html")]
 
 
-def _fmt(values: list[float]) -> str:
-    text = " ".join(f"{x:.7g}" for x in values)
+def _fmt(values: list[float], scale: float | None = None) -> str:
+    """Values at 7 digits, round-off as 0 against ``scale`` (default: their largest)."""
+    if scale is None:
+        scale = max((abs(x) for x in values if x == x), default=0.0)
+    text = " ".join(shown(x, scale, 7) for x in values)
     return text if len(values) == 1 else f"[{text}]"
 
 
@@ -78,9 +82,9 @@ def comparison_table(prop: Propagation, title: str) -> Table:
     t.add_column("max |change|", justify="right")
     for row in variable_rows(prop):
         style = {"set": "bold yellow", "moved": "cyan"}.get(row["role"])
-        t.add_row(
-            row["variable"], row["unit"], _fmt(row["before"]), _fmt(row["after"]), f"{row['change']:.3g}", style=style
-        )
+        scale = max((abs(x) for x in [*row["before"], *row["after"]] if x == x), default=0.0)
+        t.add_row(row["variable"], unit_text(row["unit"]), _fmt(row["before"], scale), _fmt(row["after"], scale),
+                  f"{row['change']:.3g}", style=style)  # fmt: skip
     return t
 
 
