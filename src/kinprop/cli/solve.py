@@ -34,15 +34,16 @@ from kinprop.cli.checks import (
 from kinprop.cli.continuation import run_propagation, shown_warnings
 from kinprop.cli.targets import run_targets
 from kinprop.engine import compile as compile_engine
+from kinprop.engine.units import changes_to_internal
 from kinprop.io.arguments import parse_assignments, parse_weights
 from kinprop.io.commands import comparison_csv
 from kinprop.io.results import propagation_json, variable_rows
-from kinprop.io.units import changes_to_internal
 from kinprop.io.writer import atomic_write, dump_model_like
+from kinprop.model import Model
 from kinprop.propagation import Propagation, propagate
 from kinprop.propagation.hardpoints import free_addresses, free_weights, is_global, resolve_changes
 from kinprop.propagation.propagate import hold as hold_joints
-from kinprop.propagation.summary import shown, unit_text
+from kinprop.propagation.propagate import shown, unit_text
 
 Tol = Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL (the paper used 1e-3)")]
 MaxIter = Annotated[int, typer.Option("--max-iter", help="maximum Newton iterations")]
@@ -124,11 +125,13 @@ def report(
     plot: Path | None = None,
     source: Path | None = None,
     quiet: bool = False,
+    written_model: Model | None = None,
 ) -> None:
+    """Print and write a propagation; ``written_model``: the model ``-o`` writes (default ``prop.after``)."""
     r = prop.result
     written = []
     for path, write in (
-        (output, lambda p: dump_model_like(prop.after, p, source)),
+        (output, lambda p: dump_model_like(prop.after if written_model is None else written_model, p, source)),
         (csv, lambda p: write_csv(prop, p)),
         (plot, lambda p: write_plot(prop, p)),
     ):
@@ -145,7 +148,8 @@ def report(
         if not quiet:  # -q: the outcome line, notes and files only
             out.print(comparison_table(prop, title))
             out.print(
-                f"free: {' '.join(prop.free)}   rank {r.rank} of {r.n_equations} equations, {r.n_free} free columns"
+                f"free: {' '.join(prop.free)}   rank {r.rank} of {prop.engine.n_rows} equations, "
+                f"{r.free.size} free columns"
             )
             out.print(f"||Phi|| history: {'  '.join(f'{x:.6g}' for x in r.residual_history)}")
         out.print(r.message, style="green" if r.converged else "red")
@@ -248,7 +252,7 @@ def propagate_cmd(
         as_json=as_json,
         method=method,
     )
-    if hold:  # the written model declares the file's own inputs, not this run's --hold
-        prop = replace(prop, before=replace(prop.before, mechanism=held.mechanism),
-                       after=replace(prop.after, mechanism=held.mechanism), engine=None)  # fmt: skip
-    report(prop, f"propagate {model}", output, as_json, csv, plot, source=model, quiet=quiet)
+    # the written model declares the file's own inputs, not this run's --hold
+    written_model = replace(prop.after, mechanism=held.mechanism) if hold else None
+    report(prop, f"propagate {model}", output, as_json, csv, plot, source=model, quiet=quiet,
+           written_model=written_model)  # fmt: skip
