@@ -16,6 +16,12 @@ from kinprop.spatial import Array
 
 POINT = re.compile(r"^point:(?P<body>[^.\s\[\]]+)\.(?P<name>[^\s\[\]]+?)(\[(?P<c>[xyz012])\])?$")
 HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[^\s.\[\]]+)(\[(?P<c>[xyz012])\])?$")
+#: a body's pose, ``body:NAME`` (every component) or ``body:NAME[x|y|z|roll|pitch|yaw]``
+BODY = re.compile(r"^body:(?P<body>[^\s\[\]]+?)(\[(?P<c>[^\]]*)\])?$")
+#: the components of a body pose: the body frame's origin (global, length unit), then its
+#: orientation as ISO 8855 Tait-Bryan angles, z-y'-x'' (yaw, pitch, roll): ``A = Rz(yaw) Ry(pitch) Rx(roll)``
+POSE = ("x", "y", "z", "roll", "pitch", "yaw")
+POSE_ANGLES = ("roll", "pitch", "yaw")
 
 
 @dataclass(frozen=True)
@@ -70,6 +76,19 @@ class OutputContext:
         if ref is not None:  # a joint's point: it follows the joint (kinprop.model.joint_points)
             return self.hardpoint(*ref)
         return self.kin.r[body] + self.kin.A[body] @ np.asarray(pts[point], dtype=float)
+
+    def body_pose(self, body: str) -> Array:
+        """``[x, y, z, roll, pitch, yaw]`` of ``body``: its frame's global origin and the
+        Tait-Bryan angles (radians) of its rotation matrix ``A = Rz(yaw) Ry(pitch) Rx(roll)``
+        (the ISO 8855 yaw-pitch-roll sequence, intrinsic z-y'-x''; pitch in [-90, 90] deg, the
+        others in [-180, 180])."""
+        from scipy.spatial.transform import Rotation
+
+        mech = self.model.mechanism
+        if body not in mech.body_names:
+            raise AddressError(f"unknown body {body!r}; bodies are {', '.join(mech.body_names)}")
+        yaw, pitch, roll = Rotation.from_matrix(self.kin.A[body]).as_euler("ZYX")
+        return np.concatenate([np.asarray(self.kin.r[body], dtype=float), [roll, pitch, yaw]])
 
     def hardpoint(self, joint: str, side: str) -> Array:
         """Global origin of ``joint``'s frame on its first (``i``) or second (``j``) body."""

@@ -9,6 +9,9 @@ its components, e.g. ``point:wheel.wheel_centre`` into ``...[x]``, ``...[y]``, `
   ``point:BODY.NAME[x|y|z]``;
 * joint hardpoints, the global origin of the joint frame on the joint's first (``i``) or
   second (``j``) body: ``hardpoint:JOINT.i[x]``, ``hardpoint:JOINT.j[z]``;
+* a body's pose, the global origin of its frame and its orientation as yaw, pitch and roll
+  (ISO 8855 order, intrinsic z-y'-x''; angles in the model's angle unit): ``body:BODY`` (six
+  components) or ``body:BODY[x|y|z|roll|pitch|yaw]``;
 * the distance between two points (e.g. a spring's length), each ``BODY.NAME`` (a named
   point) or ``hardpoint:JOINT.i|j``: ``distance:chassis.spring_chassis,lca.spring_lca``;
 * suspension metrics of a wheel body (:mod:`kinprop.analysis.metrics`):
@@ -25,7 +28,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from kinprop.analysis.context import HARD, POINT, OutputContext, pivot_point
+from kinprop.analysis.context import BODY, HARD, POINT, POSE, OutputContext, pivot_point
 from kinprop.analysis.metrics import (
     METRIC_NEEDS,
     WheelSpec,
@@ -74,6 +77,15 @@ def expand_outputs(model: Model, names: Sequence[str], engine: Engine | None = N
         if is_load_output(name):
             load_value(model, name, {}, engine)  # the joint, element, input and load case exist
             out.append(name)
+        elif name.startswith("body:"):
+            m = BODY.match(name)
+            if not m or (m["c"] is not None and m["c"] not in POSE):
+                raise AddressError(f"bad output {name!r}: expected body:BODY or body:BODY[{'|'.join(POSE)}]")
+            if m["body"] not in model.mechanism.body_names:
+                raise AddressError(
+                    f"output {name!r}: unknown body {m['body']!r}; bodies are {', '.join(model.mechanism.body_names)}"
+                )
+            out += [name] if m["c"] is not None else [f"{name}[{c}]" for c in POSE]
         elif name.startswith("distance:"):
             ctx = OutputContext.of(model, engine=engine)
             for end in _distance_ends(name):
@@ -126,7 +138,8 @@ def _parse_variable(engine: Engine, name: str) -> Address:
     except AddressError:
         raise AddressError(
             f"bad output {name!r}: expected a coordinate (J.q[k]), a design variable (J.s_i[k], J.length), "
-            "point:BODY.NAME[x], hardpoint:JOINT.i[x] or a metric (metric:WHEEL.camber)"
+            "point:BODY.NAME[x], hardpoint:JOINT.i[x], body:BODY[x|roll], distance:A,B or a metric "
+            "(metric:WHEEL.camber)"
         ) from None
     if addr.field in ("C_i", "C_j"):
         raise AddressError(f"output {name!r}: orientations are not scalar outputs; use points or metrics")
@@ -145,6 +158,9 @@ def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, flo
     if name.startswith("distance:"):
         a, b = _distance_ends(name)
         return float(np.linalg.norm(ctx.point(a) - ctx.point(b)))
+    if name.startswith("body:"):
+        m = BODY.match(name)
+        return float(ctx.body_pose(m["body"])[POSE.index(m["c"])])  # type: ignore[index]
     m = _POINT.match(name)
     if name.startswith("point:") and m:
         return float(ctx.body_point(m.group("body"), m.group("name"))[AXES[m.group("c")]])

@@ -102,11 +102,28 @@ def output_sensitivity_matrix(
             sum(coef * D[:, index[c]] for c, coef in combos[label].items()) for label in combos
         ]
         D, columns = (np.column_stack(cols) if cols else np.zeros((len(names), 0))), keep + list(combos)
+    D, columns = _as_asked(engine, wrt, D, columns)
     if model_units and D.size:
         so = np.array([derivative_scale(model, n, engine) for n in names])
         si = np.array([derivative_scale(model, c, engine) for c in columns])
         D = D * so[:, None] / si[None, :]
     return D, list(names), columns, residual
+
+
+def _as_asked(engine: Engine, wrt: Sequence[str], D: Array, columns: list[str]) -> tuple[Array, list[str]]:
+    """``D``'s columns in the order ``wrt`` asks for them (the solve gives layout order); the
+    components of one address stay in their own order."""
+    rank: dict[str, int] = {}
+    for k, w in enumerate(wrt):
+        base = w.split("[")[0]
+        if is_global(base):  # hardpoint:J.i, hardpoint:J.i[z]: its own component labels
+            mine = [c for c in columns if c == w or (c.startswith(f"{w}[") and "[" not in w)]
+        else:
+            mine = [engine.column_labels[int(i)] for i in engine.columns([w])]
+        for c in mine:
+            rank.setdefault(c, k)
+    order = sorted(range(len(columns)), key=lambda i: (rank.get(columns[i], len(wrt)), i))
+    return D[:, order], [columns[i] for i in order]
 
 
 def output_sensitivity(
