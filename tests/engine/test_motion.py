@@ -248,3 +248,60 @@ def test_an_unassembled_state_says_so() -> None:
     assert mo.status == "not_assembled" and "assemble" in mo.message
     assert all(np.isnan(v).all() for v in mo.rates.values())
     assert np.isnan(mo.body_twist("rocker").angular).all()
+
+
+def _resolved_path(engine: kp.Engine, st: kp.State, col: int, rates: dict[str, float], h: float):
+    """Design column ``col`` moved by ``t`` (retraction: additive, or ``exp`` for C), the
+    coordinates re-solved (free q, closest assembly): the state direction, the rates' and the
+    twists' derivatives along that path by Richardson central differences of re-solved models."""
+
+    def at(t: float):
+        dx = np.zeros(engine.n_columns)
+        dx[col] = t
+        sol = engine.solve(st, ("q",), target=engine.retract(st, dx), tol=1e-15)
+        if not sol.converged:
+            raise _NoTruthError(sol.message)
+        ms = engine.motion(sol.state, rates)
+        return sol.state.Q, ms.qdot, ms.V
+
+    def d(k: float):
+        plus, minus = at(k * h), at(-k * h)
+        return [(p - m) / (2 * k * h) for p, m in zip(plus, minus, strict=True)]
+
+    return [(4 * a - b) / 3 for a, b in zip(d(0.5), d(1.0), strict=True)]
+
+
+@pytest.mark.parametrize("rm", RANDOM, ids=lambda rm: f"seed{rm.seed}")
+def test_design_derivatives_of_rates_match_re_solved_models(rm) -> None:
+    """``motion_derivatives``: the exact derivatives of every coordinate rate and body twist
+    with respect to design variables (s', C, lengths, coupling coefficients: four seeded
+    columns per mechanism) along the re-solved path, against Richardson central differences of
+    velocity analyses of re-solved models."""
+    from kinprop.engine.motion import motion_derivatives
+
+    engine = kp.compile(rm.model)
+    st = engine.state_of(rm.model)
+    cols = _drivable(engine, st)
+    if not cols:
+        pytest.skip("no drivable coordinates (mobility 0 or only Euler parameters)")
+    rng = np.random.default_rng(rm.seed)
+    labels = engine.column_labels
+    rates = {labels[c]: float(r) for c, r in zip(cols, rng.uniform(-1, 1, len(cols)), strict=True)}
+    nq = engine.n_coordinates
+    design = rng.choice(np.arange(nq, engine.n_columns), size=min(4, engine.n_columns - nq), replace=False)
+    checked = 0
+    for col in design:
+        try:
+            dQ, dqdot, dV = _resolved_path(engine, st, int(col), rates, 1e-4)
+        except _NoTruthError:
+            continue
+        direction = np.zeros(engine.n_columns)
+        direction[col], direction[:nq] = 1.0, dQ
+        md = motion_derivatives(engine, st, rates, direction[:, None])
+        assert md.motion.ok, md.motion.message
+        sq, sv = max(1.0, float(np.max(np.abs(dqdot)))), max(1.0, float(np.max(np.abs(dV))))
+        assert np.max(np.abs(md.qdot[0] - dqdot)) < 1e-7 * sq, labels[col]
+        assert np.max(np.abs(md.V[0] - dV)) < 1e-7 * sv, labels[col]
+        checked += 1
+    if not checked:
+        pytest.skip("the position solves do not follow these design changes; no truth to compare with")
