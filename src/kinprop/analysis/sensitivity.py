@@ -44,7 +44,7 @@ RESIDUAL_WARN = 1e-6
 #: relative step of the central difference of the output map
 FD_STEP = 1e-6
 #: :func:`derivative_method` values
-EXACT, CENTRAL = "exact (analytic velocity derivatives)", "central difference of the output map"
+EXACT, CENTRAL = "exact (analytic velocity derivatives)", "central difference of the output map along the exact tangent"
 
 
 def derivative_method(model: Model, name: str) -> str:
