@@ -350,3 +350,23 @@ def test_exact_sensitivities_on_the_mcpherson_strut() -> None:
     _check_exact_sensitivities(
         model, outs, ["ST.s_i[0]", "RS.s_i[1]", "TD.s_j[2]", "RS.length", "TD.length"], 1e-4, 1e-6
     )
+
+
+def test_sensitivity_cli_names_the_method() -> None:
+    """``kinprop sensitivity --json``: ``method`` says which rows are exact; the matrix is the
+    API's."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from kinprop.analysis.sensitivity import CENTRAL, EXACT
+    from kinprop.cli import app
+
+    path = EXAMPLES / "double_wishbone.yaml"
+    args = ["sensitivity", str(path), "--wrt", "TR.s_i", "--of", "camber_gain", "--of", "toe", "--json"]
+    res = CliRunner().invoke(app, args)
+    assert res.exit_code == 0, res.output
+    obj = json.loads(res.stdout)
+    assert obj["method"] == {"camber_gain": EXACT, "toe": CENTRAL}
+    D = kp.output_sensitivity(kp.assemble(kp.load_model(path)).after, ["camber_gain", "toe"], ["TR.s_i"])
+    np.testing.assert_allclose(obj["matrix"], D.to_numpy(), rtol=1e-9)
