@@ -65,11 +65,11 @@ def travel_rates(engine: Engine, model: Model, travel_input: str | None, state: 
     more than one degree of freedom."""
     inputs = [a if "." in a else f"{a}.q" for a in model.mechanism.inputs]
     nq = engine.n_coordinates
-    J = engine.evaluate(state)[1][:, :nq] * engine.row_scale[:, None] / engine.col_scale[None, :nq]
     tb = engine.tables
     racks = [int(tb.joint[j, J_QCOL]) for j in tb.cut[:, K_JOINT] if tb.joint[j, J_NQ] > 0]
 
     def null(cols: list[int]) -> Array:
+        J = engine.evaluate(state)[1][:, :nq] * engine.row_scale[:, None] / engine.col_scale[None, :nq]
         E = np.zeros((len(cols), nq))
         E[np.arange(len(cols)), cols] = 1.0
         M = np.vstack([J, E])
