@@ -32,6 +32,7 @@ violate the constraints (a locked input), the status is ``singular`` and every r
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -39,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from kinprop.constraints.basic import DISTANCE, DOT1, DOT2, SPHERICAL
+from kinprop.jit import njit
 from kinprop.joints import composite, placement, universal
 from kinprop.joints import motion as joint_motion
 from kinprop.kinematics import kernels
@@ -67,6 +69,7 @@ from kinprop.kinematics.tables import (
     T_PARENT,
     T_REVERSED,
 )
+from kinprop.solver import newton
 from kinprop.spatial import Array
 
 #: ``kinprop.engine.Engine`` and its ``State``: engine.py calls into this module (``Engine.motion``),
@@ -94,7 +97,8 @@ class MotionState:
     R: Array  # joint frame axes (nj, 2, 3, 3)
     qddot: Array | None = None
     dV: Array | None = None  # (nb, 6) spatial accelerations [dv_O, alpha]
-    #: smallest / largest singular value of the scaled velocity system
+    #: smallest / largest singular value of the scaled velocity system (NaN: solved compiled by
+    #: LU on the plan, :func:`velocity_solve`, which does not compute it)
     conditioning: float = 1.0
     #: ``||Phi||`` of the state (scaled as the solver's test): the rates are those of the
     #: tangent there; :func:`kinprop.analysis.motion.motion` refuses a state that is not an assembly
@@ -389,11 +393,110 @@ def _gamma(engine: Engine, fr: _Frames, xdot: Array, V: Array, dV: Array) -> Arr
     return g
 
 
+#: :func:`velocity_solve` outcomes
+SOLVED, NEEDS_SVD, INCONSISTENT = 0, 1, 2
+#: relative consistency residual of the driven rates above which the compiled solve gives up
+CONSISTENCY_RTOL = 1e-8
+
+
+@njit
+def velocity_solve(tb, plan, Q, S, C, L, rates, need, rows, cols, row_scale, buf, qdot, V, out):
+    """Rates of every coordinate and twists of every body at the state ``Q, S, C, L``, compiled,
+    on the engine's plan of the free set (every coordinate column not driven;
+    :mod:`kinprop.solver.plan`): ``Phi_F qdot_F = -Phi_D qdot_D`` is one Newton linear step
+    (:func:`kinprop.solver.newton.newton_step`) with ``Phi_D qdot_D`` in place of ``Phi``.
+
+    ``rates`` (n_q): the driven columns' rates, zero elsewhere (``plan.free`` must be the other
+    coordinate columns); ``need`` (n_columns, int8): 1 on every coordinate column; ``rows``,
+    ``cols``: the Jacobian's pattern (``Engine.pattern``); ``buf``: :func:`kinprop.solver.newton.buffers`
+    of the plan (afterwards ``buf[B_WS]`` holds the poses and frames). Writes ``qdot`` (n_q),
+    ``V`` (nb, 6: ``[v_O ; omega]``) and ``out[0] = ||row_scale Phi||``. Returns ``SOLVED``,
+    ``NEEDS_SVD`` (a block is rectangular or singular: the caller takes the SVD path with its rank
+    check) or ``INCONSISTENT`` (the driven rates violate rows the free columns do not reach)."""
+    Phi, vals, ws, none = buf[newton.B_PHI], buf[newton.B_VALS], buf[newton.B_WS], buf[newton.B_NONE]
+    nq = qdot.shape[0]
+    kernels.evaluate(tb, Q, S, C, L, ws, Phi, vals, need, none, none)
+    r2 = 0.0
+    for i in range(Phi.shape[0]):
+        r2 += (Phi[i] * row_scale[i]) ** 2
+        Phi[i] = 0.0
+    out[0] = np.sqrt(r2)
+    for k in range(rows.shape[0]):  # Phi_D qdot_D
+        c = cols[k]
+        if c < nq and rates[c] != 0.0:
+            Phi[rows[k]] += vals[k] * rates[c]
+    if newton.newton_step(plan, Phi, vals, buf, False) == 0:
+        return NEEDS_SVD
+    dx = buf[newton.B_DX]
+    for c in range(nq):
+        qdot[c] = rates[c]
+    for f in range(plan.free.shape[0]):
+        if not np.isfinite(dx[f]):
+            return NEEDS_SVD
+        qdot[plan.free[f]] = dx[f]
+    for i in range(Phi.shape[0]):  # rows no free column reaches: the driven rates must satisfy them
+        Phi[i] = 0.0
+    scale = 0.0
+    for k in range(rows.shape[0]):
+        c = cols[k]
+        if c < nq:
+            Phi[rows[k]] += vals[k] * qdot[c]
+            scale = max(scale, abs(vals[k] * qdot[c]) * row_scale[rows[k]])
+    for i in range(Phi.shape[0]):
+        if abs(Phi[i]) * row_scale[i] > CONSISTENCY_RTOL * max(1.0, scale):
+            return INCONSISTENT
+    Tq = ws[kernels.W_TWIST_Q]
+    for b in range(V.shape[0]):
+        for x in range(6):
+            V[b, x] = 0.0
+    for t in range(tb.tree.shape[0]):
+        j, par, chi = tb.tree[t, T_JOINT], tb.tree[t, T_PARENT], tb.tree[t, T_CHILD]
+        q0, n = tb.joint[j, J_QCOL], tb.joint[j, J_NQ]
+        for x in range(6):
+            v = V[par, x]
+            for y in range(max(n, 0)):
+                v += Tq[t, x, y] * qdot[q0 + y]
+            V[chi, x] = v
+    return SOLVED
+
+
+def _compiled_motion(engine: Engine, state: State, rates: Mapping[str, Any]) -> MotionState | None:
+    """:func:`velocity_solve` on the engine's plan (None: the SVD path must decide)."""
+    cols, vals = _driven_rows(engine, rates)
+    nq, tb = engine.n_coordinates, engine.tables
+    if len(set(cols)) != len(cols):
+        return None
+    rate = np.zeros(nq)
+    rate[cols] = vals
+    free = np.setdiff1d(np.arange(nq), cols)
+    plan = engine.plan(free)
+    buf = newton.buffers(tb, plan, engine.nnz)
+    need = np.zeros(engine.n_columns, np.int8)
+    need[:nq] = 1
+    rows, pcols = engine.pattern
+    st = state.writable()
+    qdot, V, out = np.zeros(nq), np.zeros((tb.fixed.shape[0], 6)), np.zeros(1)
+    code = velocity_solve(
+        tb, plan, st.Q, st.S, st.C, st.L, rate, need, rows, pcols, engine.row_scale, buf, qdot, V, out
+    )
+    if code != SOLVED:
+        return None
+    ws = buf[newton.B_WS]
+    r, A, P, R = (ws[k] for k in (kernels.W_BODY_R, kernels.W_BODY_A, kernels.W_FRAME_P, kernels.W_FRAME_R))
+    return MotionState(OK, "ok", qdot, V, r, A, P, R, conditioning=math.nan, residual=float(out[0]))
+
+
 def motion_state(
     engine: Engine, state: State, rates: Mapping[str, Any], accelerations: Mapping[str, Any] | None = None
 ) -> MotionState:
     """Velocities and, when ``accelerations`` (of the same driven coordinates; missing ones 0)
-    is given, accelerations of every coordinate and body (module docstring)."""
+    is given, accelerations of every coordinate and body (module docstring). Velocities alone
+    are solved compiled on the engine's plan (:func:`velocity_solve`) when every block is square
+    and regular; otherwise (and for accelerations) by the SVD with its rank check."""
+    if accelerations is None:
+        ms = _compiled_motion(engine, state, rates)
+        if ms is not None:
+            return ms
     return _motion(engine, _Frames(engine, state), rates, accelerations)[0]
 
 
@@ -492,4 +595,12 @@ def motion_derivatives(engine: Engine, state: State, rates: Mapping[str, Any], d
     return MotionDerivatives(ms, pose, dq, dV)
 
 
-__all__ = ["MotionDerivatives", "MotionState", "cross3", "motion_derivatives", "motion_state", "spatial_cross"]
+__all__ = [
+    "MotionDerivatives",
+    "MotionState",
+    "cross3",
+    "motion_derivatives",
+    "motion_state",
+    "spatial_cross",
+    "velocity_solve",
+]
