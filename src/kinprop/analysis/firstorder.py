@@ -42,7 +42,7 @@ from kinprop.engine.motion import MotionState, motion_derivatives
 from kinprop.errors import AddressError
 from kinprop.kinematics.tables import J_NQ, J_QCOL, K_JOINT
 from kinprop.model import Model
-from kinprop.spatial import EZ, Array
+from kinprop.spatial import Array
 
 #: |n.u| below this: the screw axis is parallel to the view plane (the centre at infinity)
 PARALLEL_TOL = 1e-12
@@ -79,9 +79,10 @@ def travel_rates(engine: Engine, model: Model, travel_input: str | None, state: 
     if travel_input is not None or inputs:
         drive = (travel_input if "." in travel_input else f"{travel_input}.q") if travel_input else inputs[0]
         held = [a for a in inputs if a != drive]
-        driven = [int(c) for c in engine.columns([drive, *held])]
-        if racks and null(driven).shape[0] > 0:  # underdetermined: hold the racks too
-            held += [engine.column_labels[c] for c in racks if c not in driven]
+        if racks:
+            driven = [int(c) for c in engine.columns([drive, *held])]
+            if null(driven).shape[0] > 0:  # underdetermined: hold the racks too
+                held += [engine.column_labels[c] for c in racks if c not in driven]
     else:  # the mechanism's only degree of freedom (racks held): drive its largest coordinate
         free = null(racks)
         if free.shape[0] != 1:
@@ -109,51 +110,90 @@ def travel_motion(
 COMPLEX_STEP = 1e-30
 
 
+class _Vec:
+    """A 3-vector of Python scalars, real or complex (the metric formulas' arithmetic: ten times
+    cheaper than numpy's on single vectors, and analytic, for the complex step)."""
+
+    __slots__ = ("x", "y", "z")
+
+    def __init__(self, x: Any, y: Any, z: Any) -> None:
+        self.x, self.y, self.z = x, y, z
+
+    @classmethod
+    def of(cls, a: Array) -> _Vec:
+        return cls(*a.tolist())
+
+    def __getitem__(self, i: int) -> Any:
+        return self.x if i == 0 else self.y if i == 1 else self.z
+
+    def __add__(self, o: _Vec) -> _Vec:
+        return _Vec(self.x + o.x, self.y + o.y, self.z + o.z)
+
+    def __sub__(self, o: _Vec) -> _Vec:
+        return _Vec(self.x - o.x, self.y - o.y, self.z - o.z)
+
+    def __mul__(self, k: Any) -> _Vec:
+        return _Vec(self.x * k, self.y * k, self.z * k)
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, k: Any) -> _Vec:
+        return _Vec(self.x / k, self.y / k, self.z / k)
+
+    def __matmul__(self, o: _Vec) -> Any:
+        return self.x * o.x + self.y * o.y + self.z * o.z
+
+    def cross(self, o: _Vec) -> _Vec:
+        return _Vec(self.y * o.z - self.z * o.y, self.z * o.x - self.x * o.z, self.x * o.y - self.y * o.x)
+
+    def norm(self) -> Any:
+        return (self.x * self.x + self.y * self.y + self.z * self.z) ** 0.5
+
+
 def _cross(a: Array, b: Array) -> Array:
     """``a x b`` of two 3-vectors, real or complex (numpy's ``cross`` costs ten times more)."""
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
-def _norm(v: Array) -> Any:
-    return np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
 
 
 def _abs(x: Any) -> Any:
     return -x if x.real < 0 else x
 
 
-def _contact(centre: Array, axis: Array, radius: float, v_centre: Array, da: Array) -> tuple[Array, Array]:
+_EX, _EY, _EZ = _Vec(1.0, 0.0, 0.0), _Vec(0.0, 1.0, 0.0), _Vec(0.0, 0.0, 1.0)
+
+
+def _contact(centre: _Vec, axis: _Vec, radius: float, v_centre: _Vec, da: _Vec) -> tuple[_Vec, _Vec]:
     """The contact point (lowest point of the wheel circle) and its rate."""
-    g = -EZ + axis[2] * axis
-    ng = _norm(g)
+    g = axis * axis.z - _EZ
+    ng = g.norm()
     n = g / ng
-    dg = da[2] * axis + axis[2] * da
+    dg = axis * da.z + da * axis.z
     dn = (dg - n * (n @ dg)) / ng
-    return centre + radius * n, v_centre + radius * dn
+    return centre + n * radius, v_centre + dn * radius
 
 
-def _homogeneous(p: Array | None, u: Array, v: Array, normal: Array, E: Array) -> tuple[Array, Any]:
+def _homogeneous(p: _Vec | None, u: _Vec, v: _Vec, normal: _Vec, E: _Vec) -> tuple[_Vec, Any]:
     """``(H, s)`` of the axis' intersection with the plane through E (module docstring); a
     pure translation (``p`` None) of velocity ``v``: the centre at infinity across ``v``."""
     if p is None:
-        return _cross(normal, v), 0.0
+        return normal.cross(v), 0.0
     s = normal @ u
-    return s * p + (normal @ (E - p)) * u, s
+    return p * s + u * (normal @ (E - p)), s
 
 
-def _centre(H: Array, s: Any, E: Array, plane: tuple[int, int]) -> tuple[Any, Any, Any]:
+def _centre(H: _Vec, s: Any, E: _Vec, plane: tuple[int, int]) -> tuple[Any, Any, Any]:
     """In-plane coordinates of the centre and its distance from E (NaN, NaN, inf at infinity)."""
     if abs(s) < PARALLEL_TOL:
         return math.nan, math.nan, math.inf
     X = H / s
     d = X - E
-    return X[plane[0]], X[plane[1]], np.sqrt(d[plane[0]] ** 2 + d[plane[1]] ** 2)
+    return X[plane[0]], X[plane[1]], (d[plane[0]] ** 2 + d[plane[1]] ** 2) ** 0.5
 
 
-def _slope(w: Array, forward: float) -> Any:
+def _slope(w: _Vec, forward: float) -> Any:
     """``tan(theta)`` of a side-view line of direction ``w`` rising towards ``forward * x``
     (+1: the centre ahead, -1: behind); sign-free in ``w``; +-inf for a vertical line."""
-    wx, wz = w[0], w[2]
+    wx, wz = w.x, w.z
     if wx == 0.0:
         return math.copysign(math.inf, wz.real * forward) if wz != 0.0 else math.nan
     return (wz / wx) * forward
@@ -178,34 +218,39 @@ class _Inputs:
 def _metrics(model: Model, inp: _Inputs, radius: float | None) -> dict[str, Any]:
     """The metric formulas (module docstring), analytic in every input (complex-step safe)."""
     out: dict[str, Any] = {}
-    b, points, Vall = inp.wheel, inp.points, inp.V
+    b, Vall = inp.wheel, inp.V
+    points = {k: (body, _Vec.of(x)) for k, (body, x) in inp.points.items()}
+    twist: dict[int, tuple[_Vec, _Vec]] = {}
 
-    def vel(body: int, x: Array) -> Array:
-        return Vall[body, :3] + _cross(Vall[body, 3:], x)
+    def vel(body: int, x: _Vec) -> _Vec:
+        if body not in twist:
+            twist[body] = (_Vec.of(Vall[body, :3]), _Vec.of(Vall[body, 3:]))
+        v, w = twist[body]
+        return v + w.cross(x)
 
-    w = Vall[b, 3:]
     centre = points["centre"][1]
     axis = points["spin"][1] - centre
-    axis = axis / _norm(axis)
-    side = 1 if axis[1].real >= 0 else -1
+    axis = axis / axis.norm()
+    side = 1 if axis.y.real >= 0 else -1
     vc = vel(b, centre)
-    dz = vc[2]
+    w = twist[b][1]
+    dz = vc.z
     per = (lambda x: x / dz) if dz != 0.0 else (lambda x: math.nan)
     deg = 180.0 / math.pi
-    da = _cross(w, axis)
-    out["camber_gain"] = per(deg * (-da[2] / np.sqrt(1.0 - axis[2] ** 2)))
-    ay = axis[1] * side
-    out["bump_steer"] = per(deg * ((ay * da[0] - axis[0] * side * da[1]) / (axis[0] ** 2 + axis[1] ** 2)))
+    da = w.cross(axis)
+    out["camber_gain"] = per(deg * (-da.z / (1.0 - axis.z**2) ** 0.5))
+    ay = axis.y * side
+    out["bump_steer"] = per(deg * ((ay * da.x - axis.x * side * da.y) / (axis.x**2 + axis.y**2)))
     if "upper" in points:
         (bu, xu), (bl, xl) = points["upper"], points["lower"]
         k = xu - xl
         dk = vel(bu, xu) - vel(bl, xl)
-        out["caster_gain"] = per(deg * ((-dk[0] * k[2] + k[0] * dk[2]) / (k[0] ** 2 + k[2] ** 2)))
+        out["caster_gain"] = per(deg * ((-dk.x * k.z + k.x * dk.z) / (k.x**2 + k.z**2)))
     for n, bi, bj, s_i, s_j in inp.elements:
-        pi = inp.r[bi] + inp.A[bi] @ s_i
-        pj = inp.r[bj] + inp.A[bj] @ s_j
+        pi = _Vec.of(inp.r[bi] + inp.A[bi] @ s_i)
+        pj = _Vec.of(inp.r[bj] + inp.A[bj] @ s_j)
         d = pj - pi
-        dl = (d @ (vel(bj, pj) - vel(bi, pi))) / _norm(d)
+        dl = (d @ (vel(bj, pj) - vel(bi, pi))) / d.norm()
         out[f"{MOTION_RATIO}:{n}"] = _abs(per(dl))
     springs = [e for e in model.elements if e.has_spring]
     if springs:
@@ -213,32 +258,32 @@ def _metrics(model: Model, inp: _Inputs, radius: float | None) -> dict[str, Any]
     if radius is None:
         return out
     E, vE = _contact(centre, axis, radius, vc, da)
-    ref = inp.reference_contact
-    if ref is not None:
-        out["half_track_change"] = side * (E[1] - ref[1])
-        out["contact_patch_dx"] = E[0] - ref[0]
-    out["half_track_gain"] = per(side * vE[1])
-    out["contact_patch_dx_gain"] = per(vE[0])
+    if inp.reference_contact is not None:
+        ref = _Vec.of(np.asarray(inp.reference_contact))
+        out["half_track_change"] = side * (E.y - ref.y)
+        out["contact_patch_dx"] = E.x - ref.x
+    out["half_track_gain"] = per(side * vE.y)
+    out["contact_patch_dx_gain"] = per(vE.x)
     # screw axis of the wheel relative to the fixed body (the fixed body's twist is zero)
-    V = Vall[b]
-    nw, nv = _norm(w), _norm(vc)
-    scale = max(1.0, abs(_norm(centre)))
+    v_O = twist[b][0]
+    nw, nv = w.norm(), vc.norm()
+    scale = max(1.0, abs(centre.norm()))
+    p: _Vec | None
     if abs(nw) * scale <= TRANSLATION_RTOL * abs(nv) or nw == 0.0:
-        p, u = None, np.zeros(3)
+        p, u = None, _Vec(0.0, 0.0, 0.0)
     else:
         u = w / nw
-        p = _cross(w, V[:3]) / nw**2
-    ex, ey = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
-    Hf, sf = _homogeneous(p, u, vE, ex, E)  # front view: the plane x = x_E
+        p = w.cross(v_O) / nw**2
+    Hf, sf = _homogeneous(p, u, vE, _EX, E)  # front view: the plane x = x_E
     out["fvic_y"], out["fvic_z"], out["fvsa_length"] = _centre(Hf, sf, E, (1, 2))
-    wf = Hf - sf * E
-    out["roll_centre_height"] = -E[1] * wf[2] / wf[1] if wf[1] != 0.0 else math.nan
-    Hs, ss = _homogeneous(p, u, vE, ey, E)  # side view: the plane y = y_E
+    wf = Hf - E * sf
+    out["roll_centre_height"] = -E.y * wf.z / wf.y if wf.y != 0.0 else math.nan
+    Hs, ss = _homogeneous(p, u, vE, _EY, E)  # side view: the plane y = y_E
     out["svic_x"], out["svic_z"], out["svsa_length"] = _centre(Hs, ss, E, (0, 2))
     veh = model.vehicle
     if veh is not None:
         lever = veh.wheelbase / veh.cg_height * 100.0
-        wE, wC = Hs - ss * E, Hs - ss * centre  # lines from the contact patch / the wheel centre
+        wE, wC = Hs - E * ss, Hs - centre * ss  # lines from the contact patch / the wheel centre
         front = veh.axle == "front"
         brake_line = wE if veh.brakes == "outboard" else wC
         drive_line = wE if veh.drive == "outboard" else wC

@@ -33,6 +33,7 @@ violate the constraints (a locked input), the status is ``singular`` and every r
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -460,19 +461,41 @@ def velocity_solve(tb, plan, Q, S, C, L, rates, need, rows, cols, row_scale, buf
     return SOLVED
 
 
+#: per engine, per driven addresses: their columns, the plan of the other coordinate columns
+#: and the ``need`` of every coordinate column (built once; the engine caches its plans too)
+_PLANS: weakref.WeakKeyDictionary[Any, dict[tuple[str, ...], tuple[list[int], Any, Array]]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _velocity_plan(engine: Engine, rates: Mapping[str, Any]) -> tuple[list[int], list[float], Any, Array]:
+    """``(driven columns, their rates, plan, need)`` of :func:`velocity_solve`."""
+    per = _PLANS.get(engine)
+    if per is None:
+        per = _PLANS[engine] = {}
+    key = tuple(rates)
+    found = per.get(key)
+    if found is None or any(np.ndim(v) for v in rates.values()):
+        cols, vals = _driven_rows(engine, rates)
+        nq = engine.n_coordinates
+        need = np.zeros(engine.n_columns, np.int8)
+        need[:nq] = 1
+        keep = np.ones(nq, bool)
+        keep[cols] = False
+        found = per[key] = (cols, engine.plan(np.flatnonzero(keep)), need)
+        return cols, vals, found[1], need
+    return found[0], [float(v) for v in rates.values()], found[1], found[2]
+
+
 def _compiled_motion(engine: Engine, state: State, rates: Mapping[str, Any]) -> MotionState | None:
     """:func:`velocity_solve` on the engine's plan (None: the SVD path must decide)."""
-    cols, vals = _driven_rows(engine, rates)
-    nq, tb = engine.n_coordinates, engine.tables
+    cols, vals, plan, need = _velocity_plan(engine, rates)
     if len(set(cols)) != len(cols):
         return None
+    nq, tb = engine.n_coordinates, engine.tables
     rate = np.zeros(nq)
     rate[cols] = vals
-    free = np.setdiff1d(np.arange(nq), cols)
-    plan = engine.plan(free)
     buf = newton.buffers(tb, plan, engine.nnz)
-    need = np.zeros(engine.n_columns, np.int8)
-    need[:nq] = 1
     rows, pcols = engine.pattern
     st = state.writable()
     qdot, V, out = np.zeros(nq), np.zeros((tb.fixed.shape[0], 6)), np.zeros(1)
