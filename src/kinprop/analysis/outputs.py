@@ -140,7 +140,14 @@ def _parse_variable(engine: Engine, name: str) -> Address:
     return addr
 
 
-def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, float]]) -> float:
+def _scalar(
+    ctx: OutputContext,
+    name: str,
+    metric_cache: dict[str, dict[str, float]],
+    resolved: dict[str, tuple[str, str]] | None = None,
+) -> float:
+    """One output's value (``resolved``: metric names already resolved to ``(wheel, metric)``,
+    kept across states by :func:`output_function`)."""
     if is_load_output(name):
         return load_value(ctx.model, name, metric_cache, ctx.engine, ctx.reference)
     if name.startswith("distance:"):
@@ -153,7 +160,10 @@ def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, flo
     if name.startswith("hardpoint:") and m:
         return float(ctx.hardpoint(m.group("joint"), m.group("side"))[AXES[m.group("c")]])
     if name.startswith("metric:") or "." not in name:
-        wheel, metric = resolve_metric(ctx.model, name)
+        found = resolved.get(name) if resolved is not None else None
+        wheel, metric = found if found is not None else resolve_metric(ctx.model, name)
+        if resolved is not None:
+            resolved[name] = (wheel, metric)
         first = is_first_order(metric)
         key = f"{wheel}\x00first" if first else wheel
         if key not in metric_cache:
@@ -261,10 +271,12 @@ def output_function(
     eng = engine if engine is not None else compile_engine(model.mechanism)
     expanded = expand_outputs(model, names, eng)
 
+    resolved: dict[str, tuple[str, str]] = {}  # metric names: the same wheel at every state
+
     def f(m: Model) -> Array:
         ctx = OutputContext.of(m, reference, wheels, eng)
         cache: dict[str, dict[str, float]] = {}
-        return np.array([_scalar(ctx, n, cache) for n in expanded])
+        return np.array([_scalar(ctx, n, cache, resolved) for n in expanded])
 
     ctx0 = OutputContext.of(model, reference, wheels, eng)
     cache0: dict[str, dict[str, float]] = {}

@@ -33,6 +33,7 @@ violate the constraints (a locked input), the status is ``singular`` and every r
 from __future__ import annotations
 
 import math
+import threading
 import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -461,19 +462,20 @@ def velocity_solve(tb, plan, Q, S, C, L, rates, need, rows, cols, row_scale, buf
     return SOLVED
 
 
-#: per engine, per driven addresses: their columns, the plan of the other coordinate columns
-#: and the ``need`` of every coordinate column (built once; the engine caches its plans too)
-_PLANS: weakref.WeakKeyDictionary[Any, dict[tuple[str, ...], tuple[list[int], Any, Array]]] = (
+#: per engine, per driven addresses and thread: their columns, the plan of the other
+#: coordinate columns, the ``need`` of every coordinate column and the solve's buffers (built
+#: once; the engine caches its plans too)
+_PLANS: weakref.WeakKeyDictionary[Any, dict[tuple[Any, ...], tuple[list[int], Any, Array, Any]]] = (
     weakref.WeakKeyDictionary()
 )
 
 
-def _velocity_plan(engine: Engine, rates: Mapping[str, Any]) -> tuple[list[int], list[float], Any, Array]:
-    """``(driven columns, their rates, plan, need)`` of :func:`velocity_solve`."""
+def _velocity_plan(engine: Engine, rates: Mapping[str, Any]) -> tuple[list[int], list[float], Any, Array, Any]:
+    """``(driven columns, their rates, plan, need, buffers)`` of :func:`velocity_solve`."""
     per = _PLANS.get(engine)
     if per is None:
         per = _PLANS[engine] = {}
-    key = tuple(rates)
+    key = (*rates, threading.get_ident())
     found = per.get(key)
     if found is None or any(np.ndim(v) for v in rates.values()):
         cols, vals = _driven_rows(engine, rates)
@@ -482,20 +484,20 @@ def _velocity_plan(engine: Engine, rates: Mapping[str, Any]) -> tuple[list[int],
         need[:nq] = 1
         keep = np.ones(nq, bool)
         keep[cols] = False
-        found = per[key] = (cols, engine.plan(np.flatnonzero(keep)), need)
-        return cols, vals, found[1], need
-    return found[0], [float(v) for v in rates.values()], found[1], found[2]
+        plan = engine.plan(np.flatnonzero(keep))
+        found = per[key] = (cols, plan, need, newton.buffers(engine.tables, plan, engine.nnz))
+        return cols, vals, plan, need, found[3]
+    return found[0], [float(v) for v in rates.values()], found[1], found[2], found[3]
 
 
 def _compiled_motion(engine: Engine, state: State, rates: Mapping[str, Any]) -> MotionState | None:
     """:func:`velocity_solve` on the engine's plan (None: the SVD path must decide)."""
-    cols, vals, plan, need = _velocity_plan(engine, rates)
+    cols, vals, plan, need, buf = _velocity_plan(engine, rates)
     if len(set(cols)) != len(cols):
         return None
     nq, tb = engine.n_coordinates, engine.tables
     rate = np.zeros(nq)
     rate[cols] = vals
-    buf = newton.buffers(tb, plan, engine.nnz)
     rows, pcols = engine.pattern
     st = state.writable()
     qdot, V, out = np.zeros(nq), np.zeros((tb.fixed.shape[0], 6)), np.zeros(1)
@@ -504,8 +506,8 @@ def _compiled_motion(engine: Engine, state: State, rates: Mapping[str, Any]) -> 
     )
     if code != SOLVED:
         return None
-    ws = buf[newton.B_WS]
-    r, A, P, R = (ws[k] for k in (kernels.W_BODY_R, kernels.W_BODY_A, kernels.W_FRAME_P, kernels.W_FRAME_R))
+    ws = buf[newton.B_WS]  # the buffers are reused: copy the poses out
+    r, A, P, R = (ws[k].copy() for k in (kernels.W_BODY_R, kernels.W_BODY_A, kernels.W_FRAME_P, kernels.W_FRAME_R))
     return MotionState(OK, "ok", qdot, V, r, A, P, R, conditioning=math.nan, residual=float(out[0]))
 
 
