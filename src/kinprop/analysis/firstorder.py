@@ -66,7 +66,8 @@ def travel_rates(engine: Engine, model: Model, travel_input: str | None, state: 
     inputs = [a if "." in a else f"{a}.q" for a in model.mechanism.inputs]
     nq = engine.n_coordinates
     tb = engine.tables
-    racks = [int(tb.joint[j, J_QCOL]) for j in tb.cut[:, K_JOINT] if tb.joint[j, J_NQ] > 0]
+    cut = tb.cut[:, K_JOINT]
+    racks = tb.joint[cut[tb.joint[cut, J_NQ] > 0], J_QCOL].tolist()
 
     def null(cols: list[int]) -> Array:
         J = engine.evaluate(state)[1][:, :nq] * engine.row_scale[:, None] / engine.col_scale[None, :nq]

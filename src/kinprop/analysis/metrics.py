@@ -40,6 +40,7 @@ steering axis can also be given per call as two point specs (``hardpoint:JOINT.i
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -292,7 +293,13 @@ def is_first_order(metric: str) -> bool:
 
 def _radius(model: Model, wheel: str) -> float | None:
     """The loaded radius: the ``contact_patch`` point's distance from the spin axis."""
-    pts = dict(model.mechanism.body(wheel).points)
+    return _body_radius(model.mechanism.body(wheel).points)
+
+
+@functools.lru_cache(maxsize=64)
+def _body_radius(points: tuple[tuple[str, Any], ...]) -> float | None:
+    """:func:`_radius` of a wheel body's named points (cached: the same at every state)."""
+    pts = dict(points)
     if "contact_patch" not in pts:
         return None
     v = np.asarray(pts["contact_patch"], dtype=float) - np.asarray(pts["wheel_centre"], dtype=float)

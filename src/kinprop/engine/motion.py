@@ -477,7 +477,7 @@ def _velocity_plan(engine: Engine, rates: Mapping[str, Any]) -> tuple[list[int],
         per = _PLANS[engine] = {}
     key = (*rates, threading.get_ident())
     found = per.get(key)
-    if found is None or any(np.ndim(v) for v in rates.values()):
+    if found is None or not all(isinstance(v, (int, float)) for v in rates.values()):
         cols, vals = _driven_rows(engine, rates)
         nq = engine.n_coordinates
         need = np.zeros(engine.n_columns, np.int8)
@@ -485,7 +485,8 @@ def _velocity_plan(engine: Engine, rates: Mapping[str, Any]) -> tuple[list[int],
         keep = np.ones(nq, bool)
         keep[cols] = False
         plan = engine.plan(np.flatnonzero(keep))
-        found = per[key] = (cols, plan, need, newton.buffers(engine.tables, plan, engine.nnz))
+        unique = len(set(cols)) == len(cols)  # a coordinate driven twice: the SVD path checks it
+        found = per[key] = (cols, plan, need, newton.buffers(engine.tables, plan, engine.nnz) if unique else None)
         return cols, vals, plan, need, found[3]
     return found[0], [float(v) for v in rates.values()], found[1], found[2], found[3]
 
@@ -493,11 +494,12 @@ def _velocity_plan(engine: Engine, rates: Mapping[str, Any]) -> tuple[list[int],
 def _compiled_motion(engine: Engine, state: State, rates: Mapping[str, Any]) -> MotionState | None:
     """:func:`velocity_solve` on the engine's plan (None: the SVD path must decide)."""
     cols, vals, plan, need, buf = _velocity_plan(engine, rates)
-    if len(set(cols)) != len(cols):
+    if buf is None:
         return None
     nq, tb = engine.n_coordinates, engine.tables
     rate = np.zeros(nq)
-    rate[cols] = vals
+    for c, v in zip(cols, vals, strict=True):
+        rate[c] = v
     rows, pcols = engine.pattern
     st = state.writable()
     qdot, V, out = np.zeros(nq), np.zeros((tb.fixed.shape[0], 6)), np.zeros(1)
