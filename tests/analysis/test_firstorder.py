@@ -315,7 +315,20 @@ def test_exact_sensitivities_of_first_order_metrics_match_re_solved_models() -> 
     hardpoint, exact (``method``), against central differences of re-solved models."""
     base = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
     wrt = ["LBJ.s_i[2]", "UBJ.s_j[0]", "TR.s_i[1]", "UCA.C_i[0]", "TR.length", "hardpoint:UBJ.i[z]"]
-    _check_exact_sensitivities(base, FIRST_ORDER_OUTPUTS, wrt, 0.05, 1e-6)
+    outs = [*FIRST_ORDER_OUTPUTS, "half_track_change", "contact_patch_dx"]
+    _check_exact_sensitivities(base, outs, wrt, 0.05, 1e-6)
+
+
+def test_exact_sensitivities_of_a_rear_corner_anti_squat() -> None:
+    """The same corner declared a rear axle's (inboard drive): anti-lift and anti-squat, exact,
+    against re-solved models."""
+    import yaml
+
+    path = EXAMPLES / "double_wishbone.yaml"
+    data = yaml.safe_load(path.read_text())
+    data["vehicle"]["axle"] = "rear"
+    model = kp.assemble(model_from_data(data, str(path))).after
+    _check_exact_sensitivities(model, ["anti_lift", "anti_squat"], ["UCA.s_i[2]", "LBJ.s_i[0]"], 0.05, 1e-6)
 
 
 def test_exact_sensitivities_on_the_mcpherson_strut() -> None:
