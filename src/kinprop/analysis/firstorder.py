@@ -38,7 +38,7 @@ import numpy as np
 from kinprop.analysis.context import OutputContext
 from kinprop.analysis.motion import point_of
 from kinprop.engine import Engine, State
-from kinprop.engine.motion import MotionState, motion_derivatives
+from kinprop.engine.motion import MotionState, cross3, motion_derivatives
 from kinprop.errors import AddressError
 from kinprop.kinematics.tables import J_NQ, J_QCOL, K_JOINT
 from kinprop.model import Model
@@ -149,11 +149,6 @@ class _Vec:
 
     def norm(self) -> Any:
         return (self.x * self.x + self.y * self.y + self.z * self.z) ** 0.5
-
-
-def _cross(a: Array, b: Array) -> Array:
-    """``a x b`` of two 3-vectors, real or complex (numpy's ``cross`` costs ten times more)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 def _abs(x: Any) -> Any:
@@ -381,7 +376,7 @@ def first_order_derivatives(
     def moved(p: PointRef, i: int) -> Array:
         body, x = int(p[0]), np.asarray(p[1], dtype=float)
         P = md.pose[i, body]
-        dx = P[:3] + _cross(P[3:], x)
+        dx = P[:3] + cross3(P[3:], x)
         source = p[2] if len(p) > 2 else None  # type: ignore[misc]
         if source is not None:
             key = f"{source[0]}.s_{source[1]}"
