@@ -147,14 +147,20 @@ def _drivable(engine: kp.Engine, st: kp.State) -> list[int]:
 RANDOM = assembled_set(40)
 
 
-@pytest.mark.parametrize("rm", RANDOM, ids=lambda rm: f"seed{rm.seed}")
-def test_random_mechanisms_match_central_differences(rm) -> None:
+def _drivable_setup(rm):
+    """``(engine, state, drivable columns, seeded generator)`` of a random mechanism (skips one
+    that has none)."""
     engine = kp.compile(rm.model)
     st = engine.state_of(rm.model)
     cols = _drivable(engine, st)
     if not cols:
         pytest.skip("no drivable coordinates (mobility 0 or only Euler parameters)")
-    rng = np.random.default_rng(rm.seed)
+    return engine, st, cols, np.random.default_rng(rm.seed)
+
+
+@pytest.mark.parametrize("rm", RANDOM, ids=lambda rm: f"seed{rm.seed}")
+def test_random_mechanisms_match_central_differences(rm) -> None:
+    engine, st, cols, rng = _drivable_setup(rm)
     rates, acc = rng.uniform(-1, 1, len(cols)), rng.uniform(-1, 1, len(cols))
     labels = engine.column_labels
     ms = engine.motion(
@@ -279,12 +285,7 @@ def test_design_derivatives_of_rates_match_re_solved_models(rm) -> None:
     velocity analyses of re-solved models."""
     from kinprop.engine.motion import motion_derivatives
 
-    engine = kp.compile(rm.model)
-    st = engine.state_of(rm.model)
-    cols = _drivable(engine, st)
-    if not cols:
-        pytest.skip("no drivable coordinates (mobility 0 or only Euler parameters)")
-    rng = np.random.default_rng(rm.seed)
+    engine, st, cols, rng = _drivable_setup(rm)
     labels = engine.column_labels
     rates = {labels[c]: float(r) for c, r in zip(cols, rng.uniform(-1, 1, len(cols)), strict=True)}
     nq = engine.n_coordinates
