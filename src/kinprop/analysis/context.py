@@ -100,6 +100,26 @@ class OutputContext:
         f = self.kin.frames[joint]
         return f.P_i if side == "i" else f.P_j
 
+    def point_source(self, body: str, point: str) -> tuple[str, str] | None:
+        """The joint frame ``(joint, side)`` a named point is (it moves with that joint's
+        ``s'``), or None for a plain body-fixed point."""
+        return self.model.mechanism.body(body).joint_point(point)
+
+    def hardpoint_source(self, joint: str, side: str) -> tuple[str, str] | None:
+        """The joint frame ``hardpoint:JOINT.SIDE`` is (a pivot: its named point's, see
+        :meth:`point_source`)."""
+        return (joint, side) if side in ("i", "j") else self.point_source(*pivot_point(self.model, joint, side))
+
+    def spec_source(self, spec: str) -> tuple[str, str] | None:
+        """:meth:`point_source` of a ``point:BODY.NAME`` or ``hardpoint:JOINT.i|j`` spec."""
+        m = POINT.match(spec)
+        if m and m.group("c") is None:
+            return self.point_source(m.group("body"), m.group("name"))
+        m = HARD.match(spec)
+        if m and m.group("c") is None:
+            return self.hardpoint_source(m.group("joint"), m.group("side"))
+        return None
+
     def point(self, spec: str) -> Array:
         """A global point from a ``point:BODY.NAME`` or ``hardpoint:JOINT.i|j`` spec."""
         m = POINT.match(spec)

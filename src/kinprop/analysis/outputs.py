@@ -36,6 +36,7 @@ from kinprop.analysis.metrics import (
     metric_names,
     resolve_metric,
     wheel_first_order,
+    wheel_first_order_derivatives,
     wheel_metrics,
 )
 from kinprop.analysis.statics import is_load_output, load_value
@@ -152,7 +153,14 @@ def _parse_variable(engine: Engine, name: str) -> Address:
     return addr
 
 
-def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, float]]) -> float:
+def _scalar(
+    ctx: OutputContext,
+    name: str,
+    metric_cache: dict[str, dict[str, float]],
+    resolved: dict[str, tuple[str, str]] | None = None,
+) -> float:
+    """One output's value (``resolved``: metric names already resolved to ``(wheel, metric)``,
+    kept across states by :func:`output_function`)."""
     if is_load_output(name):
         return load_value(ctx.model, name, metric_cache, ctx.engine, ctx.reference)
     if name.startswith("distance:"):
@@ -168,7 +176,10 @@ def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, flo
     if name.startswith("hardpoint:") and m:
         return float(ctx.hardpoint(m.group("joint"), m.group("side"))[AXES[m.group("c")]])
     if name.startswith("metric:") or "." not in name:
-        wheel, metric = resolve_metric(ctx.model, name)
+        found = resolved.get(name) if resolved is not None else None
+        wheel, metric = found if found is not None else resolve_metric(ctx.model, name)
+        if resolved is not None:
+            resolved[name] = (wheel, metric)
         first = is_first_order(metric)
         key = f"{wheel}\x00first" if first else wheel
         if key not in metric_cache:
@@ -188,6 +199,45 @@ def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, flo
     else:
         v = np.atleast_1d(np.asarray(model.design[addr.key], dtype=float)).ravel()
     return float(v[addr.index or 0])
+
+
+def first_order_of(model: Model, name: str) -> tuple[str, str] | None:
+    """``(wheel, metric)`` of an expanded output name that is a first-order metric (a gain, a
+    centre, anti, a motion ratio, the wheel rate; :mod:`kinprop.analysis.firstorder`), else None."""
+    if is_load_output(name) or name.startswith(("distance:", "point:", "hardpoint:")):
+        return None
+    if name.startswith("metric:") or "." not in name:
+        wheel, metric = resolve_metric(model, name)
+        return (wheel, metric) if is_first_order(metric) else None
+    return None
+
+
+def first_order_derivatives(
+    model: Model,
+    names: Sequence[str],
+    directions: Array,
+    *,
+    reference: Model | None = None,
+    wheels: Mapping[str, WheelSpec] | None = None,
+    engine: Engine | None = None,
+) -> dict[int, Array]:
+    """Exact derivatives of the first-order metrics among the expanded outputs ``names`` along
+    each column of ``directions`` (state directions, solver units), keyed by their index in
+    ``names`` (values as :func:`evaluate_outputs` with ``units="solver"`` gives them):
+    :func:`kinprop.analysis.metrics.wheel_first_order_derivatives`, once per wheel."""
+    eng = engine if engine is not None else compile_engine(model.mechanism)
+    ctx = OutputContext.of(model, reference, wheels, eng)
+    per_wheel: dict[str, dict[str, Array]] = {}
+    out: dict[int, Array] = {}
+    for i, name in enumerate(names):
+        found = first_order_of(model, name)
+        if found is None:
+            continue
+        wheel, metric = found
+        if wheel not in per_wheel:
+            per_wheel[wheel] = wheel_first_order_derivatives(ctx, wheel, directions)
+        out[i] = per_wheel[wheel][metric]
+    return out
 
 
 def evaluate_outputs(
@@ -237,10 +287,12 @@ def output_function(
     eng = engine if engine is not None else compile_engine(model.mechanism)
     expanded = expand_outputs(model, names, eng)
 
+    resolved: dict[str, tuple[str, str]] = {}  # metric names: the same wheel at every state
+
     def f(m: Model) -> Array:
         ctx = OutputContext.of(m, reference, wheels, eng)
         cache: dict[str, dict[str, float]] = {}
-        return np.array([_scalar(ctx, n, cache) for n in expanded])
+        return np.array([_scalar(ctx, n, cache, resolved) for n in expanded])
 
     ctx0 = OutputContext.of(model, reference, wheels, eng)
     cache0: dict[str, dict[str, float]] = {}

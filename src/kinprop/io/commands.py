@@ -14,7 +14,7 @@ import numpy as np
 
 from kinprop.analysis.mobility import MobilityReport, row_names
 from kinprop.analysis.outputs import expand_outputs
-from kinprop.analysis.sensitivity import design_sensitivity, output_sensitivity_matrix
+from kinprop.analysis.sensitivity import derivative_method, design_sensitivity, output_sensitivity_matrix
 from kinprop.analysis.sweep import Drive, coordinate_columns, default_outputs, parse_drive
 from kinprop.analysis.units import derivative_scale, unit_of
 from kinprop.engine import Engine, Solution
@@ -194,6 +194,9 @@ class Sensitivities(NamedTuple):
     columns: list[str]
     units_of: list[str]
     units_wrt: list[str]
+    #: how each row was differentiated (``kinprop.analysis.sensitivity.derivative_method``;
+    #: None: the free variables' implicit-function response, analytic)
+    methods: list[str] | None = None
 
 
 def _solver_matrix(
@@ -234,7 +237,8 @@ def sensitivities(
     matrix = matrix * so[:, None] / si[None, :]
     units_of = [unit_of(assembled, str(name), engine) for name in rows]
     units_wrt = [_per(assembled, str(name), engine) for name in columns]
-    return Sensitivities(matrix, rows, columns, units_of, units_wrt)
+    methods = [derivative_method(assembled, str(name)) for name in rows] if of else None
+    return Sensitivities(matrix, rows, columns, units_of, units_wrt, methods)
 
 
 def sensitivity_json(
@@ -248,6 +252,7 @@ def sensitivity_json(
         "wrt": [str(c) for c in sens.columns],
         "matrix": np.asarray(sens.matrix).tolist(),
         "units": {"of": sens.units_of, "wrt": sens.units_wrt, "matrix": "unit of the row per unit of the column"},
+        "method": dict(zip(map(str, sens.rows), sens.methods, strict=True)) if sens.methods else None,
         "free": list(free),
         "weights": dict(weights) if weights else {},
         "assembly": {
