@@ -156,7 +156,7 @@ def result_of(engine: Engine, sol: Solution) -> tuple[SolveResult, float]:
     design, coords = sol.design, sol.coordinates
     res = SolveResult(sol.converged, sol.iterations, sol.residual, [float(h) for h in sol.history],
                       rank_of(sv, RANK_RTOL), int(sol.free.size), engine.n_rows, sv, sol.message, (design, coords), J,
-                      sol.status.value, tuple(sol.notes), sol.fraction, sol.optimality)  # fmt: skip
+                      sol.status.value, tuple(sol.notes), sol.fraction, sol.optimality, sol.method)  # fmt: skip
     ratio = conditioning(engine.row_blocks, Jf) if sol.converged and sol.free.size else float("nan")
     return res, ratio
 

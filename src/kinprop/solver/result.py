@@ -33,6 +33,8 @@ class SolveResult:
     #: optimality residual (SI, weighted; 0 at the assembly closest to the start or without
     #: freedom): ``kinprop.engine.Solution.optimality``
     optimality: float = 0.0
+    #: ``least-change`` or ``paper`` (``kinprop.engine.METHODS``): which result was computed
+    method: str = "least-change"
 
     @property
     def status(self) -> str:
