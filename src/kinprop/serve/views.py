@@ -9,13 +9,17 @@ import math
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 
-from kinprop.analysis.metrics import metric_names
+from kinprop.analysis.metrics import metric_names, wheel_bodies
 from kinprop.analysis.outputs import output_names
-from kinprop.analysis.points import joint_hardpoints, named_points
+from kinprop.analysis.points import joint_hardpoints, named_points, snapshot
 from kinprop.analysis.units import unit_of
+from kinprop.engine import compile as compile_engine
 from kinprop.engine.units import angle_indices, from_solver_units
+from kinprop.errors import AddressError
 from kinprop.model import Model
+from kinprop.propagation.hardpoints import parse_global, pivots
 from kinprop.plot.scene import Scene, bounds, build_scene, scale
 from kinprop.plot.style import AXIS, FADED_ALPHA, MARKERS, POINT, segment_colour
 from kinprop.serve.session import Session
@@ -70,8 +74,40 @@ def scene_json(sc: Scene) -> dict[str, Any]:
     }
 
 
-def _coordinate_components(model: Model) -> list[dict[str, Any]]:
-    """Every joint coordinate a sweep can drive (not Euler parameters), in model units."""
+#: a coordinate counts as independent when its row of the Jacobian's null-space basis is this large
+INDEPENDENT_TOL = 1e-8
+
+
+def slider_joints(model: Model) -> tuple[str, ...]:
+    """The joints the page offers a slider for: the declared inputs (``inputs:``) with one
+    coordinate; without declared inputs, as many single-coordinate joints as the mechanism has
+    degrees of freedom, chosen so that each can be set independently (a column-pivoted QR of the
+    rows of a null-space basis of ``Phi_q``): a dependent coordinate (a double wishbone's upper
+    arm angle, fixed by the lower one) is never offered."""
+    mech = model.mechanism
+    single = [j.name for j in mech.joints if j.name in model.coordinates and j.jtype.n_coordinates == 1]
+    if mech.inputs:
+        return tuple(j for j in mech.inputs if j in single)
+    if not single:
+        return ()
+    asm = compile_engine(model)
+    _, J = asm.evaluate(model.design, model.coordinates)
+    cols = asm.layout.columns(["q", "inputs"])
+    null = scipy.linalg.null_space(J[:, cols]) if J.shape[0] else np.eye(len(cols))
+    if null.shape[1] == 0:
+        return ()
+    row = {c: k for k, c in enumerate(cols)}
+    cand = [j for j in single if asm.layout[f"{j}.q"].start in row]
+    rows = null[[row[asm.layout[f"{j}.q"].start] for j in cand]]
+    _, R, piv = scipy.linalg.qr(rows.T, mode="economic", pivoting=True)
+    d = np.abs(np.diag(R))
+    chosen = {cand[p] for p, r in zip(piv, d, strict=False) if r > INDEPENDENT_TOL}
+    return tuple(j for j in single if j in chosen)
+
+
+def _coordinate_components(model: Model, sliders: tuple[str, ...] = ()) -> list[dict[str, Any]]:
+    """Every joint coordinate a sweep can drive (not Euler parameters), in model units;
+    ``slider_ok`` for the ``sliders`` joints (:func:`slider_joints`)."""
     deg = model.units.get("angle") == "deg"
     size = scale([build_scene(model)])
     out = []
@@ -104,12 +140,12 @@ def _coordinate_components(model: Model) -> list[dict[str, Any]]:
                     "value": value,
                     "curve": [value - half, value + half],
                     "slider": [value - wide, value + wide],
-                    "slider_ok": q.size == 1 and jt.n_coordinates == 1,  # one coordinate: revolute, translational
+                    "slider_ok": q.size == 1 and joint in sliders,
                     "size": q.size,
                 }
             )
-    # single coordinates first: a sweep drives a joint's whole coordinate vector (the others
-    # of a multi-coordinate joint stay as they are)
+    # inputs first, then single coordinates: a sweep drives a joint's whole coordinate vector
+    # (the others of a multi-coordinate joint stay as they are)
     return sorted(out, key=lambda c: (not c["slider_ok"], c["size"] > 1))
 
 
@@ -167,7 +203,114 @@ def variables_json(model: Model, session: Session) -> list[dict[str, Any]]:
     return rows
 
 
-def state_json(session: Session, label: str) -> dict[str, Any]:
+def wheels_json(model: Model) -> dict[str, Any]:
+    """What the views draw of each wheel body (one with ``wheel_centre`` and ``spin_axis``
+    points): its centre, unit spin axis and loaded radius (the ``contact_patch`` point's distance
+    from the spin axis, None without one), global, model units; and the ground plane's height,
+    the lowest contact patch's z (ISO 8855: z up), or None without a contact patch."""
+    points = named_points(model)
+    wheels, ground = [], None
+    for w in wheel_bodies(model):
+        c = np.asarray(points[f"{w}.wheel_centre"])
+        a = np.asarray(points[f"{w}.spin_axis"]) - c
+        a = a / np.linalg.norm(a)
+        radius = None
+        if f"{w}.contact_patch" in points:
+            p = np.asarray(points[f"{w}.contact_patch"])
+            v = p - c
+            radius = float(np.linalg.norm(v - (v @ a) * a))
+            ground = float(p[2]) if ground is None else min(ground, float(p[2]))
+        wheels.append({"body": w, "centre": _xyz(c), "axis": _xyz(a), "radius": radius})
+    return {"wheels": wheels, "ground": ground}
+
+
+#: the design table's hardpoint sections, in the order a suspension designer reads them
+SECTIONS = ("chassis pickups", "upright points", "links and steering", "spring and damper", "wheel")
+
+
+def hardpoint_rows(model: Model) -> list[dict[str, Any]]:
+    """The global hardpoints, by section (:data:`SECTIONS`): each joint's ``hardpoint:``
+    addresses that an edit accepts (a revolute's two chassis pivots, a ball joint, a link's
+    two ends), in the model's length unit, then the force elements' ends and the moving bodies'
+    named points (read-only: ``address`` None). An edit of a row is ``kinprop propagate --set
+    ADDRESS=x,y,z`` with the file's reading of hardpoint edits (``edits:``)."""
+    mech = model.mechanism
+    asm = compile_engine(model)
+    snap = snapshot(model, asm)
+    fixed = {b.name for b in mech.bodies if b.fixed}
+    hp = joint_hardpoints(model)
+    rows: list[dict[str, Any]] = []
+
+    def valid(address: str) -> bool:
+        try:
+            parse_global(asm, address)
+        except AddressError:
+            return False
+        return True
+
+    for j in mech.joints:
+        piv = pivots(asm, j.name)
+        if piv is not None:
+            for name, p in piv[1].items():
+                rows.append({"section": SECTIONS[0], "label": f"{j.name} {name} pivot", "address": f"hardpoint:{j.name}.{name}",
+                             "body": (j.body_i, j.body_j)[piv[0]], "value": _xyz(p)})  # fmt: skip
+            continue
+        on_fixed = [b in fixed for b in (j.body_i, j.body_j)]
+        if j.jtype.name == "distance" or not valid(f"hardpoint:{j.name}"):
+            for k, side in enumerate("ij"):
+                address = f"hardpoint:{j.name}.{side}"
+                if not valid(address):
+                    continue
+                body = (j.body_i, j.body_j)[k]
+                section = SECTIONS[0] if on_fixed[k] else SECTIONS[2]
+                end = "inner" if on_fixed[k] else "outer" if any(on_fixed) else ("i", "j")[k]
+                rows.append({"section": section, "label": f"{j.name} {end} ({body})", "address": address,
+                             "body": body, "value": hp[f"{j.name}.{side}"]})  # fmt: skip
+            continue
+        section = SECTIONS[0] if any(on_fixed) else SECTIONS[1]
+        rows.append({"section": section, "label": f"{j.name} ({j.jtype.name})", "address": f"hardpoint:{j.name}",
+                     "body": f"{j.body_i}/{j.body_j}", "value": hp[f"{j.name}.i"]})  # fmt: skip
+    for e in model.elements:
+        for k, (body, p) in enumerate(((e.body_i, e.s_i), (e.body_j, e.s_j))):
+            g = snap.r[body] + snap.A[body] @ np.asarray(p, dtype=float)
+            rows.append({"section": SECTIONS[3], "label": f"{e.name} {('i', 'j')[k]} ({body})", "address": None,
+                         "body": body, "value": _xyz(g)})  # fmt: skip
+    points = named_points(model)
+    for b in mech.bodies:
+        if b.fixed:
+            continue
+        for name, _ in b.points:
+            if b.joint_point(name) is None:
+                rows.append({"section": SECTIONS[4], "label": f"{b.name}.{name}", "address": None, "body": b.name,
+                             "value": points[f"{b.name}.{name}"]})  # fmt: skip
+    order = {s: k for k, s in enumerate(SECTIONS)}
+    return sorted(rows, key=lambda r: order[r["section"]])  # stable: joint order inside a section
+
+
+def _value_text(v: Any) -> str:
+    if isinstance(v, list | tuple):
+        return "[" + ", ".join(f"{float(x):.7g}" for x in v) + "]"
+    return f"{float(v):.7g}" if isinstance(v, float | int) else str(v)
+
+
+def status_text(changes: dict[str, Any], result: dict[str, Any]) -> str:
+    """The status line of an applied change: what was set (model units, as asked), the solve,
+    what moved; without changes, the loaded model's assembly."""
+    what = ", ".join(f"{a} = {_value_text(v)}" for a, v in changes.items()) or "loaded"
+    residual = result.get("residual")
+    parts = [
+        f"{what}: {result.get('status')}",
+        f"{result.get('iterations')} iterations",
+        "||Phi|| = " + ("nan" if residual is None or residual != residual else f"{residual:.3e}"),
+    ]
+    if result.get("changed"):
+        parts.append("moved: " + " ".join(result["changed"]))
+    return "  ·  ".join(parts)
+
+
+def state_json(
+    session: Session, label: str, sliders: tuple[str, ...] = (), hardpoint_style: bool = False
+) -> dict[str, Any]:
     """Everything the page draws for the session's current model."""
     model = session.model
     last = session.last
@@ -175,13 +318,16 @@ def state_json(session: Session, label: str) -> dict[str, Any]:
     if last is not None:
         scenes.append(build_scene(last.before))
     lo, hi = bounds(scenes)
-    comps = _coordinate_components(model)
+    comps = _coordinate_components(model, sliders)
     res = session.result_json
     return {
         "model": label,
         "name": model.mechanism.name,
         "units": dict(model.units),
         "variables": variables_json(model, session),
+        "hardpoint_style": hardpoint_style,
+        "hardpoint_rows": hardpoint_rows(model),
+        "status_line": session.status_line(),
         "coordinates": {k: _xyz(v) for k, v in model.coordinates.items()},
         "hardpoints": joint_hardpoints(model),
         "points": named_points(model),
@@ -190,6 +336,7 @@ def state_json(session: Session, label: str) -> dict[str, Any]:
         "outputs": output_names(model),
         "default_outputs": default_curve_outputs(model, comps),
         "scene": scene_json(scenes[0]),
+        **wheels_json(model),
         "before_scene": scene_json(scenes[1]) if last is not None else None,
         "bounds": [_xyz(lo), _xyz(hi)],
         "faded_alpha": FADED_ALPHA,
