@@ -149,6 +149,7 @@ def test_workbench_in_chromium(live_server, examples: Path, tmp_path: Path) -> N
 
             # --- drag an input slider: the mechanism follows along its branch ---------------
             slider = page.locator('#sliders input[data-address="LCA.q"]')
+            slider.scroll_into_view_if_needed()
             box = slider.bounding_box()
             y = box["y"] + box["height"] / 2
             page.mouse.move(box["x"] + box["width"] / 2, y)
@@ -242,8 +243,10 @@ def test_hardpoints_and_views_in_chromium(live_server, examples: Path, tmp_path:
                 '#hardpoints input[data-hardpoint="hardpoint:UBJ"]', "els => els.map(e => Number(e.value))"
             )
             np.testing.assert_allclose(ubj, want["hardpoints"]["UBJ.i"], rtol=1e-7)  # the row shows the result
-            assert page.locator("#status-text").inner_text().startswith(
-                "hardpoint:UBJ = [-53.0352, 715.518, 225.4936]: converged"
+            assert (
+                page.locator("#status-text")
+                .inner_text()
+                .startswith("hardpoint:UBJ = [-53.0352, 715.518, 225.4936]: converged")
             )
             changed = tmp_path / "changed.yaml"
             assert cli("propagate", assembled, "--set", target, "-o", changed)[0] == 0
@@ -278,6 +281,19 @@ def test_hardpoints_and_views_in_chromium(live_server, examples: Path, tmp_path:
             assert eyes["top"]["z"] > 0 and eyes["top"]["x"] == 0 == eyes["top"]["y"]
             if os.environ.get("KINPROP_UPDATE_SCREENSHOT"):
                 page.screenshot(path=str(SCREENSHOT.with_name("serve-hardpoints.png")))
+
+            # --- the report of the edited design: downloaded, opened (no network), its numbers
+            with page.expect_download() as dl:
+                page.click("#dl-report")
+            report = tmp_path / "report.html"
+            dl.value.save_as(report)
+            page.goto(report.as_uri())
+            page.wait_for_function("document.getElementById('curves') && document.getElementById('curves').data")
+            assert page.evaluate("document.getElementById('curves').data.length") == 2  # camber, toe
+            np.testing.assert_allclose(
+                page.evaluate("document.getElementById('curves').data[0].y"), cli_after, rtol=1e-9, atol=1e-12
+            )
+            assert "225.4936" in page.locator("#hardpoints").inner_text()
         finally:
             browser.close()
     assert console == []

@@ -88,6 +88,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "and the efforts that hold the inputs, at the model's assembled pose.",
     ),
     "import": ("kinprop.cli.importer", "Read another tool's mechanism file and write it as a kinprop model file."),
+    "report": (
+        "kinprop.cli.report",
+        "Write a self-contained HTML report: the global hardpoints and the default curves.",
+    ),
     "serve": (
         "kinprop.cli.serve",
         "Start the design-propagation workbench in the browser (edit, propagate, sweep, undo).",

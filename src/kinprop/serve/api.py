@@ -51,9 +51,10 @@ from kinprop.io.commands import (
 )
 from kinprop.io.writer import dump_model_like, file_style
 from kinprop.model import Model
+from kinprop.plot.report import report_html, slider_joints
 from kinprop.propagation import assemble
 from kinprop.serve.session import Session, Sessions
-from kinprop.serve.views import slider_joints, state_json, status_text
+from kinprop.serve.views import state_json, status_text
 
 STATIC = resources.files("kinprop.serve") / "static"
 SESSION_HEADER = "X-Kinprop-Session"
@@ -337,6 +338,12 @@ def create_app(model: Model, label: str | None = None, *, assemble_first: bool =
             dump_model_like(m, path, source)  # a hardpoint-style input comes back hardpoint style
             text = path.read_text(encoding="utf-8")
         return Response(text, media_type="application/yaml", headers=_attachment(f"{stem}.yaml"))
+
+    @app.get("/api/report.html")
+    def report(sid: Sid = None, q: QSid = None) -> Response:
+        """``kinprop report`` of the current model: one self-contained HTML file."""
+        text = report_html(session(sid, q).model, f"kinprop report: {label}")
+        return Response(text, media_type="text/html", headers=_attachment(f"{stem}-report.html"))
 
     @app.get("/api/results.json")
     def results_json(sid: Sid = None, q: QSid = None) -> Response:

@@ -524,7 +524,7 @@ async function history(what) {
 }
 
 function downloads() {
-  for (const id of ["dl-model", "dl-csv", "dl-json"]) {
+  for (const id of ["dl-model", "dl-csv", "dl-json", "dl-report"]) {
     const a = $(id);
     a.href = a.getAttribute("href").split("?")[0] + "?session=" + encodeURIComponent(SESSION);
   }
