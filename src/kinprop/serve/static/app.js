@@ -293,9 +293,9 @@ function sceneTraces(sc, faded, alpha) {
 // plotly camera presets (ISO 8855: x forward, y left, z up), orthographic but for "3d"
 const VIEWS = {
   "3d": { eye: { x: 1.5, y: 1.5, z: 1.0 }, up: { x: 0, y: 0, z: 1 }, projection: { type: "perspective" } },
-  front: { eye: { x: 2.5, y: 0, z: 0 }, up: { x: 0, y: 0, z: 1 }, projection: { type: "orthographic" } },
-  side: { eye: { x: 0, y: 2.5, z: 0 }, up: { x: 0, y: 0, z: 1 }, projection: { type: "orthographic" } },
-  top: { eye: { x: 0, y: 0, z: 2.5 }, up: { x: 1, y: 0, z: 0 }, projection: { type: "orthographic" } },
+  front: { eye: { x: 1.2, y: 0, z: 0 }, up: { x: 0, y: 0, z: 1 }, projection: { type: "orthographic" } },
+  side: { eye: { x: 0, y: 1.2, z: 0 }, up: { x: 0, y: 0, z: 1 }, projection: { type: "orthographic" } },
+  top: { eye: { x: 0, y: 0, z: 1.2 }, up: { x: 1, y: 0, z: 0 }, projection: { type: "orthographic" } },
 };
 let view = "3d";
 
