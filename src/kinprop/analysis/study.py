@@ -221,10 +221,55 @@ def model_unit_scale(
     return {k: v for k, v in scale.items() if v != 1.0}
 
 
-def evaluate_payload(payload: Mapping[str, Any], spec: StudySpec, values: Array, start: int) -> pd.DataFrame:
-    """:func:`evaluate_chunk` on a Dask worker: the model travels as a payload and is compiled
-    there (once per chunk: a worker holds no engine of ours)."""
-    return evaluate_chunk(compile_engine(_model_from_payload(payload)), spec, values, start)
+#: a Dask worker's engine and output program of the study it last ran chunks of (compiled once
+#: per worker process, not once per chunk)
+_WORKER: dict[str, tuple[Engine, OutputProgram]] = {}
+
+
+def evaluate_payload(payload: Mapping[str, Any], spec: StudySpec, values: Array, start: int,
+                     part: tuple[str, int] | None = None,
+                     given: tuple[Sequence[str], Array] | None = None) -> pd.DataFrame | StudyTotals:  # fmt: skip
+    """:func:`evaluate_chunk` on a Dask worker: the model travels as a payload; the worker compiles
+    it on its first chunk of the study and keeps the engine for the next ones. Each chunk runs on
+    the worker's thread alone (no numba threads): a cluster's parallelism is its workers.
+
+    ``part``: ``(directory, index)`` of the chunk's Parquet part. When the worker sees the
+    study's directory (its manifest, for this plan: a shared or the same file system) it writes
+    the part itself (with ``given``: the factors as given, this chunk's rows) and returns only
+    the chunk's :class:`StudyTotals`; otherwise it returns the rows."""
+    key = json.dumps([spec.model_hash, spec.sets, spec.outputs], sort_keys=True)
+    if key not in _WORKER:
+        eng = compile_engine(_model_from_payload(payload))
+        _WORKER.clear()
+        _WORKER[key] = (eng, study_program(eng, spec))
+    eng, program = _WORKER[key]
+    frame = evaluate_chunk(eng, spec, values, start, program, threads=False)
+    if part is None or not _is_study_of(Path(part[0]), spec):
+        return frame
+    _with_given(frame, given)
+    _write_part(Path(part[0]), part[1], frame)
+    totals = StudyTotals()
+    totals.add(frame)
+    return totals
+
+
+def _is_study_of(directory: Path, spec: StudySpec) -> bool:
+    try:
+        return json.loads((directory / MANIFEST).read_text()).get("plan_hash") == spec.plan_hash
+    except (OSError, ValueError):
+        return False
+
+
+def _with_given(frame: pd.DataFrame, given: tuple[Sequence[str], Array] | None) -> None:
+    """Insert the factors as given (rows of the frame's variants, or the chunk's own rows)
+    beside the variant column."""
+    if given is None:
+        return
+    vals = np.asarray(given[1], dtype=float)
+    if len(vals) != len(frame):
+        vals = vals[frame["variant"].to_numpy()]
+    for k, name in enumerate(given[0]):
+        frame.insert(1 + k, name, vals[:, k])
 
 
 def study_program(eng: Engine, spec: StudySpec) -> OutputProgram:
@@ -238,12 +283,13 @@ def study_program(eng: Engine, spec: StudySpec) -> OutputProgram:
     return output_program(model, [*points, *extra], engine=eng)
 
 
-def evaluate_chunk(eng: Engine, spec: StudySpec, values: Array, start: int,
-                   program: OutputProgram | None = None) -> pd.DataFrame:  # fmt: skip
+def evaluate_chunk(eng: Engine, spec: StudySpec, values: Array, start: int, program: OutputProgram | None = None,
+                   threads: bool | None = None) -> pd.DataFrame:  # fmt: skip
     """Rows of variants ``start .. start + len(values) - 1`` with the study's engine (compiled
     once from the base model: ``eng.model``) and its outputs (:func:`study_program`, built here
     when not given): the plan written into one batch of states, one :meth:`Engine.solve_batch`,
-    one compiled evaluation of the outputs over the converged variants."""
+    one compiled evaluation of the outputs over the converged variants; ``threads`` as in
+    :meth:`Engine.solve_batch`."""
     model = eng.model
     program = program if program is not None else study_program(eng, spec)
     labels = column_labels(eng.layout)
@@ -272,7 +318,8 @@ def evaluate_chunk(eng: Engine, spec: StudySpec, values: Array, start: int,
             except AddressError:
                 ok[i] = False
     changed = {parse_address(a).key for a in spec.addresses} | {parse_address(a).key for a in spec.sets}
-    res = eng.solve_batch(st, tuple(spec.free), exclude=changed, tol=spec.tol, max_iter=spec.max_iter)
+    res = eng.solve_batch(st, tuple(spec.free), exclude=changed, tol=spec.tol, max_iter=spec.max_iter,
+                          threads=threads)  # fmt: skip
     conv = res.converged & ok
     status = np.array([s.value for s in Status], dtype=object)[res.status_code]
     status[~ok] = "invalid"
@@ -333,6 +380,14 @@ class StudyTotals:
                 t[0] += x.size
                 t[1], t[2], t[3] = min(t[1], float(x.min())), t[2] + float(x.sum()), max(t[3], float(x.max()))
 
+    def merge(self, other: StudyTotals) -> None:
+        """Add another chunk's totals."""
+        self.variants += other.variants
+        self.failed += other.failed
+        for c, (n, lo, total, hi) in other.columns.items():
+            t = self.columns.setdefault(c, [0, math.inf, 0.0, -math.inf])
+            t[0], t[1], t[2], t[3] = t[0] + n, min(t[1], lo), t[2] + total, max(t[3], hi)
+
     def summary(self, column: str) -> tuple[float, float, float] | None:
         """``(min, mean, max)`` of a column over the converged variants (None: no values)."""
         t = self.columns.get(column)
@@ -377,7 +432,7 @@ def run_study(
     outputs: Sequence[str] | None = None,
     tol: float = 1e-10,
     max_iter: int = 50,
-    chunk_size: int = CHUNK_SIZE,
+    chunk_size: int | None = None,
     output: str | Path | None = None,
     resume: bool = False,
     scheduler: str | None = None,
@@ -426,7 +481,7 @@ def run_study(
             raise AddressError(f"plan has {values.shape[1]} columns for {len(addrs)} addresses")
         if given is None:
             method, samples, seed = "plan", values.shape[0], None
-    if chunk_size < 1:
+    if chunk_size is not None and chunk_size < 1:
         raise AddressError("--chunk-size must be >= 1")
     if engine not in ("auto", "fast", "reference"):
         raise AddressError(f"engine {engine!r}: expected auto, fast or reference")
@@ -448,39 +503,48 @@ def run_study(
         expand_outputs(base, list(outputs), eng0)
     if scale is None and model_units:
         scale = model_unit_scale(model, addrs, outputs, eng0)
-    spec = StudySpec(
-        addresses=addrs,
-        free=list(free),
-        sets={k: np.atleast_1d(np.asarray(v, dtype=float)).tolist() for k, v in (sets or {}).items()},
-        outputs=list(outputs) if outputs is not None else None,
-        tol=tol,
-        max_iter=max_iter,
-        chunk_size=chunk_size,
-        method=method,
-        samples=samples,
-        seed=seed,
-        plan_hash=hashlib.sha256(np.ascontiguousarray(values).tobytes()).hexdigest()[:16],
-        model_hash=_model_hash(model),
-        engine=engine,
-        scale=dict(scale or {}),
-        factors=list(given[0]) if given is not None else None,
-    )
-    n_chunks = -(-len(values) // chunk_size)
-    done: set[int] = set()
-    directory = Path(output) if output is not None else None
-    fresh = directory is not None and not (directory.exists() and any(directory.iterdir()))
-    if directory is not None and not fresh:
-        manifest = directory / MANIFEST
-        if not resume:
-            raise AddressError(f"{directory} exists: use --resume to complete it, or remove it")
-        if not manifest.exists():
-            raise AddressError(f"{directory} is not a study directory (no {MANIFEST})")
-        old = json.loads(manifest.read_text())
-        if old != asdict(spec):
-            diff = sorted(k for k in old if old.get(k) != asdict(spec).get(k))
-            raise AddressError(f"cannot resume {directory}: the study differs in {', '.join(diff)}")
-        done = _done_chunks(directory) & set(range(n_chunks))
+    if not collect and output is None:
+        raise AddressError("collect=False needs an output directory")
     client, own_client = _connect(scheduler)  # before creating anything: a bad address leaves no directory
+    try:
+        if chunk_size is None:  # a resumed study keeps its chunks; a cluster gets a few per worker
+            chunk_size = _chunk_size(len(values), client, Path(output) if output is not None and resume else None)
+        spec = StudySpec(
+            addresses=addrs,
+            free=list(free),
+            sets={k: np.atleast_1d(np.asarray(v, dtype=float)).tolist() for k, v in (sets or {}).items()},
+            outputs=list(outputs) if outputs is not None else None,
+            tol=tol,
+            max_iter=max_iter,
+            chunk_size=chunk_size,
+            method=method,
+            samples=samples,
+            seed=seed,
+            plan_hash=hashlib.sha256(np.ascontiguousarray(values).tobytes()).hexdigest()[:16],
+            model_hash=_model_hash(model),
+            engine=engine,
+            scale=dict(scale or {}),
+            factors=list(given[0]) if given is not None else None,
+        )
+        n_chunks = -(-len(values) // chunk_size)
+        done: set[int] = set()
+        directory = Path(output) if output is not None else None
+        fresh = directory is not None and not (directory.exists() and any(directory.iterdir()))
+        if directory is not None and not fresh:
+            manifest = directory / MANIFEST
+            if not resume:
+                raise AddressError(f"{directory} exists: use --resume to complete it, or remove it")
+            if not manifest.exists():
+                raise AddressError(f"{directory} is not a study directory (no {MANIFEST})")
+            old = json.loads(manifest.read_text())
+            if old != asdict(spec):
+                diff = sorted(k for k in old if old.get(k) != asdict(spec).get(k))
+                raise AddressError(f"cannot resume {directory}: the study differs in {', '.join(diff)}")
+            done = _done_chunks(directory) & set(range(n_chunks))
+    except BaseException:
+        if own_client:
+            client.close()
+        raise
     if directory is not None and fresh:
         directory.mkdir(parents=True, exist_ok=True)
         tmp = directory / (MANIFEST + ".tmp")
@@ -490,18 +554,18 @@ def run_study(
     eng = eng0.rebased(_model_from_payload(payload))  # the study's one engine, at its base
     todo = [c for c in range(n_chunks) if c not in done]
     frames: dict[int, pd.DataFrame] = {}
-    if not collect and directory is None:
-        raise AddressError("collect=False needs an output directory")
     totals = StudyTotals()
     if not collect:  # the chunks of an earlier run, one at a time
         for c in sorted(done):
             totals.add(_pandas().read_parquet(directory / f"part-{c:06d}.parquet"))
 
-    def store(c: int, frame: pd.DataFrame) -> None:
-        if given is not None:  # the factors as given, beside the variant
-            rows = frame["variant"].to_numpy()
-            for k, name in enumerate(given[0]):
-                frame.insert(1 + k, name, np.asarray(given[1], dtype=float)[rows, k])
+    def store(c: int, frame: pd.DataFrame | StudyTotals) -> None:
+        if isinstance(frame, StudyTotals):  # written by a Dask worker that sees the directory
+            totals.merge(frame)
+            if on_chunk is not None:
+                on_chunk(c)
+            return
+        _with_given(frame, given)
         if directory is not None:
             _write_part(directory, c, frame)
         else:
@@ -519,7 +583,7 @@ def run_study(
         if client is None:
             _run_local(eng, spec, todo, chunk, chunk_size, store, bar)
         else:
-            _run_dask(client, payload, spec, todo, chunk, chunk_size, store, bar)
+            _run_dask(client, payload, spec, todo, chunk, chunk_size, store, bar, directory, given)
     finally:
         bar.close()
         if own_client:
@@ -555,6 +619,18 @@ def _run_local(eng: Engine, spec: StudySpec, todo: list[int], chunk: Callable[[i
                 pending.result()
 
 
+def _chunk_size(n: int, client: Any, resumed: Path | None) -> int:
+    """The default chunk size: a resumed study's own (its manifest); locally :data:`CHUNK_SIZE`;
+    on a cluster about four chunks per worker (so that a slow worker does not hold the study
+    up), between 256 and :data:`CHUNK_SIZE` variants."""
+    if resumed is not None and (resumed / MANIFEST).exists():
+        return int(json.loads((resumed / MANIFEST).read_text())["chunk_size"])
+    if client is None:
+        return CHUNK_SIZE
+    workers = max(1, len(client.scheduler_info().get("workers", {})))
+    return int(min(CHUNK_SIZE, max(256, -(-n // (4 * workers)))))
+
+
 def _connect(scheduler: Any) -> tuple[Any, bool]:
     """``(client, owned)``: a new Client for an address (closed by us), or the given Client."""
     if scheduler is None or not isinstance(scheduler, str):
@@ -568,12 +644,21 @@ def _connect(scheduler: Any) -> tuple[Any, bool]:
 
 
 def _run_dask(client: Any, payload: Any, spec: StudySpec, todo: list[int], chunk: Callable[[int], Array],
-              chunk_size: int, store: Callable[[int, pd.DataFrame], None], bar: Any) -> None:  # fmt: skip
-    """Submit the chunks to a Dask cluster and store each as it completes (any order)."""
+              chunk_size: int, store: Callable[[int, Any], None], bar: Any, directory: Path | None = None,
+              given: tuple[Sequence[str], Array] | None = None) -> None:  # fmt: skip
+    """Submit the chunks to a Dask cluster and store each as it completes (any order); workers
+    that see ``directory`` write their parts themselves (:func:`evaluate_payload`)."""
     from distributed import as_completed
 
     data = client.scatter(payload, broadcast=True)
-    futures = {client.submit(evaluate_payload, data, spec, chunk(c), c * chunk_size, pure=False): c for c in todo}
+    futures = {}
+    for c in todo:
+        start = c * chunk_size
+        part = (str(directory.resolve()), c) if directory is not None else None
+        mine = (
+            None if given is None else (list(given[0]), np.asarray(given[1], dtype=float)[start : start + chunk_size])
+        )
+        futures[client.submit(evaluate_payload, data, spec, chunk(c), start, part, mine, pure=False)] = c
     for fut in as_completed(futures):
         c = futures[fut]
         store(c, fut.result())

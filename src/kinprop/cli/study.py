@@ -79,8 +79,13 @@ def study_cmd(
     ] = None,
     resume: Annotated[bool, typer.Option("--resume", help="complete an interrupted study in OUTPUT")] = False,
     chunk_size: Annotated[
-        int, typer.Option("--chunk-size", help="variants per chunk (one batch solve, one Parquet part each)")
-    ] = CHUNK_SIZE,
+        int | None,
+        typer.Option(
+            "--chunk-size",
+            help=f"variants per chunk (one batch solve, one Parquet part each); default "
+            f"{CHUNK_SIZE}, on a cluster about four chunks per worker",
+        ),
+    ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print a JSON summary")] = False,
     engine: Annotated[
         str, typer.Option("--engine", help="auto (compiled when possible), fast (compiled) or reference (numpy)")
@@ -90,7 +95,8 @@ def study_cmd(
     check_tol(tol)
     check_int("--max-iter", max_iter, 1, MAX_ITER)
     check_int("--samples", samples, 1, MAX_SAMPLES)
-    check_int("--chunk-size", chunk_size, 1, MAX_SAMPLES)
+    if chunk_size is not None:
+        check_int("--chunk-size", chunk_size, 1, MAX_SAMPLES)
     if method not in ("grid", "lhs", "mc"):
         raise AddressError(f"--method {method!r}: expected grid, lhs or mc")
     if engine not in ("auto", "fast", "reference"):

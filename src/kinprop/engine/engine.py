@@ -243,12 +243,16 @@ class Solution:
                        self.substeps, self.flags, self.optimality)  # fmt: skip
 
     @cached_property
-    def design(self) -> Design:
-        return self.engine.unpack(self.state)[0]
+    def _unpacked(self) -> tuple[Design, Mapping[str, Array]]:
+        return self.engine.unpack(self.state)
 
-    @cached_property
+    @property
+    def design(self) -> Design:
+        return self._unpacked[0]
+
+    @property
     def coordinates(self) -> Mapping[str, Array]:
-        return self.engine.unpack(self.state)[1]
+        return self._unpacked[1]
 
     def value(self, address: str) -> Array:
         """Current value of an address (``O2.q``, ``L1.length``, ``J.s_i[1]``)."""
