@@ -10,9 +10,16 @@ every coordinate (layout labels ``J01.q``, ``J32.q[1]``), every named point
 (``point:BODY.NAME[x]``) and the outputs of :func:`kinprop.analysis.outputs.evaluate_outputs`
 (by default the suspension metrics of wheel bodies, if any).
 
-Variants run in chunks. Locally the compiled engine (:meth:`kinprop.Engine.solve_batch`) solves a
-chunk in one call (the numpy reference when the mechanism cannot be compiled); with a
-``scheduler`` address the chunks go to a Dask distributed cluster. Finished chunks are
+Variants run in chunks (:data:`CHUNK_SIZE` locally; about four per worker on a cluster). A
+chunk is one batch: the plan written into a stack of states column by column
+(:meth:`kinprop.Engine.set_batch`), one :meth:`kinprop.Engine.solve_batch`, and one compiled
+evaluation of every point and position-level output over the converged variants
+(:func:`study_program`, :mod:`kinprop.engine.outputs`); only first-order metrics and loads
+are evaluated per variant. Locally each part is written in a second thread while the next
+chunk is solved; with a ``scheduler`` address the chunks go to a Dask distributed cluster,
+whose workers write their parts themselves when they see the study's directory. With
+``collect=False`` a study returns :class:`StudyTotals` and holds one chunk of rows at a
+time. Finished chunks are
 streamed to the output as one Parquet file per chunk in a directory
 (``results.parquet/part-000012.parquet``), each written to a temporary name and renamed
 atomically, next to a ``_study.json`` manifest. A killed study therefore never leaves a
