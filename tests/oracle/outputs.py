@@ -10,13 +10,26 @@ import math
 import numpy as np
 
 from kinprop.analysis.context import HARD, POINT, OutputContext, find_point
-from kinprop.analysis.metrics import resolve_metric, steering_points
+from kinprop.analysis.metrics import resolve_metric
 from kinprop.analysis.outputs import AXES, _distance_ends, _parse_variable
+from kinprop.model.joint_points import steering_joints
 from kinprop.spatial import EZ, Array
 
 
 def wheel_side(axis: Array) -> int:
     return 1 if axis[1] >= 0 else -1
+
+
+def steering_points(ctx: OutputContext, wheel: str) -> tuple[Array | None, Array | None]:
+    model = ctx.model
+    found_upper, found_lower = (find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
+    if found_upper is not None and found_lower is not None:
+        return ctx.body_point(*found_upper), ctx.body_point(*found_lower)
+    pair = steering_joints(model.mechanism, wheel)
+    if pair is None:
+        return None, None
+    a, b = (ctx.hardpoint(*p) for p in pair)
+    return (a, b) if a[2] >= b[2] else (b, a)
 
 
 def camber_toe(axis: Array) -> tuple[float, float]:

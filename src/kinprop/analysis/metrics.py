@@ -70,11 +70,6 @@ METRIC_ALIASES = {"kingpin_inclination": "kpi", "scrub": "scrub_radius", "wheel_
 
 
 # --- closed-form geometry (vectors in vehicle axes) -----------------------------------------
-def wheel_side(axis: Array) -> int:
-    """+1 for a left wheel (outboard spin axis towards +y), -1 for a right wheel."""
-    return 1 if axis[1] >= 0 else -1
-
-
 def _vec(x: Array) -> Array:
     return np.ascontiguousarray(x, dtype=float)
 
@@ -184,25 +179,12 @@ def resolve_metric(model: Model, name: str) -> tuple[str, str]:
     return wheel, metric
 
 
-def steering_points(ctx: OutputContext, wheel: str) -> tuple[Array | None, Array | None]:
-    """Global upper and lower points of the wheel's steering axis at the context's state: the
-    declared ``kingpin_upper``/``kingpin_lower`` points (coordinates, or references to joints
-    that follow them), else the default joints of :func:`kinprop.model.joint_points.steering_joints`
-    (two ball joints, or a strut top mount and the lower ball joint), the higher one upper."""
-    model = ctx.model
-    found_upper, found_lower = (find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
-    if found_upper is not None and found_lower is not None:
-        return ctx.body_point(*found_upper), ctx.body_point(*found_lower)
-    pair = steering_joints(model.mechanism, wheel)
-    if pair is None:
-        return None, None
-    a, b = (ctx.hardpoint(*p) for p in pair)
-    return (a, b) if a[2] >= b[2] else (b, a)
-
-
 def steering_bodies(ctx: OutputContext, wheel: str) -> tuple[tuple[str, Array], tuple[str, Array]] | None:
-    """``((body, point), (body, point))`` of the steering axis' upper and lower points (as
-    :func:`steering_points`), each with the body it moves with (a joint's point: that side's)."""
+    """``((body, point), (body, point))`` of the steering axis' upper and lower points at the
+    context's state — the declared ``kingpin_upper``/``kingpin_lower`` points, else the default
+    joints of :func:`kinprop.model.joint_points.steering_joints`, the higher one upper (the
+    rule :class:`kinprop.analysis.program.ProgramBuilder` compiles) — each with the body it
+    moves with (a joint's point: that side's)."""
     model = ctx.model
     mech = model.mechanism
     found = [find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
@@ -371,6 +353,7 @@ __all__ = [
     "metric_names",
     "metric_unit",
     "steering_angles",
+    "steering_bodies",
     "suspension_metrics",
     "wheel_bodies",
     "wheel_first_order",
