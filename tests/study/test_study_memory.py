@@ -8,7 +8,7 @@ import tracemalloc
 
 import pandas as pd
 
-from kinprop.analysis.study import Factor, StudyTotals, read_study, run_study
+from kinprop.analysis.study import Factor, StudyTotals, read_study, run_study, sample_plan
 from kinprop.builders import rssr
 
 FACTORS = [Factor("coupler.length", 0.30, 0.32), Factor("rocker.s_i[0]", 0.34, 0.36)]
@@ -16,11 +16,14 @@ CHUNK = 200
 
 
 def peak(model, n: int, out) -> tuple[int, StudyTotals]:
+    """Traced peak of a streamed study of ``n`` variants; the plan (N x F numbers, which a study
+    holds) is sampled before tracing starts."""
+    plan = sample_plan(FACTORS, "mc", n, seed=1)
     tracemalloc.start()
     try:
         tracemalloc.reset_peak()
-        totals = run_study(model, FACTORS, method="mc", samples=n, seed=1, free=("rocker.q",), chunk_size=CHUNK,
-                           output=out, collect=False)  # fmt: skip
+        totals = run_study(model, plan=plan, addresses=[f.address for f in FACTORS], free=("rocker.q",),
+                           chunk_size=CHUNK, output=out, collect=False)  # fmt: skip
         return tracemalloc.get_traced_memory()[1], totals
     finally:
         tracemalloc.stop()

@@ -49,12 +49,13 @@ from kinprop.analysis.program import OutputProgram
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine, State, Status
 from kinprop.engine import compile as compile_engine
+from kinprop.engine.status import STATUSES
+from kinprop.engine.units import changes_to_internal, check_units
 from kinprop.errors import AddressError
 from kinprop.kinematics.layout import column_labels
 from kinprop.model import Design, Model
 from kinprop.model.design import as_coordinates, parse_address
 from kinprop.propagation.propagate import apply_changes
-from kinprop.propagation.units import changes_to_internal, check_units
 from kinprop.spatial import Array
 
 if TYPE_CHECKING:  # pandas (the data extra) is imported where a frame is built
@@ -328,8 +329,8 @@ def evaluate_chunk(eng: Engine, spec: StudySpec, values: Array, start: int, prog
     res = eng.solve_batch(st, tuple(spec.free), exclude=changed, tol=spec.tol, max_iter=spec.max_iter,
                           threads=threads)  # fmt: skip
     conv = res.converged & ok
-    status = np.array([s.value for s in Status], dtype=object)[res.status_code]
-    status[~ok] = "invalid"
+    status = np.array([s.value for s in STATUSES], dtype=object)[res.status_code]
+    status[~ok] = Status.INVALID.value
     Q = res.state.Q.copy()
     Q[~conv] = np.nan
     rows["converged"] = conv
@@ -527,7 +528,7 @@ def run_study(
             method=method,
             samples=samples,
             seed=seed,
-            plan_hash=hashlib.sha256(np.ascontiguousarray(values).tobytes()).hexdigest()[:16],
+            plan_hash=hashlib.sha256(memoryview(np.ascontiguousarray(values))).hexdigest()[:16],  # no copy
             model_hash=_model_hash(model),
             engine=engine,
             scale=dict(scale or {}),
