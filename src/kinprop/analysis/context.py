@@ -16,6 +16,12 @@ from kinprop.spatial import Array
 
 POINT = re.compile(r"^point:(?P<body>[^.\s\[\]]+)\.(?P<name>[^\s\[\]]+?)(\[(?P<c>[xyz012])\])?$")
 HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[^\s.\[\]]+)(\[(?P<c>[xyz012])\])?$")
+#: a body's pose, ``body:NAME`` (every component) or ``body:NAME[x|y|z|roll|pitch|yaw]``
+BODY = re.compile(r"^body:(?P<body>[^\s\[\]]+?)(\[(?P<c>[^\]]*)\])?$")
+#: the components of a body pose: the body frame's origin (global, length unit), then its
+#: orientation as ISO 8855 Tait-Bryan angles, z-y'-x'' (yaw, pitch, roll): ``A = Rz(yaw) Ry(pitch) Rx(roll)``
+POSE = ("x", "y", "z", "roll", "pitch", "yaw")
+POSE_ANGLES = ("roll", "pitch", "yaw")
 
 
 @dataclass(frozen=True)
@@ -58,10 +64,23 @@ class OutputContext:
 
     def body_point(self, body: str, point: str) -> Array:
         """Global position of the named point ``point`` of ``body``."""
-        source = point_source(self.model, body, point)
+        source = locate_point(self.model, body, point)
         if source[0] == "joint":  # a joint's point: it follows the joint (kinprop.model.joint_points)
             return self.hardpoint(source[1], source[2])
         return self.kin.r[body] + self.kin.A[body] @ source[2]
+
+    def body_pose(self, body: str) -> Array:
+        """``[x, y, z, roll, pitch, yaw]`` of ``body``: its frame's global origin and the
+        Tait-Bryan angles (radians) of its rotation matrix ``A = Rz(yaw) Ry(pitch) Rx(roll)``
+        (the ISO 8855 yaw-pitch-roll sequence, intrinsic z-y'-x''; pitch in [-90, 90] deg, the
+        others in [-180, 180])."""
+        from scipy.spatial.transform import Rotation
+
+        mech = self.model.mechanism
+        if body not in mech.body_names:
+            raise AddressError(f"unknown body {body!r}; bodies are {', '.join(mech.body_names)}")
+        yaw, pitch, roll = Rotation.from_matrix(self.kin.A[body]).as_euler("ZYX")
+        return np.concatenate([np.asarray(self.kin.r[body], dtype=float), [roll, pitch, yaw]])
 
     def hardpoint(self, joint: str, side: str) -> Array:
         """Global origin of ``joint``'s frame on its first (``i``) or second (``j``) body."""
@@ -72,6 +91,26 @@ class OutputContext:
             return self.body_point(*pivot_point(self.model, joint, side))
         f = self.kin.frames[joint]
         return f.P_i if side == "i" else f.P_j
+
+    def point_source(self, body: str, point: str) -> tuple[str, str] | None:
+        """The joint frame ``(joint, side)`` a named point is (it moves with that joint's
+        ``s'``), or None for a plain body-fixed point."""
+        return self.model.mechanism.body(body).joint_point(point)
+
+    def hardpoint_source(self, joint: str, side: str) -> tuple[str, str] | None:
+        """The joint frame ``hardpoint:JOINT.SIDE`` is (a pivot: its named point's, see
+        :meth:`point_source`)."""
+        return (joint, side) if side in ("i", "j") else self.point_source(*pivot_point(self.model, joint, side))
+
+    def spec_source(self, spec: str) -> tuple[str, str] | None:
+        """:meth:`point_source` of a ``point:BODY.NAME`` or ``hardpoint:JOINT.i|j`` spec."""
+        m = POINT.match(spec)
+        if m and m.group("c") is None:
+            return self.point_source(m.group("body"), m.group("name"))
+        m = HARD.match(spec)
+        if m and m.group("c") is None:
+            return self.hardpoint_source(m.group("joint"), m.group("side"))
+        return None
 
     def point(self, spec: str) -> Array:
         """A global point from a ``point:BODY.NAME`` or ``hardpoint:JOINT.i|j`` spec."""
@@ -84,7 +123,7 @@ class OutputContext:
         raise AddressError(f"{spec!r} is not a point: expected point:BODY.NAME or hardpoint:JOINT.i|j")
 
 
-def point_source(model: Model, body: str, point: str) -> tuple[str, str, Array] | tuple[str, str, str]:
+def locate_point(model: Model, body: str, point: str) -> tuple[str, str, Array] | tuple[str, str, str]:
     """Where the named point ``point`` of ``body`` comes from: ``("joint", JOINT, side)`` for a
     joint's point (:mod:`kinprop.model.joint_points`), else ``("body", body, p')`` (body frame).
     Raises :class:`AddressError` for an unknown body or point."""

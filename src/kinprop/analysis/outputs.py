@@ -9,6 +9,9 @@ its components, e.g. ``point:wheel.wheel_centre`` into ``...[x]``, ``...[y]``, `
   ``point:BODY.NAME[x|y|z]``;
 * joint hardpoints, the global origin of the joint frame on the joint's first (``i``) or
   second (``j``) body: ``hardpoint:JOINT.i[x]``, ``hardpoint:JOINT.j[z]``;
+* a body's pose, the global origin of its frame and its orientation as yaw, pitch and roll
+  (ISO 8855 order, intrinsic z-y'-x''; angles in the model's angle unit): ``body:BODY`` (six
+  components) or ``body:BODY[x|y|z|roll|pitch|yaw]``;
 * the distance between two points (e.g. a spring's length), each ``BODY.NAME`` (a named
   point) or ``hardpoint:JOINT.i|j``: ``distance:chassis.spring_chassis,lca.spring_lca``;
 * suspension metrics of a wheel body (:mod:`kinprop.analysis.metrics`):
@@ -27,7 +30,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from kinprop.analysis.context import HARD, POINT, OutputContext, pivot_point
+from kinprop.analysis.context import BODY, HARD, POINT, POSE, OutputContext, pivot_point
 from kinprop.analysis.metrics import (
     METRIC_NEEDS,
     WheelSpec,
@@ -35,6 +38,7 @@ from kinprop.analysis.metrics import (
     metric_names,
     resolve_metric,
     wheel_first_order,
+    wheel_first_order_derivatives,
 )
 from kinprop.analysis.program import OutputProgram, ProgramBuilder
 from kinprop.analysis.statics import is_load_output, load_value
@@ -76,6 +80,15 @@ def expand_outputs(model: Model, names: Sequence[str], engine: Engine | None = N
         if is_load_output(name):
             load_value(model, name, {}, engine)  # the joint, element, input and load case exist
             out.append(name)
+        elif name.startswith("body:"):
+            m = BODY.match(name)
+            if not m or (m["c"] is not None and m["c"] not in POSE):
+                raise AddressError(f"bad output {name!r}: expected body:BODY or body:BODY[{'|'.join(POSE)}]")
+            if m["body"] not in model.mechanism.body_names:
+                raise AddressError(
+                    f"output {name!r}: unknown body {m['body']!r}; bodies are {', '.join(model.mechanism.body_names)}"
+                )
+            out += [name] if m["c"] is not None else [f"{name}[{c}]" for c in POSE]
         elif name.startswith("distance:"):
             ctx = OutputContext.of(model, engine=engine)
             for end in _distance_ends(name):
@@ -128,7 +141,8 @@ def _parse_variable(engine: Engine, name: str) -> Address:
     except AddressError:
         raise AddressError(
             f"bad output {name!r}: expected a coordinate (J.q[k]), a design variable (J.s_i[k], J.length), "
-            "point:BODY.NAME[x], hardpoint:JOINT.i[x] or a metric (metric:WHEEL.camber)"
+            "point:BODY.NAME[x], hardpoint:JOINT.i[x], body:BODY[x|roll], distance:A,B or a metric "
+            "(metric:WHEEL.camber)"
         ) from None
     if addr.field in ("C_i", "C_j"):
         raise AddressError(f"output {name!r}: orientations are not scalar outputs; use points or metrics")
@@ -157,7 +171,7 @@ def output_program(
     eng = engine if engine is not None else compile_engine(model.mechanism)
     b = ProgramBuilder(model, eng, reference, wheels)
     for name in expand_outputs(model, names, eng):
-        if is_load_output(name):
+        if is_load_output(name) or name.startswith("body:"):
             b.add_other(name)
         elif name.startswith("distance:"):
             b.add_distance(name, *_distance_ends(name))
@@ -183,10 +197,13 @@ def output_program(
 
 
 def _other(ctx: OutputContext, name: str, cache: dict[str, dict[str, float]]) -> float:
-    """An output the program leaves to Python: a load, or a first-order metric (one velocity
-    analysis per wheel and state, :func:`~kinprop.analysis.metrics.wheel_first_order`)."""
+    """An output the program leaves to Python: a load, a body's pose, or a first-order metric
+    (one velocity analysis per wheel and state, :func:`~kinprop.analysis.metrics.wheel_first_order`)."""
     if is_load_output(name):
         return load_value(ctx.model, name, cache, ctx.engine, ctx.reference)
+    if name.startswith("body:"):
+        m = BODY.match(name)
+        return float(ctx.body_pose(m["body"])[POSE.index(m["c"])])  # type: ignore[index]
     wheel, metric = resolve_metric(ctx.model, name)
     key = f"{wheel}\x00first"
     if key not in cache:
@@ -236,6 +253,45 @@ def program_batch(
             for k in others:
                 values[i, k] = _other(ctx, program.names[k], cache)
     return values
+
+
+def first_order_of(model: Model, name: str) -> tuple[str, str] | None:
+    """``(wheel, metric)`` of an expanded output name that is a first-order metric (a gain, a
+    centre, anti, a motion ratio, the wheel rate; :mod:`kinprop.analysis.firstorder`), else None."""
+    if is_load_output(name) or name.startswith(("distance:", "point:", "hardpoint:")):
+        return None
+    if name.startswith("metric:") or "." not in name:
+        wheel, metric = resolve_metric(model, name)
+        return (wheel, metric) if is_first_order(metric) else None
+    return None
+
+
+def first_order_derivatives(
+    model: Model,
+    names: Sequence[str],
+    directions: Array,
+    *,
+    reference: Model | None = None,
+    wheels: Mapping[str, WheelSpec] | None = None,
+    engine: Engine | None = None,
+) -> dict[int, Array]:
+    """Exact derivatives of the first-order metrics among the expanded outputs ``names`` along
+    each column of ``directions`` (state directions, solver units), keyed by their index in
+    ``names`` (values as :func:`evaluate_outputs` with ``units="solver"`` gives them):
+    :func:`kinprop.analysis.metrics.wheel_first_order_derivatives`, once per wheel."""
+    eng = engine if engine is not None else compile_engine(model.mechanism)
+    ctx = OutputContext.of(model, reference, wheels, eng)
+    per_wheel: dict[str, dict[str, Array]] = {}
+    out: dict[int, Array] = {}
+    for i, name in enumerate(names):
+        found = first_order_of(model, name)
+        if found is None:
+            continue
+        wheel, metric = found
+        if wheel not in per_wheel:
+            per_wheel[wheel] = wheel_first_order_derivatives(ctx, wheel, directions)
+        out[i] = per_wheel[wheel][metric]
+    return out
 
 
 def evaluate_outputs(

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from kinprop.analysis.context import OutputContext, WheelSpec, find_point, pivot_point, point_source
+from kinprop.analysis.context import OutputContext, WheelSpec, find_point, locate_point, pivot_point
 from kinprop.engine import Engine, State
 from kinprop.engine import outputs as compiled
 from kinprop.errors import AddressError
@@ -91,7 +91,7 @@ class ProgramBuilder:
 
     def body_point(self, body: str, name: str) -> int:
         """Slot of the named point ``name`` of ``body`` (a joint's point follows the joint)."""
-        source = point_source(self.model, body, name)
+        source = locate_point(self.model, body, name)
         if source[0] == "joint":
             return self.hardpoint(source[1], source[2])  # type: ignore[arg-type]
         b = self.engine.body_index[body]
