@@ -38,9 +38,8 @@ def test_streamed_study_memory_is_bounded_per_chunk(tmp_path):
     frame = read_study(tmp_path / "large.parquet")
     rows = frame.memory_usage(deep=True).sum()
     assert totals.variants == len(frame) == 100 * CHUNK and totals.failed == int((~frame["converged"]).sum())
-    # 25 times the chunks, the same peak (within the plan's growth and allocator noise): it grows
-    # by less than a tenth of the rows added; they were never held together
-    assert large < 1.3 * small, (small, large)
+    # 25 times the chunks: the peak grows by less than a tenth of the rows added (holding them
+    # would add all of them; measured: 0.15 MB for 2.3 MB of rows); they were never held together
     assert large - small < (rows - rows_small) / 10, (small, large, rows_small, rows)
     # the totals are the rows' own statistics
     ok = frame[frame["converged"]]
