@@ -371,3 +371,81 @@ def test_an_unassembled_model_has_no_loads() -> None:
     s = kp.statics(raw, PointLoad("slider", (0.0, 0.0, 0.0), force=(100.0, 0.0, 0.0)))
     assert s.status == "not_assembled" and "assemble" in s.message
     assert all(np.isnan(r.force[1]).all() for r in s.reactions.values())
+
+
+def _richardson_of_resolved(base: kp.Model, names: list[str], column: str, h: float, **propagate) -> np.ndarray:
+    """d(outputs)/d(column) by Richardson central differences (steps h, h/2) of models
+    re-solved with the design column changed (``kp.propagate``, model units)."""
+    from kinprop.analysis.outputs import evaluate_outputs
+
+    key, _, index = column.partition("[")
+    x0 = float(np.atleast_1d(np.asarray(base.design[key], dtype=float)).ravel()[int(index[:-1]) if index else 0])
+
+    def at(t: float) -> np.ndarray:
+        m = kp.propagate(base, {column: x0 + t}, tol=1e-14, **propagate).after
+        v = evaluate_outputs(m, names)
+        return np.array([v[n] for n in names])
+
+    def d(step: float) -> np.ndarray:
+        return (at(step) - at(-step)) / (2 * step)
+
+    return (4 * d(h / 2) - d(h)) / 3
+
+
+def test_double_wishbone_design_derivatives_of_loads() -> None:
+    """``output_sensitivity`` of reactions (global, joint-frame, magnitude), the tie rod's
+    tension, the spring force and the input effort under the example's wheel load cases
+    (contact-point forces, weights) with respect to hardpoints and a length: exact (the
+    differentiated equilibrium, method 'direct') against central differences of re-solved
+    models, in the model's units (N per mm, N mm per mm)."""
+    from kinprop.analysis.sensitivity import DIRECT, output_sensitivity
+
+    base = kp.propagate(_assembled(EXAMPLES / "double_wishbone.yaml"), {"LCA.q": 4.0}, tol=1e-14).after
+    names = ["reaction:UBJ.fz@bump_3g", "reaction:LCA.local.mz@bump_3g", "reaction:LBJ.fx@cornering_1g",
+             "reaction:UCA.my@braking_1g", "reaction:UCA.local.fx@braking_1g", "reaction:UBJ.f@bump_3g",
+             "force:TR@braking_1g", "force:spring", "effort:LCA@cornering_1g"]  # fmt: skip
+    wrt = ["UBJ.s_j[0]", "LBJ.s_i[2]", "TR.length", "UCA.s_i[1]"]
+    D = output_sensitivity(base, names, wrt)
+    assert set(D.attrs["methods"].values()) == {DIRECT}
+    for c in wrt:
+        fd = _richardson_of_resolved(base, names, c, 0.1)
+        scale = np.maximum(np.abs(fd), 1.0)
+        assert np.all(np.abs(D[c].to_numpy() - fd) < 1e-7 * scale), (c, D[c].to_numpy(), fd)
+    assert abs(D.loc["force:TR@braking_1g", "TR.length"]) > 10.0  # a real dependence, N per mm
+
+
+def test_mcpherson_design_derivatives_of_loads() -> None:
+    """The McPherson strut (S-T tree joint with Euler parameters, R-S and T-D cut rods) held at
+    the rack and the strut slide under a force on the wheel: exact design derivatives
+    (``load_derivatives`` along the propagation's state response) of the rods' tensions, the
+    strut's reaction and the efforts against central differences of re-solved models."""
+    from kinprop.analysis.statics import load_derivatives
+    from kinprop.propagation.sensitivity import design_sensitivity
+
+    base = _assembled(EXAMPLES / "mcpherson.yaml")
+    inputs = ["TD", "ST.q[4]"]
+    case = LoadCase("corner", (PointLoad("wheel", (0.02, 0.1, -0.3), force=(-2000.0, 3000.0, 8000.0)),))
+    names = ["force:RS", "force:TD", "reaction:ST.fz", "reaction:ST.local.my", "reaction:RS.local.fy", "effort:TD",
+             "effort:ST.q[4]"]  # fmt: skip
+    wrt = ["RS.s_j[1]", "TD.length", "ST.s_i[2]", "RS.length", "TD.s_i[0]"]
+    engine = kp.compile(base)
+    sens = design_sensitivity(base, wrt, ["q"], engine=engine, units="solver")
+    X = np.zeros((len(wrt), engine.n_columns))
+    X[np.arange(len(wrt)), sens.wrt_columns] = 1.0
+    X[:, sens.free_columns] = sens.matrix.T
+    wrt = list(sens.columns)  # the design columns in the order of X
+    s0 = kp.statics(base, case, inputs=inputs)
+    assert s0.ok and not s0.undetermined
+    D = load_derivatives(base, names, X, engine=engine, inputs=inputs, loads=case)
+    for k, c in enumerate(wrt):
+        key, _, index = c.partition("[")
+        x0 = float(np.atleast_1d(np.asarray(base.design[key], dtype=float)).ravel()[int(index[:-1]) if index else 0])
+
+        def at(t: float, c: str = c, x0: float = x0) -> np.ndarray:
+            s = kp.statics(kp.propagate(base, {c: x0 + t}, tol=1e-14).after, case, inputs=inputs)
+            return np.array([s.value(n) for n in names])
+
+        h = 1e-4
+        fd = (4 * (at(h / 2) - at(-h / 2)) / h - (at(h) - at(-h)) / (2 * h)) / 3
+        scale = np.maximum(np.abs(fd), 1.0)
+        assert np.all(np.abs(D[:, k] - fd) < 1e-6 * scale), (c, D[:, k], fd)

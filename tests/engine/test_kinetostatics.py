@@ -245,3 +245,61 @@ def test_reduced_stiffness_matches_central_differences(rm) -> None:
         pytest.skip(f"the position solves do not follow this drive ({exc})")
     scale = max(1.0, float(np.max(np.abs(fd))))
     assert np.max(np.abs(K - fd)) < 1e-6 * scale
+
+
+@pytest.mark.parametrize("rm", RANDOM, ids=lambda rm: f"seed{rm.seed}")
+def test_design_rates_match_central_differences_of_re_solved_models(rm) -> None:
+    """Exact design derivatives (kinprop.engine.statics_rates, the differentiated equilibrium)
+    of the efforts, every determined reaction component (global and joint-frame), the rods'
+    tensions and the element forces, for design columns of every kind (s', C, lengths, coupling
+    coefficients), against Richardson central differences of the statics at re-solved states
+    (the design column changed, the inputs held, the other coordinates re-solved)."""
+    from kinprop.engine.statics_rates import statics_rates
+
+    engine = kp.compile(rm.model)
+    st = engine.state_of(rm.model)
+    cols = _drivable(engine, st)
+    if not cols or len(engine.mechanism.bodies) < 3:
+        pytest.skip("no drivable coordinates")
+    rng = np.random.default_rng(400 + rm.seed)
+    r, A, _, _ = engine.poses(st)
+    loads, local, laws = _random_point_forces(rng, engine, np.array(r), np.array(A))
+    nq = engine.n_coordinates
+    free = np.array([c for c in range(nq) if c not in cols], np.int64)
+    J = engine.evaluate(st)[1]
+    X = np.eye(engine.n_columns)[nq:]
+    X[:, free] = -np.linalg.lstsq(J[:, free], J[:, nq:], rcond=None)[0].T
+    # design columns the coordinates can follow (a redundant mechanism's others break the assembly)
+    tangent = np.flatnonzero(np.max(np.abs(J @ X.T), axis=0) < 1e-9 * max(1.0, float(np.max(np.abs(J)))))
+    if tangent.size == 0:
+        pytest.skip("no design column the coordinates can follow")
+    pick = rng.choice(tangent, size=min(6, tangent.size), replace=False)
+    design, X = nq + pick, X[pick]
+    rates = statics_rates(engine, st, loads, X, cols, laws)
+    ss = rates.statics
+    assert ss.ok, ss.message
+
+    def values(s, k: int | None = None) -> np.ndarray:
+        arrays = (s.efforts, s.at_point, s.local, s.member, s.element_force)
+        return np.concatenate([(a if k is None else a[k]).ravel() for a in arrays])
+
+    def at(c: int, t: float) -> np.ndarray:
+        dx = np.zeros(engine.n_columns)
+        dx[c] = t
+        sol = engine.solve(engine.retract(st, dx), free, tol=1e-15)
+        if not sol.converged:
+            raise RuntimeError(sol.message)
+        return values(statics_state(engine, sol.state, _loads_at(engine, sol.state, loads, local), cols, laws))
+
+    h = 1e-4
+    got = np.array([values(rates, k) for k in range(design.size)])
+    try:
+        fd = np.array([(4 * (at(c, h / 2) - at(c, -h / 2)) / h - (at(c, h) - at(c, -h)) / (2 * h)) / 3 for c in design])
+    except RuntimeError as exc:
+        pytest.skip(f"the position solves do not follow this change ({exc})")
+    known = ~np.isnan(values(ss))
+    assert known.sum() > 10
+    assert np.array_equal(~np.isnan(got), np.broadcast_to(known, got.shape))  # NaN exactly where undetermined
+    scale = max(1.0, float(np.max(np.abs(fd[:, known]))))
+    err = np.abs(got[:, known] - fd[:, known])
+    assert np.max(err) < 1e-7 * scale, (engine.column_labels[design[np.argmax(err.max(axis=1))]], np.max(err) / scale)

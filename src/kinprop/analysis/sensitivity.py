@@ -11,7 +11,10 @@ itself plus the analytic free-variable response), and the output function of the
 (:mod:`kinprop.analysis.outputs`) is differenced centrally along that direction on the
 manifold (``retract``: additive for q, s', l; exponential map for C). Only the output map is
 differenced; coordinates and design variables are linear in the state, so for them the
-difference is exact up to rounding.
+difference is exact up to rounding. Load outputs (``reaction:``, ``force:``, ``effort:``) are
+not differenced: their derivatives are exact, from the differentiated equilibrium along the
+same directions (:mod:`kinprop.engine.statics_rates`, the direct method). :func:`method_of`
+names the method of each output.
 """
 
 from __future__ import annotations
@@ -23,7 +26,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from kinprop.analysis.metrics import WheelSpec
-from kinprop.analysis.outputs import output_function
+from kinprop.analysis.outputs import expand_outputs, output_function
+from kinprop.analysis.statics import is_load_output, load_derivatives
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
 from kinprop.model import Model
@@ -40,6 +44,18 @@ if TYPE_CHECKING:  # pandas (the 'data' extra) is imported only when a frame is 
 RESIDUAL_WARN = 1e-6
 #: relative step of the central difference of the output map
 FD_STEP = 1e-6
+
+
+#: how a derivative is computed (:func:`method_of`)
+DIRECT = "direct: the differentiated equilibrium along the analytic state response (exact)"
+TANGENT_DIFFERENCE = "analytic state response; the output map differenced centrally along it"
+#: the free variables' own response (:func:`design_sensitivity`)
+IMPLICIT = "implicit-function theorem (exact)"
+
+
+def method_of(name: str) -> str:
+    """How :func:`output_sensitivity` differentiates the output ``name``."""
+    return DIRECT if is_load_output(name) else TANGENT_DIFFERENCE
 
 
 def _step(engine: Engine, model: Model, column: int) -> float:
@@ -81,16 +97,22 @@ def output_sensitivity_matrix(
     design, combos = global_columns(engine, state, wrt)
     free, weights = free_addresses(engine, free), free_weights(engine, weights)
     sens = design_sensitivity(model, design, free, weights, engine=engine, units="solver")
-    f, names = output_function(model, of, reference=reference, wheels=wheels, engine=engine)
+    names = expand_outputs(model, of, engine)
+    loads = [k for k, n in enumerate(names) if is_load_output(n)]
+    others = [k for k, n in enumerate(names) if not is_load_output(n)]
     D = np.zeros((len(names), sens.wrt_columns.size))
-    for k, col in enumerate(sens.wrt_columns):
-        direction = np.zeros(engine.n_columns)
-        direction[col] = 1.0
-        direction[sens.free_columns] = sens.matrix[:, k]
-        h = _step(engine, model, int(col))
-        plus = engine.model_of(engine.retract(state, h * direction), model)
-        minus = engine.model_of(engine.retract(state, -h * direction), model)
-        D[:, k] = (f(plus) - f(minus)) / (2.0 * h)
+    directions = np.zeros((sens.wrt_columns.size, engine.n_columns))
+    directions[np.arange(sens.wrt_columns.size), sens.wrt_columns] = 1.0
+    directions[:, sens.free_columns] = sens.matrix.T
+    if loads:  # exact: the differentiated equilibrium (direct method)
+        D[loads] = load_derivatives(model, [names[k] for k in loads], directions, engine=engine, reference=reference)
+    if others:
+        f, _ = output_function(model, [names[k] for k in others], reference=reference, wheels=wheels, engine=engine)
+        for k, col in enumerate(sens.wrt_columns):
+            h = _step(engine, model, int(col))
+            plus = engine.model_of(engine.retract(state, h * directions[k]), model)
+            minus = engine.model_of(engine.retract(state, -h * directions[k]), model)
+            D[others, k] = (f(plus) - f(minus)) / (2.0 * h)
     columns = list(sens.columns)
     if combos:
         index = {c: k for k, c in enumerate(columns)}
@@ -124,8 +146,9 @@ def output_sensitivity(
     """``d(output)/d(p)``: rows the (expanded) outputs ``of``, columns the design columns ``wrt``.
 
     The model must be assembled (``Phi = 0``); a warning is issued when ``||Phi||`` exceeds
-    :data:`RESIDUAL_WARN`. ``attrs`` of the frame carry ``residual``, ``free`` and
-    ``weights`` and ``units``. Units: output unit per design-variable unit, in the model's
+    :data:`RESIDUAL_WARN`. ``attrs`` of the frame carry ``residual``, ``free``,
+    ``weights``, ``units`` and ``methods`` (output -> :func:`method_of`).
+    Units: output unit per design-variable unit, in the model's
     declared units (``units="model"``: deg per mm, mm per deg, metric angles in the angle unit, C
     columns per angle unit of body-frame rotation; docs/units.md); ``units="solver"``: as
     computed (coordinates per radian, metric angles in degrees, C columns per radian).
@@ -136,8 +159,19 @@ def output_sensitivity(
     import pandas as pd
 
     frame = pd.DataFrame(D, index=names, columns=columns)
-    frame.attrs.update(residual=residual, free=list(free), weights=dict(weights or {}), units=units)
+    frame.attrs.update(residual=residual, free=list(free), weights=dict(weights or {}), units=units,
+                       methods={n: method_of(n) for n in names})  # fmt: skip
     return frame
 
 
-__all__ = ["Sensitivity", "design_sensitivity", "output_sensitivity", "output_sensitivity_matrix", "weight_vector"]
+__all__ = [
+    "DIRECT",
+    "IMPLICIT",
+    "TANGENT_DIFFERENCE",
+    "Sensitivity",
+    "design_sensitivity",
+    "method_of",
+    "output_sensitivity",
+    "output_sensitivity_matrix",
+    "weight_vector",
+]

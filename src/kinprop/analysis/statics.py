@@ -47,6 +47,7 @@ from kinprop.engine.statics import (
     reduced_stiffness,
     statics_state,
 )
+from kinprop.engine.statics_rates import StaticsRates, statics_rates
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.loads import LoadCase, PointLoad
@@ -200,6 +201,7 @@ def _point(model: Model, body: str, point: str | Sequence[float]) -> Array:
 def applied_points(model: Model, engine: Engine, r: Array, A: Array, case: LoadCase | None) -> PointForces:
     """The loads of a case as forces and couples at body points, global axes at poses ``r``, ``A``."""
     body, Ps, Fs, Ms, follows = [], [], [], [], []
+    wheel_of: list[tuple[float, Array, Array, bool]] = []  # (radius, centre, unit axis, SAE) or radius 0
     if case is None:
         return PointForces.empty()
     names = set(model.mechanism.body_names)
@@ -209,6 +211,8 @@ def applied_points(model: Model, engine: Engine, r: Array, A: Array, case: LoadC
             raise AddressError(f"unknown body {b_name!r}; bodies are {', '.join(model.mechanism.body_names)}")
         body.append(engine.body_index[b_name])
         Ps.append(P), Fs.append(F), Ms.append(M), follows.append(turns)
+        if len(wheel_of) < len(body):
+            wheel_of.append((0.0, np.zeros(3), np.zeros(3), False))
 
     for ld in case.forces:
         b = engine.body_index.get(ld.body, -1)
@@ -231,6 +235,7 @@ def applied_points(model: Model, engine: Engine, r: Array, A: Array, case: LoadC
         centre = r[b] + A[b] @ _point(model, wheel, "wheel_centre")
         axis = r[b] + A[b] @ _point(model, wheel, "spin_axis") - centre
         F = np.asarray(force, float) * (np.array([1.0, -1.0, -1.0]) if sae else 1.0)
+        wheel_of.append((float(radius), centre, axis / np.linalg.norm(axis), sae))
         if sae:  # down is +z: the lowest point of the wheel circle in the z-mirrored axes, mirrored back
             flip = np.array([1.0, 1.0, -1.0])
             add(wheel, flip * contact_point(flip * centre, flip * axis, radius), F, np.zeros(3))
@@ -241,10 +246,13 @@ def applied_points(model: Model, engine: Engine, r: Array, A: Array, case: LoadC
         for m in model.loads.masses if model.loads is not None else ():
             b = engine.body_index[m.body]
             add(m.body, r[b] + A[b] @ _point(model, m.body, m.cm), m.weight * g, np.zeros(3))
-    z = np.zeros((0, 3))
-    return PointForces(np.array(body, np.int64), np.array(Ps).reshape(-1, 3) if Ps else z,
-                       np.array(Fs).reshape(-1, 3) if Fs else z, np.array(Ms).reshape(-1, 3) if Ms else z,
-                       np.array(follows, bool))  # fmt: skip
+
+    def stack(x: list) -> Array:
+        return np.array(x, dtype=float).reshape(-1, 3)
+
+    return PointForces(np.array(body, np.int64), stack(Ps), stack(Fs), stack(Ms), np.array(follows, bool),
+                       np.array([w[0] for w in wheel_of]), stack([w[1] for w in wheel_of]),
+                       stack([w[2] for w in wheel_of]), np.array([w[3] for w in wheel_of], bool))  # fmt: skip
 
 
 def applied_wrenches(model: Model, engine: Engine, r: Array, A: Array, case: LoadCase | None) -> Array:
@@ -309,6 +317,76 @@ def statics(
     efforts = {n: float(ss.efforts[k]) for k, n in enumerate(names)}
     return Statics(model, eng, ss, case.name if case else None, reactions, members, ef, el, efforts,
                    tuple(undetermined))  # fmt: skip
+
+
+# --- design derivatives ------------------------------------------------------------------------
+def _rate(s: Statics, rates: StaticsRates, name: str) -> Array:
+    """(K,) rate of the load output ``name`` (no ``@CASE``) along the directions of ``rates``."""
+    s.value(name)  # the output exists (AddressError naming what does otherwise)
+    kind, _, rest = name.partition(":")
+    mech = s.model.mechanism
+    if kind == "reaction":
+        joint, _, comp = rest.partition(".")
+        k = mech.joint_names.index(joint)
+        local = comp.startswith("local.")
+        comp = comp[len("local.") :] if local else comp
+        arr, now = (rates.local, s.state.local) if local else (rates.at_point, s.state.at_point)
+        if comp == "f":
+            F = now[k, 1, :3]
+            return arr[:, k, 1, :3] @ F / float(np.linalg.norm(F))
+        return arr[:, k, 1, COMPONENTS.index(comp)]
+    if kind == "force":
+        if rest in s.element_forces:
+            return rates.element_force[:, [e.name for e in s.model.elements].index(rest)]
+        k = mech.joint_names.index(rest)
+        if not np.isnan(s.state.member[k]):  # a cut joint's rod
+            return rates.member[:, k]
+        # a distance joint in the tree: -F_j . u / |u|
+        u = s.state.P[k, 1] - s.state.P[k, 0]
+        du = rates.point_rates[:, k, 1] - rates.point_rates[:, k, 0]
+        n = float(np.linalg.norm(u))
+        F = s.state.at_point[k, 1, :3]
+        return -(rates.at_point[:, k, 1, :3] @ u + du @ F - (du @ u) * (F @ u) / n**2) / n
+    key = rest if "." in rest else f"{rest}.q"
+    return rates.efforts[:, list(s.efforts).index(key)]
+
+
+def load_derivatives(
+    model: Model,
+    names: Sequence[str],
+    directions: Array,
+    *,
+    engine: Engine | None = None,
+    reference: Model | None = None,
+    inputs: Sequence[str] | None = None,
+    loads: str | LoadCase | PointLoad | Sequence[PointLoad] | None = None,
+) -> Array:
+    """(len(names), K): exact rates of the load outputs ``NAME[@CASE]`` (with ``loads``: every
+    name under those loads, as :func:`statics` takes them) along ``directions``
+    (K, n_columns), state directions tangent to the constraints (e.g. a design column plus the
+    coordinates' response, :func:`kinprop.analysis.sensitivity.output_sensitivity`), in solver
+    units, by the direct method of :mod:`kinprop.engine.statics_rates`. Preloads as
+    :func:`statics` takes them: at ``reference``'s pose, else at the model's own pose (then the
+    element's force stays its preload); held by ``inputs`` (default: the declared ones)."""
+    eng = engine or compile_engine(model)
+    st = eng.state_of(model)
+    X = np.atleast_2d(np.asarray(directions, dtype=float))
+    out = np.zeros((len(names), X.shape[0]))
+    r, A, _, _ = eng.poses(st)
+    r, A = np.array(r), np.array(A)
+    cols, _ = input_columns(eng, model.mechanism.inputs if inputs is None else inputs)
+    laws = element_laws(eng, model.elements, st if reference is None else eng.state_of(reference))
+    held = [reference is None and e.has_spring and e.free_length is None for e in model.elements]
+    by_case: dict[str, list[int]] = {}
+    for i, n in enumerate(names):
+        by_case.setdefault(n.partition("@")[2], []).append(i)
+    for case_name, rows in by_case.items():
+        case = _case(model, loads if loads is not None else case_name or None)
+        s = statics(model, case, inputs=inputs, engine=eng, reference=reference)
+        rates = statics_rates(eng, st, applied_points(model, eng, r, A, case), X, cols, laws, held)
+        for i in rows:
+            out[i] = _rate(s, rates, names[i].partition("@")[0])
+    return out
 
 
 # --- static equilibrium and wheel rate --------------------------------------------------------
@@ -488,6 +566,7 @@ __all__ = [
     "equilibrium",
     "input_columns",
     "is_load_output",
+    "load_derivatives",
     "load_output_unit",
     "load_value",
     "statics",

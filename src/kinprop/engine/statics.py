@@ -141,9 +141,9 @@ class StaticsState:
         return self.P[j, side]
 
 
-def _cut_partials(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, c: int) -> tuple[Array, Array]:
-    """``(Z_i, Z_j)`` (m, 6) of cut joint ``c``: its rows' partials with respect to the twists of
-    its bodies (module docstring), from the compiled basic-constraint rows."""
+def _cut_rows(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, c: int) -> tuple[Array, ...]:
+    """``(P_i, d, Phi_d, Phi_wi, Phi_wj)`` of cut joint ``c`` from the compiled basic-constraint
+    rows (``P_i`` slid along ``z''_i`` by a T-D joint's own coordinate, ``d = P_j - P_i``)."""
     tb = engine.tables
     j = tb.cut[c, K_JOINT]
     Pi = fr_P[j, 0].copy()
@@ -157,9 +157,18 @@ def _cut_partials(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, 
     for b in range(tb.cut[c, K_BASIC0], tb.cut[c, K_BASIC1]):
         r += basic_rows(tb.basic[b, B_KIND], tb.basic[b, B_ON_J], tb.basic_axes[b], d, fr_R[j, 0], fr_R[j, 1],
                         L[j], r, Phi, Pd, Wi, Wj, Pl)  # fmt: skip
-    Zi = np.hstack([-Pd, np.cross(Pd, Pi) + Wi])
-    Zj = np.hstack([Pd, -np.cross(Pd, fr_P[j, 1]) + Wj])
-    return Zi, Zj
+    return Pi, d, Pd, Wi, Wj
+
+
+def cut_arms(Pi: Array, d: Array, Pd: Array, Wi: Array, Wj: Array) -> tuple[Array, Array]:
+    """``(Z_i, Z_j)`` (m, 6): a cut joint's rows' partials with respect to the twists of its
+    bodies (module docstring), from :func:`_cut_rows`."""
+    return np.hstack([-Pd, np.cross(Pd, Pi) + Wi]), np.hstack([Pd, -np.cross(Pd, Pi + d) + Wj])
+
+
+def _cut_partials(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, c: int) -> tuple[Array, Array]:
+    """``(Z_i, Z_j)`` (m, 6) of cut joint ``c`` (module docstring)."""
+    return cut_arms(*_cut_rows(engine, fr_P, fr_R, Q, L, c))
 
 
 def distance_rows(engine: Engine, P: Array, R: Array, Q: Array) -> list[tuple[int, int, float]]:
@@ -252,6 +261,14 @@ class PointForces:
     F: Array
     M: Array
     follows: Array
+    #: wheel loads (None: every point is a material point): ``radius`` (n,) > 0 where the
+    #: point is a wheel's contact point (the lowest point of the circle of that radius about
+    #: ``centre`` (n, 3) in the plane normal to the unit spin ``axis`` (n, 3)), ``sae`` (n,)
+    #: True where down is +z (the lowest point of the z-mirrored circle)
+    radius: Array | None = None
+    centre: Array | None = None
+    axis: Array | None = None
+    sae: Array | None = None
 
     @classmethod
     def empty(cls) -> PointForces:
@@ -266,39 +283,80 @@ class PointForces:
         return W
 
 
-def _wrench_rates(loads: PointForces, laws: Sequence[ElementLaw], r: Array, A: Array, V: Array) -> Array:
-    """(nb, 6) time derivative of the applied wrenches (loads and elements) about the origin
-    along the motion with body twists ``V``: a force at a material point P moving with ``v_P``
-    has ``dM_O = v_P x F``; body-axes components turn with ``omega``; an element's force
-    changes with its length (``df = -k dL``) and direction."""
-    nb = r.shape[0]
-    dW = np.zeros((nb, 6))
+def _cross(a: Array, b: Array) -> Array:
+    """Cross products on the last axis (broadcast)."""
+    return np.cross(a, b)
 
-    def vel(b: int, x: Array) -> Array:
-        return V[b, :3] + cross3(V[b, 3:], x)
 
+def _velocity(T: Array, P: Array) -> Array:
+    """(K, 3) velocity of the point now at ``P`` moving with twists ``T`` (K, 6)."""
+    return T[:, :3] + _cross(T[:, 3:], P)
+
+
+def load_rates(loads: PointForces, V: Array) -> Array:
+    """(K, nb, 6) rates of the applied wrenches about the origin under body twists ``V``
+    (K, nb, 6): a force at a material point P has ``dM_O = v_P x F + P x dF`` (``dF = omega x F``
+    in body axes); a wheel load's contact point moves as :func:`contact_rate` says."""
+    dW = np.zeros(V.shape)
     for k in range(loads.body.shape[0]):
         b, P, F, M = loads.body[k], loads.P[k], loads.F[k], loads.M[k]
-        dF = cross3(V[b, 3:], F) if loads.follows[k] else np.zeros(3)
-        dM = cross3(V[b, 3:], M) if loads.follows[k] else np.zeros(3)
-        dW[b] += np.concatenate([dF, dM + cross3(vel(b, P), F) + cross3(P, dF)])
-    for e in laws:
+        w = V[:, b, 3:]
+        if loads.radius is not None and loads.radius[k] > 0.0:
+            vP = contact_rate(loads, k, V[:, b])
+        else:
+            vP = _velocity(V[:, b], P)
+        dF = _cross(w, F) if loads.follows[k] else np.zeros_like(w)
+        dM = _cross(w, M) if loads.follows[k] else np.zeros_like(w)
+        dW[:, b, :3] += dF
+        dW[:, b, 3:] += dM + _cross(vP, F) + _cross(P, dF)
+    return dW
+
+
+def contact_rate(loads: PointForces, k: int, Vb: Array) -> Array:
+    """(K, 3) velocity of wheel load ``k``'s contact point (the lowest point of the wheel circle
+    ``centre + radius n``, ``n`` along ``-z`` projected onto the wheel plane; in SAE axes the
+    lowest point of the z-mirrored circle) under the wheel body's twists ``Vb`` (K, 6)."""
+    assert loads.radius is not None and loads.centre is not None and loads.axis is not None
+    flip = np.array([1.0, 1.0, -1.0]) if loads.sae[k] else np.ones(3)
+    c, a = loads.centre[k], loads.axis[k]
+    vc, da = flip * _velocity(Vb, c), flip * _cross(Vb[:, 3:], a)
+    a = flip * a
+    g = np.array([0.0, 0.0, -1.0]) + a[2] * a
+    ng = float(np.linalg.norm(g))
+    n = g / ng
+    dg = da[:, 2:3] * a + a[2] * da
+    dn = (dg - (dg @ n)[:, None] * n) / ng
+    return flip * (vc + loads.radius[k] * dn)
+
+
+def element_rates(
+    laws: Sequence[ElementLaw], held: Sequence[bool], r: Array, A: Array, V: Array
+) -> tuple[Array, Array, Array]:
+    """``(dW (K, nb, 6), df (K, ne), dL (K, ne))``: rates of the elements' wrenches, forces
+    and lengths under body twists ``V`` (K, nb, 6): ``df = -k dL`` (0 where ``held``: a force
+    held at its preload), ``d(f u)`` with the direction's rate."""
+    K = V.shape[0]
+    dW, df, dL = np.zeros(V.shape), np.zeros((K, len(laws))), np.zeros((K, len(laws)))
+    for k, e in enumerate(laws):
         Pi, Pj = r[e.body_i] + A[e.body_i] @ e.s_i, r[e.body_j] + A[e.body_j] @ e.s_j
         d = Pj - Pi
         length = float(np.linalg.norm(d))
         if length == 0.0:
             continue
         u = d / length
-        vi, vj = vel(e.body_i, Pi), vel(e.body_j, Pj)
+        vi, vj = _velocity(V[:, e.body_i], Pi), _velocity(V[:, e.body_j], Pj)
         dd = vj - vi
-        dL = float(u @ dd)
-        du = (dd - u * dL) / length
+        dL[:, k] = dd @ u
+        du = (dd - dL[:, k : k + 1] * u) / length
         f = e.f0 + e.k * (e.L0 - length)
-        dFv = -e.k * dL * u + f * du  # d(f u)/dt
+        df[:, k] = 0.0 if held[k] else -e.k * dL[:, k]
+        dF = df[:, k : k + 1] * u + f * du
         Fv = f * u
-        dW[e.body_j] += np.concatenate([dFv, cross3(vj, Fv) + cross3(Pj, dFv)])
-        dW[e.body_i] -= np.concatenate([dFv, cross3(vi, Fv) + cross3(Pi, dFv)])
-    return dW
+        dW[:, e.body_j, :3] += dF
+        dW[:, e.body_j, 3:] += _cross(vj, Fv) + _cross(Pj, dF)
+        dW[:, e.body_i, :3] -= dF
+        dW[:, e.body_i, 3:] -= _cross(vi, Fv) + _cross(Pi, dF)
+    return dW, df, dL
 
 
 def reduced_stiffness(
@@ -313,8 +371,8 @@ def reduced_stiffness(
     symmetric part of ``dV^(k)/dq_l`` is the bias acceleration of the velocity analysis
     (:mod:`kinprop.engine.motion`, Haug's ``gamma``: second order, analytic) polarised over
     ``e_k + e_l``; the antisymmetric part is half the twists' spatial cross product
-    ``V^(l) x V^(k)``. Loads at material points (a wheel force at the contact point is
-    differentiated as fixed to the wheel body)."""
+    ``V^(l) x V^(k)``. Loads at material points; a wheel force's contact point moves as the
+    lowest point of the wheel circle (:func:`contact_rate`)."""
     labels = engine.column_labels
     nd = len(driven)
     r, A, _, _ = engine.poses(state)
@@ -338,7 +396,7 @@ def reduced_stiffness(
     tau = np.array([-float(np.sum(W * V)) for V in Vk])
     K = np.zeros((nd, nd))
     for m in range(nd):
-        dW = _wrench_rates(loads, laws, r, A, Vk[m])
+        dW = load_rates(loads, Vk[m][None])[0] + element_rates(laws, [False] * len(laws), r, A, Vk[m][None])[0][0]
         for k in range(nd):
             sym = acc[min(k, m), max(k, m)]
             anti = 0.5 * np.array([spatial_cross(Vk[m][b], Vk[k][b]) for b in range(r.shape[0])])
@@ -383,6 +441,17 @@ def _local(W: Array, P: Array, R: Array) -> Array:
                           axis=-1)  # fmt: skip
 
 
+def equilibrium_system(engine: Engine, Phi_q: Array, driven: Sequence[int]) -> tuple[Array, Array, Array]:
+    """``(A_s, unscale, c_s)``: ``[Phi_q^T  E_D^T]`` with rows and columns scaled as the solver
+    scales them; ``A_s (y / unscale) = b / c_s`` for ``[Phi_q^T  E_D^T] y = b``."""
+    nq, nd = engine.n_coordinates, len(driven)
+    rs, cs = engine.row_scale, engine.col_scale[:nq]
+    E = np.zeros((nd, nq))
+    E[np.arange(nd), list(driven)] = 1.0
+    As = np.hstack([(Phi_q * rs[:, None] / cs[None, :]).T, E.T])  # unknowns [lambda / rs ; tau / cs_D]
+    return As, np.concatenate([rs, cs[list(driven)] if nd else np.zeros(0)]), cs
+
+
 def statics_state(
     engine: Engine,
     state: State,
@@ -396,21 +465,17 @@ def statics_state(
     fr = _Frames(engine, state)
     st = fr.state
     tb = engine.tables
-    nq, m, nd = engine.n_coordinates, engine.n_rows, len(driven)
+    m, nd = engine.n_rows, len(driven)
     f, lengths, ends, W_el = element_state(laws, fr.r, fr.A)
     W = np.asarray(applied, dtype=float) + W_el
     Qg = generalized_forces(engine, fr.Tq, W)
-    rs, cs = engine.row_scale, engine.col_scale[:nq]
-    E = np.zeros((nd, nq))
-    E[np.arange(nd), list(driven)] = 1.0
-    As = np.hstack([(fr.Phi_q * rs[:, None] / cs[None, :]).T, E.T])  # unknowns [lambda / rs ; tau / cs_D]
+    As, unscale, cs = equilibrium_system(engine, fr.Phi_q, driven)
     b = -Qg / cs
     U, s, Vt = np.linalg.svd(As, full_matrices=True)
     smax = float(s[0]) if s.size and s[0] > 0 else 1.0
     rank = int(np.sum(s > RANK_RTOL * smax))
     xs = Vt[:rank].T @ ((U[:, :rank].T @ b) / s[:rank])
     null = Vt[rank:]
-    unscale = np.concatenate([rs, cs[list(driven)] if nd else np.zeros(0)])
     resid = float(np.linalg.norm(As @ xs - b))
     Zs = [_cut_partials(engine, fr.P, fr.R, st.Q, st.L, c) for c in range(tb.cut.shape[0])]
     nj = tb.joint.shape[0]
@@ -472,10 +537,15 @@ __all__ = [
     "ElementLaw",
     "PointForces",
     "StaticsState",
+    "contact_rate",
+    "cut_arms",
     "distance_rows",
     "element_laws",
+    "element_rates",
     "element_state",
+    "equilibrium_system",
     "generalized_forces",
+    "load_rates",
     "reduced_stiffness",
     "statics_state",
     "subtree_sums",

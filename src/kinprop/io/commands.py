@@ -13,7 +13,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from kinprop.analysis.mobility import MobilityReport, row_names
-from kinprop.analysis.sensitivity import design_sensitivity, output_sensitivity_matrix
+from kinprop.analysis.sensitivity import IMPLICIT, design_sensitivity, method_of, output_sensitivity_matrix
 from kinprop.analysis.sweep import Drive, parse_drive
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
@@ -193,6 +193,8 @@ class Sensitivities(NamedTuple):
     columns: list[str]
     units_of: list[str]
     units_wrt: list[str]
+    #: how each row was differentiated (:func:`kinprop.analysis.sensitivity.method_of`)
+    methods: tuple[str, ...] = ()
 
 
 def _solver_matrix(
@@ -233,7 +235,8 @@ def sensitivities(
     matrix = matrix * so[:, None] / si[None, :]
     units_of = [unit_of(assembled, str(name), engine) for name in rows]
     units_wrt = [_per(assembled, str(name), engine) for name in columns]
-    return Sensitivities(matrix, rows, columns, units_of, units_wrt)
+    methods = [method_of(str(n)) if of else IMPLICIT for n in rows]
+    return Sensitivities(matrix, rows, columns, units_of, units_wrt, tuple(methods))
 
 
 def sensitivity_json(
@@ -247,6 +250,7 @@ def sensitivity_json(
         "wrt": [str(c) for c in sens.columns],
         "matrix": np.asarray(sens.matrix).tolist(),
         "units": {"of": sens.units_of, "wrt": sens.units_wrt, "matrix": "unit of the row per unit of the column"},
+        "methods": dict(zip((str(i) for i in sens.rows), sens.methods, strict=True)),
         "free": list(free),
         "weights": dict(weights) if weights else {},
         "assembly": {
