@@ -449,3 +449,93 @@ def test_mcpherson_design_derivatives_of_loads() -> None:
         fd = (4 * (at(h / 2) - at(-h / 2)) / h - (at(h) - at(-h)) / (2 * h)) / 3
         scale = np.maximum(np.abs(fd), 1.0)
         assert np.all(np.abs(D[:, k] - fd) < 1e-6 * scale), (c, D[:, k], fd)
+
+
+def _fourbar_with(tmp_path: Path, elements: dict, inputs: list[str] | None = None) -> kp.Model:
+    source = yaml.safe_load((EXAMPLES / "fourbar.yaml").read_text())
+    source["units"]["force"] = "N"
+    source["elements"] = elements
+    if inputs is not None:
+        source["inputs"] = inputs
+    return _assembled(source, tmp_path)
+
+
+@pytest.mark.parametrize("crank_deg", [60.0, 150.0, 250.0])
+def test_torsion_spring_by_virtual_work(tmp_path: Path, crank_deg: float) -> None:
+    """A torsion spring on the rocker's pivot (``type: torsion``, 2 N m/deg, free at 70 deg):
+    its torque from the joint angle, the crank's holding torque by virtual work ``-T w4/w2``
+    (the loop's velocity ratio by hand), the pivot carrying no torque about its axis, the
+    torque's unit and the angle reported as the spring's "length"."""
+    from kinprop.analysis.units import unit_of
+
+    base = _fourbar_with(tmp_path, {"bar": {"type": "torsion", "joint": "O4", "stiffness": 2.0, "free_angle": 70.0}})
+    model = kp.propagate(base, {"O2.q": crank_deg}, tol=1e-13).after
+    _, w4, ang = _fourbar_ratios(model)
+    theta4 = math.degrees(ang["t4"]) % 360.0
+    assert float(model.coordinates["O4"][0]) == pytest.approx(math.radians(theta4), abs=1e-12)
+    s = kp.statics(model)
+    T = 2.0 * (70.0 - theta4)
+    assert s.element_forces["bar"] == pytest.approx(T, rel=1e-12)
+    assert s.element_lengths["bar"] == pytest.approx(theta4, rel=1e-12)
+    assert s.efforts["O2.q"] == pytest.approx(-T * w4, rel=1e-10)
+    assert abs(s.reactions["O4"].local[1, 5]) < 1e-10 * abs(T)  # the spring carries the torque, not the pin
+    assert unit_of(model, "force:bar") == "N m"
+
+
+def test_torsion_spring_equilibrium(tmp_path: Path) -> None:
+    """A torsion spring on the crank (the input released) against a couple on the rocker: the
+    equilibrium angle against a root (scipy's brentq) of ``k (theta0 - theta2) + T4 w4`` written
+    from the loop's velocity ratio by hand."""
+    import scipy.optimize
+
+    from kinprop.analysis.statics import equilibrium
+
+    base = _fourbar_with(tmp_path, {"bar": {"type": "torsion", "joint": "O2", "stiffness": 0.5, "free_angle": 60.0}})
+    T4 = -8.0
+    e = equilibrium(base, PointLoad("rocker", (0.0, 0.0, 0.0), moment=(0.0, 0.0, T4)))
+    assert e.converged, e.message
+
+    def residual(theta2_deg: float) -> float:
+        m = kp.propagate(base, {"O2.q": theta2_deg}, tol=1e-14).after
+        return 0.5 * (60.0 - theta2_deg) + T4 * _fourbar_ratios(m)[1]
+
+    got = math.degrees(float(e.model.coordinates["O2"][0]))
+    truth = scipy.optimize.brentq(residual, got - 5.0, got + 5.0, xtol=1e-13)
+    assert got == pytest.approx(truth, abs=1e-9)
+    assert abs(got - 60.0) > 1.0  # the couple moved it
+    assert e.statics.element_forces["bar"] == pytest.approx(0.5 * (60.0 - truth), rel=1e-8)
+
+
+def test_torsion_spring_preload_and_bad_input(tmp_path: Path) -> None:
+    """A preload is the torque at the model's angle; a torsion spring needs a revolute or
+    cylindrical joint and takes no bodies or ends (errors name the element and the field)."""
+    from kinprop.errors import ModelError
+
+    base = _fourbar_with(tmp_path, {"bar": {"type": "torsion", "joint": "O4", "stiffness": 2.0, "preload": 5.0}})
+    assert kp.statics(base).element_forces["bar"] == pytest.approx(5.0, rel=1e-12)
+    moved = kp.propagate(base, {"O2.q": 70.0}, tol=1e-13).after
+    dtheta = math.degrees(float(moved.coordinates["O4"][0]) - float(base.coordinates["O4"][0]))
+    assert kp.statics(moved, reference=base).element_forces["bar"] == pytest.approx(5.0 - 2.0 * dtheta, rel=1e-10)
+    for spec, where, text in (
+        ({"type": "torsion", "joint": "B", "stiffness": 1.0}, "elements.bar.joint", "revolute or cylindrical"),
+        ({"type": "torsion", "joint": "NOPE", "stiffness": 1.0}, "elements.bar.joint", "unknown joint 'NOPE'"),
+        ({"type": "torsion", "joint": "O4"}, "elements.bar.stiffness", "needs 'stiffness'"),
+        ({"type": "torsion", "joint": "O4", "stiffness": 1.0, "bodies": ["ground", "rocker"]}, "elements.bar.bodies",
+         "takes no 'bodies'"),
+        ({"type": "spring", "bodies": ["ground", "rocker"], "s_i": [0, 0, 0], "s_j": [0, 0, 0], "stiffness": 1.0,
+          "joint": "O4"}, "elements.bar.joint", "takes no 'joint'"),
+    ):  # fmt: skip
+        with pytest.raises(ModelError) as exc:
+            _fourbar_with(tmp_path, {"bar": spec})
+        assert where in str(exc.value) and text in str(exc.value), str(exc.value)
+
+
+def test_torsion_spring_survives_writing(tmp_path: Path) -> None:
+    from kinprop.io import model_from_data
+    from kinprop.io.hardpoints import model_to_hardpoints
+    from kinprop.io.writer import dump_model
+
+    base = _fourbar_with(tmp_path, {"bar": {"type": "torsion", "joint": "O4", "stiffness": 2.0, "free_angle": 70.0}})
+    dump_model(base, tmp_path / "out.yaml")
+    assert kp.load_model(tmp_path / "out.yaml").torsion_springs == base.torsion_springs
+    assert model_from_data(model_to_hardpoints(base)).torsion_springs == base.torsion_springs

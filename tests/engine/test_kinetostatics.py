@@ -16,7 +16,19 @@ import scipy.linalg
 import kinprop as kp
 from kinprop.engine.motion import _Frames
 from kinprop.engine.statics import _cut_partials, generalized_forces, statics_state
-from kinprop.kinematics.tables import E_COL, E_ROW, J_NQ, J_QCOL, K_JOINT, K_ROW0, T_CHILD, T_JOINT, T_REVERSED
+from kinprop.kinematics.tables import (
+    E_COL,
+    E_ROW,
+    J_BODY_I,
+    J_BODY_J,
+    J_NQ,
+    J_QCOL,
+    K_JOINT,
+    K_ROW0,
+    T_CHILD,
+    T_JOINT,
+    T_REVERSED,
+)
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from random_mechanisms import assembled_set
@@ -180,7 +192,7 @@ def test_tree_joints_transmit_nothing_along_their_free_motion(rm) -> None:
 
 
 def _random_point_forces(rng: np.random.Generator, engine: kp.Engine, r, A):
-    from kinprop.engine.statics import ElementLaw, PointForces
+    from kinprop.engine.statics import ElementLaw, PointForces, TorsionLaw
 
     moving = [k for k, b in enumerate(engine.mechanism.bodies) if not b.fixed]
     fixed = [k for k, b in enumerate(engine.mechanism.bodies) if b.fixed]
@@ -196,6 +208,12 @@ def _random_point_forces(rng: np.random.Generator, engine: kp.Engine, r, A):
         bj = int(rng.choice([b for b in moving if b != bi]))
         laws.append(ElementLaw(bi, bj, rng.normal(size=3), rng.normal(size=3), float(rng.uniform(1, 5)),
                                float(rng.uniform(0.5, 2)), float(rng.normal())))  # fmt: skip
+    tb = engine.tables
+    for t in range(tb.tree.shape[0]):  # a torsion spring on every revolute and cylindrical tree joint's angle
+        j = int(tb.tree[t, T_JOINT])
+        if engine.mechanism.joints[j].jtype.name in ("revolute", "cylindrical"):
+            laws.append(TorsionLaw(j, int(tb.joint[j, J_BODY_I]), int(tb.joint[j, J_BODY_J]), int(tb.joint[j, J_QCOL]),
+                                   float(rng.uniform(1, 5)), float(rng.normal()), float(rng.normal())))  # fmt: skip
     return loads, local, laws
 
 
@@ -292,7 +310,7 @@ def test_design_rates_match_central_differences_of_re_solved_models(rm) -> None:
             raise RuntimeError(sol.message)
         return values(statics_state(engine, sol.state, _loads_at(engine, sol.state, loads, local), cols, laws))
 
-    h = 1e-4
+    h = 3e-6  # small: some random poses are ill-conditioned (seed 28: derivatives 1e3 x the loads)
     got = np.array([values(rates, k) for k in range(design.size)])
     try:
         fd = np.array([(4 * (at(c, h / 2) - at(c, -h / 2)) / h - (at(c, h) - at(c, -h)) / (2 * h)) / 3 for c in design])
@@ -303,4 +321,4 @@ def test_design_rates_match_central_differences_of_re_solved_models(rm) -> None:
     assert np.array_equal(~np.isnan(got), np.broadcast_to(known, got.shape))  # NaN exactly where undetermined
     scale = max(1.0, float(np.max(np.abs(fd[:, known]))))
     err = np.abs(got[:, known] - fd[:, known])
-    assert np.max(err) < 1e-7 * scale, (engine.column_labels[design[np.argmax(err.max(axis=1))]], np.max(err) / scale)
+    assert np.max(err) < 3e-7 * scale, (engine.column_labels[design[np.argmax(err.max(axis=1))]], np.max(err) / scale)

@@ -19,6 +19,10 @@ Sign conventions and units (force unit ``F`` = the model's ``units.force``, leng
   of a coil spring; the ``preload`` convention), ``f = k (L0 - L)`` from ``free_length``
   ``L0``, or ``preload + k (L_model - L)`` with ``L_model`` the length in the given model; a
   damper carries no force at rest.
+* **torsion spring** on a revolute joint's angle (``type: torsion``, an anti-roll bar's
+  twist): its torque ``T = k (free_angle - q)`` or ``preload + k (q_model - q)`` (``F L``;
+  ``k`` per the model's angle unit), positive turning body j towards increasing ``q``; its
+  "length" is the joint angle (the model's angle unit).
 * **effort** at a declared input: the generalised force the input applies to its coordinate
   to hold the pose, positive along increasing ``q``: a torque (``F L``) for an angle whatever
   the angle unit, a force for a slide. By virtual work ``effort = -sum F_k . dP_k/dq``.
@@ -28,6 +32,7 @@ Sign conventions and units (force unit ``F`` = the model's ``units.force``, leng
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -39,8 +44,10 @@ from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
 from kinprop.engine.motion import motion_state
 from kinprop.engine.statics import (
+    Law,
     PointForces,
     StaticsState,
+    TorsionLaw,
     distance_rows,
     element_laws,
     element_state,
@@ -173,6 +180,22 @@ class Statics:
         return "\n".join(lines)
 
 
+def _angle_unit(model: Model) -> float:
+    """Radians per unit of the model's angles."""
+    return math.pi / 180.0 if model.units.get("angle") == "deg" else 1.0
+
+
+def model_laws(model: Model, engine: Engine, reference: Any, at_pose: bool = False) -> tuple[list[Law], list[bool]]:
+    """The force laws of the model's elements and torsion springs (preloads at the state
+    ``reference``) and, per law, whether its force is held at its preload whatever the pose
+    (``at_pose``: the preload is at the analysed pose itself, so a change of the pose moves the
+    free length with it)."""
+    laws = element_laws(engine, model.elements, reference, model.torsion_springs, _angle_unit(model))
+    held = [at_pose and e.has_spring and e.free_length is None for e in model.elements]
+    held += [at_pose and t.free_angle is None for t in model.torsion_springs]
+    return laws, held
+
+
 def input_columns(engine: Engine, inputs: Sequence[str]) -> tuple[list[int], list[str]]:
     """Layout q columns and their addresses of driven inputs (``JOINT`` or ``JOINT.q[k]``)."""
     cols, names = [], []
@@ -292,7 +315,7 @@ def statics(
     r, A, _, _ = eng.poses(st)
     W = applied_wrenches(model, eng, r, A, case)
     cols, names = input_columns(eng, model.mechanism.inputs if inputs is None else inputs)
-    laws = element_laws(eng, model.elements, st if reference is None else eng.state_of(reference))
+    laws, _ = model_laws(model, eng, st if reference is None else eng.state_of(reference), reference is None)
     ss = statics_state(eng, st, W, cols, laws)
     mech = model.mechanism
     reactions = {}
@@ -312,8 +335,10 @@ def statics(
         elif j.jtype.name == "distance":  # a distance joint in the tree: the force along its line
             u = ss.P[k, 1] - ss.P[k, 0]
             members[j.name] = float(-ss.at_point[k, 1, :3] @ u / np.linalg.norm(u))
-    ef = {e.name: float(ss.element_force[k]) for k, e in enumerate(model.elements)}
-    el = {e.name: float(ss.element_length[k]) for k, e in enumerate(model.elements)}
+    named = [*model.elements, *model.torsion_springs]
+    angle = _angle_unit(model)
+    ef = {e.name: float(ss.element_force[k]) for k, e in enumerate(named)}
+    el = {e.name: float(ss.element_length[k]) / (angle if e.kind == "torsion" else 1.0) for k, e in enumerate(named)}
     efforts = {n: float(ss.efforts[k]) for k, n in enumerate(names)}
     return Statics(model, eng, ss, case.name if case else None, reactions, members, ef, el, efforts,
                    tuple(undetermined))  # fmt: skip
@@ -337,7 +362,7 @@ def _rate(s: Statics, rates: StaticsRates, name: str) -> Array:
         return arr[:, k, 1, COMPONENTS.index(comp)]
     if kind == "force":
         if rest in s.element_forces:
-            return rates.element_force[:, [e.name for e in s.model.elements].index(rest)]
+            return rates.element_force[:, list(s.element_forces).index(rest)]
         k = mech.joint_names.index(rest)
         if not np.isnan(s.state.member[k]):  # a cut joint's rod
             return rates.member[:, k]
@@ -375,8 +400,7 @@ def load_derivatives(
     r, A, _, _ = eng.poses(st)
     r, A = np.array(r), np.array(A)
     cols, _ = input_columns(eng, model.mechanism.inputs if inputs is None else inputs)
-    laws = element_laws(eng, model.elements, st if reference is None else eng.state_of(reference))
-    held = [reference is None and e.has_spring and e.free_length is None for e in model.elements]
+    laws, held = model_laws(model, eng, st if reference is None else eng.state_of(reference), reference is None)
     by_case: dict[str, list[int]] = {}
     for i, n in enumerate(names):
         by_case.setdefault(n.partition("@")[2], []).append(i)
@@ -417,9 +441,10 @@ class Equilibrium:
 
 def _tau_scale(pf: PointForces, laws: Sequence[Any], model: Model, eng: Engine, st: Any) -> float:
     L = eng.length_scale or eng._length_scale(st)
-    r, A, _, _ = eng.poses(st)
-    f_el = np.abs(element_state(laws, np.array(r), np.array(A))[0]).sum()
-    return float((np.abs(pf.F).sum() + f_el) * L + np.abs(pf.M).sum()) or 1.0
+    r, A, P, R = (np.array(x) for x in eng.poses(st))
+    f = np.abs(element_state(laws, r, A, st.Q, P, R)[0])
+    arm = np.array([1.0 if isinstance(e, TorsionLaw) else L for e in laws])
+    return float(np.abs(pf.F).sum() * L + float(f @ arm) + np.abs(pf.M).sum()) or 1.0
 
 
 def equilibrium(
@@ -442,7 +467,7 @@ def equilibrium(
     names = list(model.mechanism.inputs if release is None else release)
     cols, addresses = input_columns(eng, names)
     labels = eng.column_labels
-    laws = element_laws(eng, model.elements, st0)
+    laws, _ = model_laws(model, eng, st0)
     st, status, message, K, it = st0, "not_converged", "", np.zeros((len(cols), len(cols))), 0
     for it in range(1, max_iter + 1):
         r, A, _, _ = eng.poses(st)
@@ -502,7 +527,7 @@ def wheel_rate(
     r, A, _, _ = eng.poses(st)
     r, A = np.array(r), np.array(A)
     pf = applied_points(model, eng, r, A, _case(model, loads))
-    tau, K, msg = reduced_stiffness(eng, st, pf, cols, element_laws(eng, model.elements, st))
+    tau, K, msg = reduced_stiffness(eng, st, pf, cols, model_laws(model, eng, st)[0])
     if msg != "ok":
         return float("nan")
     ms = motion_state(eng, st, {eng.column_labels[cols[0]]: 1.0}, {})
@@ -528,6 +553,8 @@ def load_output_unit(model: Model, name: str) -> str:
     base = name.partition("@")[0]
     if base.startswith("reaction:") and base.rsplit(".", 1)[-1] in ("mx", "my", "mz"):
         return f"{F} {L}"
+    if base.startswith("force:") and base[len("force:") :] in {t.name for t in model.torsion_springs}:
+        return f"{F} {L}"  # a torsion spring's torque
     if base.startswith("effort:"):
         joint = base[len("effort:") :].split(".")[0]
         if joint in model.mechanism.joint_names and model.mechanism.joint(joint).jtype.angle_indices:

@@ -221,8 +221,10 @@ def _print(s: Statics) -> None:
         t.add_column("force", justify="right")
         for n, v in s.member_forces.items():
             t.add_row(n, "member", f"{v:.6g}")
+        kinds = {e.name: e.kind for e in (*s.model.elements, *s.model.torsion_springs)}
         for n, v in s.element_forces.items():
-            t.add_row(n, s.model.element(n).kind, f"{v:.6g}")
+            unit = f" {u['moment']}" if kinds[n] == "torsion" else ""
+            t.add_row(n, kinds[n], f"{v:.6g}{unit}")
         out.print(t)
     for a, v in s.efforts.items():
         jt = s.model.mechanism.joint(a.split(".")[0]).jtype

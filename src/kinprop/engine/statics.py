@@ -62,7 +62,7 @@ from kinprop.kinematics.tables import (
     T_PARENT,
     T_REVERSED,
 )
-from kinprop.model.elements import Element
+from kinprop.model.elements import Element, TorsionSpring
 from kinprop.spatial import Array
 
 if TYPE_CHECKING:
@@ -93,6 +93,25 @@ class ElementLaw:
 
 
 @dataclass(frozen=True)
+class TorsionLaw:
+    """A torsion spring on a tree joint's angle (layout column ``col``, about the joint's
+    ``z''``): torque ``T = T0 + k (theta0 - q)`` (per radian) turning ``body_j`` towards
+    increasing ``q``, and ``body_i`` the other way (a couple pair ``+-T z''``)."""
+
+    joint: int
+    body_i: int
+    body_j: int
+    col: int
+    k: float
+    theta0: float
+    T0: float
+
+
+#: a force element's law
+Law = ElementLaw | TorsionLaw
+
+
+@dataclass(frozen=True)
 class StaticsState:
     """Loads of one assembled state (solver units: the model's length and force units; the
     efforts of angular coordinates are torques, force x length per radian)."""
@@ -116,7 +135,8 @@ class StaticsState:
     undetermined: Array
     #: (nb, 6) applied wrench on each body (loads and elements), about the origin
     applied: Array
-    #: element forces (positive: pushing the ends apart) and lengths, by element
+    #: element forces (positive: pushing the ends apart; a torsion spring's torque) and lengths
+    #: (a torsion spring's angle, radians), by element
     element_force: Array
     element_length: Array
     #: (ne, 2, 3) element end points (global)
@@ -208,11 +228,24 @@ def generalized_forces(engine: Engine, Tq: Array, W: Array) -> Array:
     return Qg
 
 
-def element_state(laws: Sequence[ElementLaw], r: Array, A: Array) -> tuple[Array, Array, Array, Array]:
-    """Forces, lengths, end points (ne, 2, 3) of the elements and their wrenches (nb, 6)."""
+def element_state(
+    laws: Sequence[Law], r: Array, A: Array, Q: Array | None = None, P: Array | None = None, R: Array | None = None
+) -> tuple[Array, Array, Array, Array]:
+    """Forces, lengths, end points (ne, 2, 3) of the elements and their wrenches (nb, 6); a
+    torsion spring (its torque, its angle, its joint's points) needs the coordinates ``Q`` and
+    the joint frames ``P``, ``R``."""
     f, lengths, ends = np.zeros(len(laws)), np.zeros(len(laws)), np.zeros((len(laws), 2, 3))
     W = np.zeros((r.shape[0], 6))
     for k, e in enumerate(laws):
+        if isinstance(e, TorsionLaw):
+            if Q is None or P is None or R is None:
+                raise ValueError("a torsion spring needs the coordinates and the joint frames")
+            q = float(Q[e.col])
+            f[k], lengths[k], ends[k] = e.T0 + e.k * (e.theta0 - q), q, P[e.joint]
+            M = f[k] * R[e.joint, 0, :, 2]
+            W[e.body_j, 3:] += M
+            W[e.body_i, 3:] -= M
+            continue
         Pi, Pj = r[e.body_i] + A[e.body_i] @ e.s_i, r[e.body_j] + A[e.body_j] @ e.s_j
         d = Pj - Pi
         length = float(np.linalg.norm(d))
@@ -226,10 +259,18 @@ def element_state(laws: Sequence[ElementLaw], r: Array, A: Array) -> tuple[Array
     return f, lengths, ends, W
 
 
-def element_laws(engine: Engine, elements: Sequence[Element], reference: State | None = None) -> list[ElementLaw]:
-    """The force laws of model elements; a ``preload`` is the force at the ``reference``
-    state's length (default: the engine's reference), ``free_length`` the length at zero force."""
-    laws = []
+def element_laws(
+    engine: Engine,
+    elements: Sequence[Element],
+    reference: State | None = None,
+    torsion: Sequence[TorsionSpring] = (),
+    angle_unit: float = 1.0,
+) -> list[Law]:
+    """The force laws of model elements, then of torsion springs; a ``preload`` is the force
+    (torque) at the ``reference`` state's length (angle) (default: the engine's reference),
+    ``free_length`` the length at zero force. ``angle_unit``: radians per unit of a torsion
+    spring's ``free_angle`` (its stiffness is per that unit)."""
+    laws: list[Law] = []
     r = A = None
     for e in elements:
         bi, bj = engine.body_index[e.body_i], engine.body_index[e.body_j]
@@ -247,6 +288,22 @@ def element_laws(engine: Engine, elements: Sequence[Element], reference: State |
                 r, A, _, _ = engine.poses(st)
             length = float(np.linalg.norm(r[bj] + A[bj] @ s_j - r[bi] - A[bi] @ s_i))
             laws.append(ElementLaw(bi, bj, s_i, s_j, k, length, float(e.preload or 0.0)))
+    tb = engine.tables
+    for t in torsion:
+        j = engine.mechanism.joint_names.index(t.joint)
+        if tb.joint[j, J_NQ] <= 0:
+            raise ValueError(f"torsion spring {t.name!r}: joint {t.joint!r} is cut (it has no angle coordinate); "
+                             "keep it in the tree (cut: false)")  # fmt: skip
+        col = int(tb.joint[j, J_QCOL])
+        if t.free_angle is not None:
+            theta0, T0 = float(t.free_angle) * angle_unit, 0.0
+        else:
+            st = reference if reference is not None else engine.reference
+            if st is None:
+                raise ValueError("a preloaded torsion spring needs the reference state its preload is given at")
+            theta0, T0 = float(st.Q[col]), float(t.preload or 0.0)
+        laws.append(TorsionLaw(j, int(tb.joint[j, J_BODY_I]), int(tb.joint[j, J_BODY_J]), col,
+                               float(t.stiffness) / angle_unit, theta0, T0))  # fmt: skip
     return laws
 
 
@@ -330,14 +387,35 @@ def contact_rate(loads: PointForces, k: int, Vb: Array) -> Array:
 
 
 def element_rates(
-    laws: Sequence[ElementLaw], held: Sequence[bool], r: Array, A: Array, V: Array
+    laws: Sequence[Law],
+    held: Sequence[bool],
+    r: Array,
+    A: Array,
+    V: Array,
+    qdot: Array | None = None,
+    frame_w: Array | None = None,
+    R: Array | None = None,
+    Q: Array | None = None,
 ) -> tuple[Array, Array, Array]:
     """``(dW (K, nb, 6), df (K, ne), dL (K, ne))``: rates of the elements' wrenches, forces
     and lengths under body twists ``V`` (K, nb, 6): ``df = -k dL`` (0 where ``held``: a force
-    held at its preload), ``d(f u)`` with the direction's rate."""
+    held at its preload), ``d(f u)`` with the direction's rate. A torsion spring needs the
+    coordinates ``Q`` and their rates ``qdot`` (K, n_q), its joint frame i's angular velocity
+    ``frame_w`` (K, nj, 3) and the frames ``R``: ``d(T z'') = dT z'' + T omega x z''``."""
     K = V.shape[0]
     dW, df, dL = np.zeros(V.shape), np.zeros((K, len(laws))), np.zeros((K, len(laws)))
     for k, e in enumerate(laws):
+        if isinstance(e, TorsionLaw):
+            if qdot is None or frame_w is None or R is None or Q is None:
+                raise ValueError("a torsion spring's rates need the coordinates, their rates and the joint frames")
+            a = R[e.joint, 0, :, 2]
+            dL[:, k] = qdot[:, e.col]
+            df[:, k] = 0.0 if held[k] else -e.k * dL[:, k]
+            T = e.T0 + e.k * (e.theta0 - float(Q[e.col]))
+            dM = df[:, k : k + 1] * a + T * _cross(frame_w[:, e.joint], a)
+            dW[:, e.body_j, 3:] += dM
+            dW[:, e.body_i, 3:] -= dM
+            continue
         Pi, Pj = r[e.body_i] + A[e.body_i] @ e.s_i, r[e.body_j] + A[e.body_j] @ e.s_j
         d = Pj - Pi
         length = float(np.linalg.norm(d))
@@ -360,7 +438,7 @@ def element_rates(
 
 
 def reduced_stiffness(
-    engine: Engine, state: State, loads: PointForces, driven: Sequence[int], laws: Sequence[ElementLaw] = ()
+    engine: Engine, state: State, loads: PointForces, driven: Sequence[int], laws: Sequence[Law] = ()
 ) -> tuple[Array, Array, str]:
     """``(tau, K, message)``: the efforts at the ``driven`` columns and their exact derivatives
     ``K[k, l] = d tau_k / d q_l`` (the other driven coordinates held, the constraints
@@ -375,19 +453,21 @@ def reduced_stiffness(
     lowest point of the wheel circle (:func:`contact_rate`)."""
     labels = engine.column_labels
     nd = len(driven)
-    r, A, _, _ = engine.poses(state)
-    r, A = np.array(r), np.array(A)
-    W = loads.wrenches(r.shape[0]) + element_state(laws, r, A)[3]
+    r, A, P, R = (np.array(x) for x in engine.poses(state))
+    Q = state.Q
+    W = loads.wrenches(r.shape[0]) + element_state(laws, r, A, Q, P, R)[3]
+    body_i = engine.tables.joint[:, J_BODY_I]
 
     def rates(weights: dict[int, float]) -> dict[str, float]:
         return {labels[c]: weights.get(k, 0.0) for k, c in enumerate(driven)}
 
-    Vk, acc = [], {}
+    Vk, qk, acc = [], [], {}
     for k in range(nd):
         ms = motion_state(engine, state, rates({k: 1.0}), {})
         if not ms.ok:
             return np.full(nd, np.nan), np.full((nd, nd), np.nan), ms.message
         Vk.append(ms.V)
+        qk.append(ms.qdot)
         acc[k, k] = ms.dV
     for k in range(nd):
         for m in range(k + 1, nd):
@@ -396,7 +476,9 @@ def reduced_stiffness(
     tau = np.array([-float(np.sum(W * V)) for V in Vk])
     K = np.zeros((nd, nd))
     for m in range(nd):
-        dW = load_rates(loads, Vk[m][None])[0] + element_rates(laws, [False] * len(laws), r, A, Vk[m][None])[0][0]
+        V = Vk[m][None]
+        dW = load_rates(loads, V)[0] + element_rates(laws, [False] * len(laws), r, A, V, qk[m][None],
+                                                     V[:, body_i, 3:], R, Q)[0][0]  # fmt: skip
         for k in range(nd):
             sym = acc[min(k, m), max(k, m)]
             anti = 0.5 * np.array([spatial_cross(Vk[m][b], Vk[k][b]) for b in range(r.shape[0])])
@@ -457,7 +539,7 @@ def statics_state(
     state: State,
     applied: Array,
     driven: Sequence[int] = (),
-    laws: Sequence[ElementLaw] = (),
+    laws: Sequence[Law] = (),
 ) -> StaticsState:
     """Multipliers, input efforts, joint reactions and element forces of the assembled
     ``state`` under body wrenches ``applied`` (nb, 6) about the origin, held by the efforts
@@ -466,7 +548,7 @@ def statics_state(
     st = fr.state
     tb = engine.tables
     m, nd = engine.n_rows, len(driven)
-    f, lengths, ends, W_el = element_state(laws, fr.r, fr.A)
+    f, lengths, ends, W_el = element_state(laws, fr.r, fr.A, fr.state.Q, fr.P, fr.R)
     W = np.asarray(applied, dtype=float) + W_el
     Qg = generalized_forces(engine, fr.Tq, W)
     As, unscale, cs = equilibrium_system(engine, fr.Phi_q, driven)
@@ -535,8 +617,10 @@ def statics_state(
 
 __all__ = [
     "ElementLaw",
+    "Law",
     "PointForces",
     "StaticsState",
+    "TorsionLaw",
     "contact_rate",
     "cut_arms",
     "distance_rows",

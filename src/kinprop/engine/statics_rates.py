@@ -46,7 +46,7 @@ import numpy as np
 from kinprop.constraints.basic import DISTANCE, DOT1, DOT2, ROWS
 from kinprop.engine.motion import _Frames
 from kinprop.engine.statics import (
-    ElementLaw,
+    Law,
     PointForces,
     StaticsState,
     _cross,
@@ -197,7 +197,7 @@ def statics_rates(
     loads: PointForces,
     X: Array,
     driven: Sequence[int] = (),
-    laws: Sequence[ElementLaw] = (),
+    laws: Sequence[Law] = (),
     held: Sequence[bool] | None = None,
 ) -> StaticsRates:
     """The loads of the assembled ``state`` and their exact rates along the directions ``X``
@@ -218,7 +218,7 @@ def statics_rates(
                             np.full((K, nb, 6), np.nan))  # fmt: skip
     lam = ss.lam
     V, U = twists(engine, fr, X)
-    dW_el, df_el, dL_el = element_rates(laws, held, fr.r, fr.A, V)
+    dW_el, df_el, dL_el = element_rates(laws, held, fr.r, fr.A, V, X[:, :nq], U[:, :, 0, 3:], fr.R, st.Q)
     dW_app = load_rates(loads, V) + dW_el  # applied wrenches' rates (loads and elements)
     W_cut, dW_cut = np.zeros((nb, 6)), np.zeros((K, nb, 6))
     dG = np.zeros((K, nq))
