@@ -209,7 +209,7 @@ def statics_rates(
     fr = _Frames(engine, state)
     tb, st = engine.tables, fr.state
     nb, nj, nq, m, nd = tb.fixed.shape[0], tb.joint.shape[0], engine.n_coordinates, engine.n_rows, len(driven)
-    ss = statics_state(engine, state, loads.wrenches(nb), driven, laws)
+    ss = statics_state(engine, state, loads.wrenches(nb), driven, laws, fr)
     ne = len(laws)
     if not ss.ok:
         nan = np.full((K, nj, 2, 6), np.nan)
