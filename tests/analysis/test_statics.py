@@ -539,3 +539,36 @@ def test_torsion_spring_survives_writing(tmp_path: Path) -> None:
     dump_model(base, tmp_path / "out.yaml")
     assert kp.load_model(tmp_path / "out.yaml").torsion_springs == base.torsion_springs
     assert model_from_data(model_to_hardpoints(base)).torsion_springs == base.torsion_springs
+
+
+SLIDES = {
+    "kinprop": 1,
+    "name": "two slides in series and a spring across both",
+    "units": {"length": "mm", "angle": "deg", "force": "N"},
+    "bodies": {"ground": {"fixed": True}, "b1": {}, "b2": {}},
+    "joints": {
+        "J1": {"type": "translational", "bodies": ["ground", "b1"], "q": [100.0]},
+        "J2": {"type": "translational", "bodies": ["b1", "b2"], "q": [60.0]},
+    },
+    "inputs": ["J1", "J2"],
+    "elements": {"spring": {"type": "spring", "bodies": ["ground", "b2"], "s_i": [0, 0, 0], "s_j": [0, 0, 0],
+                            "stiffness": 20.0, "free_length": 100.0}},  # fmt: skip
+}
+
+
+@pytest.mark.parametrize("w1", [1.0, 4.0])
+def test_equilibrium_takes_the_least_change_in_a_neutral_direction(tmp_path: Path, w1: float) -> None:
+    """Two released slides in series: the spring fixes only their sum (``K`` singular), so the
+    equilibrium is a line; the least change in the propagation's metric splits the 60 mm
+    correction in proportion to the weights (``dq_k = w_k c / sum w``), and the pose is not
+    stable (neutral)."""
+    from kinprop.analysis.statics import equilibrium
+
+    model = _assembled(SLIDES, tmp_path)
+    e = equilibrium(model, weights={"J1.q": w1})
+    assert e.converged, e.message
+    q1, q2 = (float(e.model.coordinates[j][0]) for j in ("J1", "J2"))
+    assert q1 + q2 == pytest.approx(100.0, abs=1e-9)
+    assert q1 - 100.0 == pytest.approx(-60.0 * w1 / (w1 + 1.0), abs=1e-9)
+    assert e.statics.element_forces["spring"] == pytest.approx(0.0, abs=1e-9)
+    assert not e.stable

@@ -416,6 +416,8 @@ def load_derivatives(
 # --- static equilibrium and wheel rate --------------------------------------------------------
 #: Newton on the reduced equilibrium: converged when |tau| < EQ_TOL * (force scale x length scale)
 EQ_TOL, EQ_MAX_ITER, EQ_TRUST = 1e-12, 50, 0.35
+#: relative singular value of the weighted stiffness below which a direction is neutral
+EQ_RCOND = 1e-10
 
 
 @dataclass(frozen=True)
@@ -455,12 +457,17 @@ def equilibrium(
     tol: float = EQ_TOL,
     max_iter: int = EQ_MAX_ITER,
     engine: Engine | None = None,
+    weights: Mapping[str, float] | None = None,
 ) -> Equilibrium:
     r"""The static equilibrium of the spring-supported ``model`` under ``loads`` with the
     ``release``\ d inputs (default: the declared inputs) free: Newton on ``tau(q_D) = 0`` with
     the exact tangent stiffness (:func:`kinprop.engine.statics.reduced_stiffness`), each step
     re-assembled on the start's branch (``Engine.propagate``), steps limited to a trust radius.
-    Preloads are taken at the given model's pose."""
+    Least change, as in propagation: each step is the minimum-norm solution of ``K dq = -tau``
+    in the propagation's metric ``sum (si_k dq_k)^2 / w_k`` (changes in metres and radians,
+    ``weights`` by address as ``propagate`` takes them), so where the loads leave the pose
+    undetermined (a neutral direction, ``K`` singular) the released inputs move as little as
+    the metric allows. Preloads are taken at the given model's pose."""
     eng = engine or compile_engine(model)
     st0 = eng.state_of(model)
     case = _case(model, loads)
@@ -468,6 +475,8 @@ def equilibrium(
     cols, addresses = input_columns(eng, names)
     labels = eng.column_labels
     laws, _ = model_laws(model, eng, st0)
+    w = eng.weights_for(np.array(cols, np.int64), weights)
+    w_half = np.sqrt(w) if w is not None else np.ones(len(cols))
     st, status, message, K, it = st0, "not_converged", "", np.zeros((len(cols), len(cols))), 0
     for it in range(1, max_iter + 1):
         r, A, _, _ = eng.poses(st)
@@ -479,7 +488,7 @@ def equilibrium(
         if float(np.max(np.abs(tau), initial=0.0)) <= tol * _tau_scale(pf, laws, model, eng, st):
             status, message = "converged", f"converged in {it - 1} step(s)"
             break
-        dq = -np.linalg.lstsq(K, tau, rcond=None)[0]
+        dq = -w_half * np.linalg.lstsq(K * w_half[None, :], tau, rcond=EQ_RCOND)[0]
         size = float(np.max(np.abs(dq * eng.col_scale[cols])))
         if size > EQ_TRUST:
             dq *= EQ_TRUST / size
