@@ -551,8 +551,10 @@ SLIDES = {
         "J2": {"type": "translational", "bodies": ["b1", "b2"], "q": [60.0]},
     },
     "inputs": ["J1", "J2"],
-    "elements": {"spring": {"type": "spring", "bodies": ["ground", "b2"], "s_i": [0, 0, 0], "s_j": [0, 0, 0],
-                            "stiffness": 20.0, "free_length": 100.0}},  # fmt: skip
+    "elements": {
+        "spring": {"type": "spring", "bodies": ["ground", "b2"], "s_i": [0, 0, 0], "s_j": [0, 0, 0],
+                   "stiffness": 20.0, "free_length": 100.0}  # fmt: skip
+    },
 }
 
 
