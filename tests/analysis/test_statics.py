@@ -552,8 +552,14 @@ SLIDES = {
     },
     "inputs": ["J1", "J2"],
     "elements": {
-        "spring": {"type": "spring", "bodies": ["ground", "b2"], "s_i": [0, 0, 0], "s_j": [0, 0, 0],
-                   "stiffness": 20.0, "free_length": 100.0}  # fmt: skip
+        "spring": {
+            "type": "spring",
+            "bodies": ["ground", "b2"],
+            "s_i": [0, 0, 0],
+            "s_j": [0, 0, 0],
+            "stiffness": 20.0,
+            "free_length": 100.0,
+        }
     },
 }
 
