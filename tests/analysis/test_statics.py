@@ -580,3 +580,31 @@ def test_equilibrium_takes_the_least_change_in_a_neutral_direction(tmp_path: Pat
     assert q1 - 100.0 == pytest.approx(-60.0 * w1 / (w1 + 1.0), abs=1e-9)
     assert e.statics.element_forces["spring"] == pytest.approx(0.0, abs=1e-9)
     assert not e.stable
+
+
+def test_double_wishbone_equilibrium_design_derivatives() -> None:
+    """The ride height's design derivatives (``dq_D/dp = -K^-1 dtau/dp``, exact) against
+    central differences of equilibria of re-solved models, in the model's units (deg per mm)."""
+    from kinprop.analysis.statics import equilibrium, equilibrium_sensitivity
+
+    model = _assembled(EXAMPLES / "double_wishbone.yaml")
+    case = LoadCase("corner", wheels={"upright": (0.0, 0.0, 11000.0)})
+    e = equilibrium(model, case)
+    assert e.converged
+    wrt = ["UBJ.s_j[0]", "TR.length", "LBJ.s_i[2]"]
+    D, released, columns = equilibrium_sensitivity(e, wrt, case, reference=model)
+    assert released == ["LCA.q"]
+    for k, c in enumerate(columns):
+        key, _, index = c.partition("[")
+        x0 = float(np.atleast_1d(np.asarray(model.design[key], dtype=float)).ravel()[int(index[:-1]) if index else 0])
+
+        def at(t: float, c: str = c, x0: float = x0) -> float:
+            m = kp.propagate(model, {c: x0 + t}, tol=1e-14).after
+            eq = equilibrium(m, case)
+            assert eq.converged
+            return math.degrees(float(eq.model.coordinates["LCA"][0]))
+
+        h = 0.1
+        fd = (4 * (at(h / 2) - at(-h / 2)) / h - (at(h) - at(-h)) / (2 * h)) / 3
+        assert D[0, k] == pytest.approx(fd, rel=1e-6, abs=1e-9), (c, D[0, k], fd)
+    assert abs(D[0, columns.index("LBJ.s_i[2]")]) > 1e-3  # a real dependence (deg per mm)

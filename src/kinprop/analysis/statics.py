@@ -506,6 +506,45 @@ def equilibrium(
     return Equilibrium(status, message, at, s, it, tuple(addresses), K, stable)
 
 
+def equilibrium_sensitivity(
+    eq: Equilibrium,
+    wrt: Sequence[str],
+    loads: str | LoadCase | PointLoad | Sequence[PointLoad] | None = None,
+    *,
+    reference: Model | None = None,
+    engine: Engine | None = None,
+) -> tuple[Array, list[str], list[str]]:
+    """``(D, released, columns)``: exact derivatives of the equilibrium's released inputs with
+    respect to the design columns ``wrt``, in the model's units. At equilibrium ``tau(q_D, p) =
+    0``, so ``dq_D/dp = -K^-1 dtau/dp``: ``K`` the reduced tangent stiffness
+    (:func:`equilibrium`) and ``dtau/dp`` the efforts' design derivatives with the inputs held
+    (:func:`kinprop.engine.statics_rates.statics_rates` along ``e_p + dq/dp``, the other
+    coordinates' response by the implicit-function theorem). ``loads`` as the equilibrium
+    took them; preloads at ``reference``'s pose (the model the equilibrium started from;
+    default: the equilibrium's own)."""
+    from kinprop.analysis.units import derivative_scale
+    from kinprop.propagation.sensitivity import design_sensitivity
+
+    model = eq.model
+    eng = engine or compile_engine(model)
+    st = eng.state_of(model)
+    cols, names = input_columns(eng, list(eq.released))
+    labels = eng.column_labels
+    held = [labels[c] for c in range(eng.n_coordinates) if c not in cols]
+    sens = design_sensitivity(model, wrt, held, engine=eng, units="solver")
+    X = np.zeros((sens.wrt_columns.size, eng.n_columns))
+    X[np.arange(sens.wrt_columns.size), sens.wrt_columns] = 1.0
+    X[:, sens.free_columns] = sens.matrix.T
+    r, A, _, _ = eng.poses(st)
+    pf = applied_points(model, eng, np.array(r), np.array(A), _case(model, loads))
+    laws, _ = model_laws(model, eng, st if reference is None else eng.state_of(reference))
+    dtau = statics_rates(eng, st, pf, X, cols, laws).efforts  # (K, nd)
+    D = -np.linalg.solve(eq.stiffness, dtau.T)
+    so = np.array([derivative_scale(model, n, eng) for n in names])
+    si = np.array([derivative_scale(model, c, eng) for c in sens.columns])
+    return D * so[:, None] / si[None, :], list(names), list(sens.columns)
+
+
 def wheel_rate(
     model: Model,
     wheel: str | None = None,
@@ -600,6 +639,7 @@ __all__ = [
     "Statics",
     "applied_wrenches",
     "equilibrium",
+    "equilibrium_sensitivity",
     "input_columns",
     "is_load_output",
     "load_derivatives",
