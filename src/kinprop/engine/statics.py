@@ -207,11 +207,11 @@ def distance_rows(engine: Engine, P: Array, R: Array, Q: Array) -> list[tuple[in
 
 
 def subtree_sums(engine: Engine, W: Array) -> Array:
-    """``W_sub`` (nb, 6): each body's wrench plus those of every body below it in the tree."""
+    """``W_sub`` (..., nb, 6): each body's wrench plus those of every body below it in the tree."""
     tb = engine.tables
     Ws = np.array(W, dtype=float)
     for t in range(tb.tree.shape[0] - 1, -1, -1):
-        Ws[tb.tree[t, T_PARENT]] += Ws[tb.tree[t, T_CHILD]]
+        Ws[..., tb.tree[t, T_PARENT], :] += Ws[..., tb.tree[t, T_CHILD], :]
     return Ws
 
 

@@ -58,6 +58,7 @@ from kinprop.engine.statics import (
     equilibrium_system,
     load_rates,
     statics_state,
+    subtree_sums,
 )
 from kinprop.joints import composite, placement, spherical, universal
 from kinprop.joints import motion as joint_motion
@@ -72,6 +73,7 @@ from kinprop.kinematics.tables import (
     E_COL,
     E_ROW,
     J_BODY_I,
+    J_BODY_J,
     J_CODE,
     J_COL_S_I,
     J_NQ,
@@ -182,15 +184,6 @@ def _local_rates(code: int, q: Array, qd: Array, App: Array, dpp: Array, dd: Arr
     return ddd, dH
 
 
-def _subtree(engine: Engine, W: Array) -> Array:
-    """Subtree sums over the body axis (-2) of (..., nb, 6)."""
-    tb = engine.tables
-    Ws = np.array(W, dtype=float)
-    for t in range(tb.tree.shape[0] - 1, -1, -1):
-        Ws[..., tb.tree[t, T_PARENT], :] += Ws[..., tb.tree[t, T_CHILD], :]
-    return Ws
-
-
 def statics_rates(
     engine: Engine,
     state: State,
@@ -225,7 +218,7 @@ def statics_rates(
     cuts = []
     for c in range(tb.cut.shape[0]):
         j, r0 = tb.cut[c, K_JOINT], tb.cut[c, K_ROW0]
-        bi, bj = tb.joint[j, J_BODY_I], tb.joint[j, J_BODY_I + 1]
+        bi, bj = tb.joint[j, J_BODY_I], tb.joint[j, J_BODY_J]
         Pi, d, Pd, Wi, Wj = _cut_rows(engine, fr.P, fr.R, st.Q, st.L, c)
         mc = Pd.shape[0]
         lc = lam[r0 : r0 + mc]
@@ -266,8 +259,8 @@ def statics_rates(
         if e is not None:
             dG[:, tb.joint[j, J_QCOL]] -= df @ e + de @ f
         cuts.append((c, j, r0, mc, d, dd, cut_arms(Pi, d, Pd, Wi, Wj), dWi_c, dWj_c))
-    Ws = _subtree(engine, ss.applied + W_cut)
-    dWs = _subtree(engine, dW_app + dW_cut)
+    Ws = subtree_sums(engine, ss.applied + W_cut)
+    dWs = subtree_sums(engine, dW_app + dW_cut)
     Q = st.Q
     for t in range(tb.tree.shape[0]):
         j, chi = tb.tree[t, T_JOINT], tb.tree[t, T_CHILD]
@@ -317,7 +310,7 @@ def statics_rates(
         dl = dlam[:, r0 : r0 + mc]
         dwrench[:, j, 0], dwrench[:, j, 1] = dWi_c + dl @ Zi, dWj_c + dl @ Zj
         dW_all[:, tb.joint[j, J_BODY_I]] += dl @ Zi
-        dW_all[:, tb.joint[j, J_BODY_I + 1]] += dl @ Zj
+        dW_all[:, tb.joint[j, J_BODY_J]] += dl @ Zj
         r = r0
         for bc in range(tb.cut[c, K_BASIC0], tb.cut[c, K_BASIC1]):
             kind = tb.basic[bc, B_KIND]
@@ -325,7 +318,7 @@ def statics_rates(
                 length = float(np.linalg.norm(d))
                 dmember[:, j] = -2.0 * (dlam[:, r] * length + lam[r] * (dd @ d) / length)
             r += ROWS[kind]
-    dWs_all = _subtree(engine, dW_all)
+    dWs_all = subtree_sums(engine, dW_all)
     for t in range(tb.tree.shape[0]):
         j, chi = tb.tree[t, T_JOINT], tb.tree[t, T_CHILD]
         child_side = 0 if tb.tree[t, T_REVERSED] else 1
