@@ -36,6 +36,7 @@ in equilibrium with no load; a reported component that any of them changes is *u
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -180,10 +181,16 @@ def _cut_rows(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, c: i
     return Pi, d, Pd, Wi, Wj
 
 
+def _skew(p: Array) -> Array:
+    """``S`` with ``a x p = a S`` for row vectors ``a``."""
+    x, y, z = float(p[0]), float(p[1]), float(p[2])
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
 def cut_arms(Pi: Array, d: Array, Pd: Array, Wi: Array, Wj: Array) -> tuple[Array, Array]:
     """``(Z_i, Z_j)`` (m, 6): a cut joint's rows' partials with respect to the twists of its
     bodies (module docstring), from :func:`_cut_rows`."""
-    return np.hstack([-Pd, _cross(Pd, Pi) + Wi]), np.hstack([Pd, -_cross(Pd, Pi + d) + Wj])
+    return np.hstack([-Pd, Pd @ _skew(Pi) + Wi]), np.hstack([Pd, Wj - Pd @ _skew(Pi + d)])
 
 
 def _cut_partials(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, c: int) -> tuple[Array, Array]:
@@ -248,7 +255,7 @@ def element_state(
             continue
         Pi, Pj = r[e.body_i] + A[e.body_i] @ e.s_i, r[e.body_j] + A[e.body_j] @ e.s_j
         d = Pj - Pi
-        length = float(np.linalg.norm(d))
+        length = math.sqrt(float(d @ d))
         f[k], lengths[k], ends[k] = e.f0 + e.k * (e.L0 - length), length, (Pi, Pj)
         if f[k] != 0.0:
             if length == 0.0:
@@ -516,14 +523,10 @@ def _at_points(W: Array, P: Array) -> Array:
     return np.concatenate([W[..., :3], W[..., 3:] - _cross(P, W[..., :3])], axis=-1)
 
 
-def _local(W: Array, P: Array, R: Array) -> Array:
-    """Components of joint wrenches (nj, 2, 6): force and moment about the joint's point on
-    each body, in joint frame i's axes."""
-    G = _at_points(W, P)
-    Ri = R[:, 0][:, None]  # (nj, 1, 3, 3): frame i's axes for both sides
-    return np.concatenate([np.einsum("jsba,jsb->jsa", np.broadcast_to(Ri, (*G.shape[:2], 3, 3)), G[..., :3]),
-                           np.einsum("jsba,jsb->jsa", np.broadcast_to(Ri, (*G.shape[:2], 3, 3)), G[..., 3:])],
-                          axis=-1)  # fmt: skip
+def _local(G: Array, R: Array) -> Array:
+    """Joint wrenches at their points ``G`` (nj, 2, 6, :func:`_at_points`) in joint frame i's
+    axes (the same frame for both sides)."""
+    return np.einsum("jba,jstb->jsta", R[:, 0], G.reshape(*G.shape[:2], 2, 3)).reshape(G.shape)
 
 
 def equilibrium_system(engine: Engine, Phi_q: Array, driven: Sequence[int]) -> tuple[Array, Array, Array]:
@@ -592,7 +595,8 @@ def statics_state(
         member[j] = -2.0 * lam[row] * length
     member_und = np.zeros(nj, bool)
     for k, v in enumerate(null):
-        loc, glob = _local(stress[k], fr.P, fr.R), _at_points(stress[k], fr.P)
+        glob = _at_points(stress[k], fr.P)
+        loc = _local(glob, fr.R)
         loc[..., 3:] /= Lsc
         glob[..., 3:] /= Lsc
         t = v[m:] * unscale[m:] / Lsc if nd else np.zeros(0)  # efforts: torque-like scale
@@ -605,7 +609,8 @@ def statics_state(
             member_und[j] |= abs(2.0 * v[row] * unscale[row] * length) > UNDETERMINED_RTOL * size
         if nd:
             tau_und |= np.abs(t) > UNDETERMINED_RTOL * size
-    wrench_out, local, at_point = wrench.copy(), _local(wrench, fr.P, fr.R), _at_points(wrench, fr.P)
+    wrench_out, at_point = wrench.copy(), _at_points(wrench, fr.P)
+    local = _local(at_point, fr.R)
     local[und] = np.nan
     at_point[und_g] = np.nan
     wrench_out[und.any(axis=2)] = np.nan  # a side with an undetermined component: no global wrench
