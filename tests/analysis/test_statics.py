@@ -31,6 +31,42 @@ def _assembled(source: str | Path | dict, tmp_path: Path | None = None) -> kp.Mo
     return kp.assemble(kp.load_model(source), tol=1e-13).after
 
 
+def _bodies_balance(s, loads=None) -> None:
+    """Every moving body of a statics record balances: the reported joint forces and moments on
+    it (moments about the reported points), the applied loads (rebuilt from the case), the
+    elements' forces along their ends and the torsion springs' torques about their joints' axes
+    sum to zero, forces and moments about the origin."""
+    from kinprop.analysis.statics import _case, applied_points
+
+    model = s.model
+    kin = kp.compile(model).kinematics(model.design, model.coordinates)
+    body = {b: np.zeros(6) for b in model.mechanism.body_names}
+    for j in model.mechanism.joints:
+        r = s.reactions[j.name]
+        for side, b in enumerate((j.body_i, j.body_j)):
+            body[b] += np.concatenate([r.force[side], r.moment[side] + np.cross(r.points[side], r.force[side])])
+    W = applied_points(model, s.engine, s.state.r, s.state.A, _case(model, loads)).wrenches(len(body))
+    for b, k in s.engine.body_index.items():
+        body[b] += W[k]
+    for e in model.elements:
+        Pi = kin.r[e.body_i] + kin.A[e.body_i] @ np.array(e.s_i)
+        Pj = kin.r[e.body_j] + kin.A[e.body_j] @ np.array(e.s_j)
+        F = s.element_forces[e.name] * (Pj - Pi) / np.linalg.norm(Pj - Pi)
+        body[e.body_j] += np.concatenate([F, np.cross(Pj, F)])
+        body[e.body_i] -= np.concatenate([F, np.cross(Pi, F)])
+    for t in model.torsion_springs:
+        j = model.mechanism.joint(t.joint)
+        M = s.element_forces[t.name] * kin.frames[t.joint].R_i[:, 2]
+        body[j.body_j][3:] += M
+        body[j.body_i][3:] -= M
+    scale = max([1.0] + [float(np.linalg.norm(r.force[1])) for r in s.reactions.values()])
+    size = max(1.0, float(np.max(np.abs(s.state.P))))
+    for b in model.mechanism.bodies:
+        if not b.fixed:
+            assert np.linalg.norm(body[b.name][:3]) < 1e-9 * scale, b.name
+            assert np.linalg.norm(body[b.name][3:]) < 1e-9 * scale * size, b.name
+
+
 def _angle(A: np.ndarray) -> float:
     return math.atan2(A[1, 0], A[0, 0])
 
@@ -56,10 +92,12 @@ def test_fourbar_input_torque_closed_form(crank_deg: float) -> None:
     T4 = 12.5  # N m on the rocker, counter-clockwise
     s = kp.statics(model, PointLoad("rocker", (0.0, 0.0, 0.0), moment=(0.0, 0.0, T4)))
     assert s.ok
+    _bodies_balance(s, PointLoad("rocker", (0.0, 0.0, 0.0), moment=(0.0, 0.0, T4)))
     assert s.efforts["O2.q"] == pytest.approx(-T4 * w4, rel=1e-10)
     # a force at the coupler point P (0.2, 0.1 in the coupler frame): v_P = v_A + w3 x (P - A)
     F = np.array([30.0, -45.0, 0.0])
     s = kp.statics(model, PointLoad("coupler", "P", force=tuple(F)))
+    _bodies_balance(s, PointLoad("coupler", "P", force=tuple(F)))
     t2, t3 = ang["t2"], ang["t3"]
     vA = 0.15 * np.array([-math.sin(t2), math.cos(t2), 0.0])
     rel = np.array([0.2 * math.cos(t3) - 0.1 * math.sin(t3), 0.2 * math.sin(t3) + 0.1 * math.cos(t3), 0.0])
@@ -82,6 +120,7 @@ def test_offset_slider_crank_input_torque_closed_form(crank_deg: float) -> None:
     dx = -a * math.sin(t) + (e - a * math.sin(t)) * a * math.cos(t) / root
     Fx = -800.0  # gas force on the piston, towards the crank
     s = kp.statics(model, PointLoad("slider", (0.0, 0.0, 0.0), force=(Fx, 0.0, 0.0)), inputs=["O2"])
+    _bodies_balance(s, PointLoad("slider", (0.0, 0.0, 0.0), force=(Fx, 0.0, 0.0)))
     assert s.efforts["O2.q"] == pytest.approx(-Fx * dx, rel=1e-10)
     # the connecting rod is a two-force member: the pin force at A on the rod is along A-B
     A_, B_ = s.reactions["A"].points[1], s.reactions["B"].points[0]
@@ -276,6 +315,7 @@ def test_equilibrium_of_a_spring_loaded_lever(tmp_path: Path) -> None:
     truth = scipy.optimize.brentq(lambda t: _lever_tau(t, Fy), theta - 0.3, theta + 0.3, xtol=1e-15)
     assert theta == pytest.approx(truth, abs=1e-10)
     assert abs(e.statics.efforts["O.q"]) < 1e-8
+    _bodies_balance(e.statics, PointLoad("lever", "tip", force=(0.0, Fy, 0.0)))
     # the stiffness is the derivative of the hand-written effort
     h = 1e-6
     assert e.stiffness[0, 0] == pytest.approx(
@@ -328,6 +368,7 @@ def test_mcpherson_rods_carry_axial_forces() -> None:
     F = np.array([-2000.0, 3000.0, 8000.0])
     s = kp.statics(model, PointLoad("wheel", (0.0, 0.0, 0.0), force=tuple(F)), inputs=["TD", "ST.q[4]"])
     assert s.ok and not s.undetermined
+    _bodies_balance(s, PointLoad("wheel", (0.0, 0.0, 0.0), force=tuple(F)))
     kin = kp.compile(model).kinematics(model.design, model.coordinates)
     fr = kin.frames
     for name in ("RS", "TD"):
@@ -474,6 +515,7 @@ def test_torsion_spring_by_virtual_work(tmp_path: Path, crank_deg: float) -> Non
     theta4 = math.degrees(ang["t4"]) % 360.0
     assert float(model.coordinates["O4"][0]) == pytest.approx(math.radians(theta4), abs=1e-12)
     s = kp.statics(model)
+    _bodies_balance(s)
     T = 2.0 * (70.0 - theta4)
     assert s.element_forces["bar"] == pytest.approx(T, rel=1e-12)
     assert s.element_lengths["bar"] == pytest.approx(theta4, rel=1e-12)
@@ -504,6 +546,7 @@ def test_torsion_spring_equilibrium(tmp_path: Path) -> None:
     assert got == pytest.approx(truth, abs=1e-9)
     assert abs(got - 60.0) > 1.0  # the couple moved it
     assert e.statics.element_forces["bar"] == pytest.approx(0.5 * (60.0 - truth), rel=1e-8)
+    _bodies_balance(e.statics, PointLoad("rocker", (0.0, 0.0, 0.0), moment=(0.0, 0.0, T4)))
 
 
 def test_torsion_spring_preload_and_bad_input(tmp_path: Path) -> None:
