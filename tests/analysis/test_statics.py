@@ -405,6 +405,21 @@ def test_wheel_forces_in_an_sae_model(tmp_path: Path) -> None:
     for j in a.reactions:
         assert np.allclose(b.reactions[j].force[1], flip * a.reactions[j].force[1], rtol=1e-9, atol=1e-6)
         assert np.allclose(b.reactions[j].moment[1], flip * a.reactions[j].moment[1], rtol=1e-9, atol=1e-3)
+    # the design derivatives (the contact point's motion in the z-mirrored axes) match too
+    from kinprop.analysis.statics import load_derivatives
+    from kinprop.propagation.sensitivity import design_sensitivity
+
+    names, wrt = ["effort:LCA", "force:TR", "reaction:UBJ.fy"], ["UBJ.s_j[0]", "TR.length", "LBJ.s_i[2]"]
+    D = []
+    for m in (iso, sae):
+        eng = kp.compile(m)
+        sens = design_sensitivity(m, wrt, ["q"], engine=eng, units="solver")
+        X = np.zeros((len(wrt), eng.n_columns))
+        X[np.arange(len(wrt)), sens.wrt_columns] = 1.0
+        X[:, sens.free_columns] = sens.matrix.T
+        D.append(load_derivatives(m, names, X, engine=eng, loads=case))
+    assert np.allclose(D[1], D[0] * np.array([1.0, 1.0, -1.0])[:, None], rtol=1e-8, atol=1e-6)
+    assert np.all(np.abs(D[0][:2]) > 1.0)
 
 
 def test_an_unassembled_model_has_no_loads() -> None:
