@@ -597,6 +597,9 @@ def test_torsion_spring_survives_writing(tmp_path: Path) -> None:
     dump_model(base, tmp_path / "out.yaml")
     assert kp.load_model(tmp_path / "out.yaml").torsion_springs == base.torsion_springs
     assert model_from_data(model_to_hardpoints(base)).torsion_springs == base.torsion_springs
+    from kinprop.analysis.study import _model_from_payload, _model_payload
+
+    assert _model_from_payload(_model_payload(base)).torsion_springs == base.torsion_springs
 
 
 SLIDES = {
