@@ -2,7 +2,7 @@
 
 A designer drives a suspension by wheel travel in millimetres, not by an arm angle. An output
 held at a value is one more constraint row, solved with the mechanism's rows by the same
-engine (:func:`kinprop.propagation.targets.solve_targets`, each configuration's coordinates
+engine (:func:`kinprop.engine.targets.solve_targets`, each configuration's coordinates
 the unknowns, no design variable free). The grammar is the one of ``--target``
 (:mod:`kinprop.analysis.targets`) without the ``=VALUE``:
 
@@ -34,10 +34,11 @@ from kinprop.analysis.targets import (
 )
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
+from kinprop.engine.targets import Configuration, Row, solve_targets
+from kinprop.engine.units import RADIANS_PER
 from kinprop.errors import AddressError, ConvergenceError
 from kinprop.model import Model
 from kinprop.propagation.propagate import engine_for
-from kinprop.propagation.targets import Configuration, Row, solve_targets
 from kinprop.spatial import Array
 
 
@@ -53,7 +54,7 @@ def _key(cs: Sequence[Condition]) -> tuple:
 def _to_model_units(model: Model, spec: TargetSpec, value: float, engine: Engine) -> float:
     """A configuration output (internal: metric angles deg, joint angles rad) in model units."""
     if _kind(model, spec.output) == "deg":
-        return value if model.units.get("angle") == "deg" else float(np.radians(value))
+        return value if model.units.get("angle") == "deg" else value * RADIANS_PER["deg"]
     return value * derivative_scale(model, spec.output, engine)
 
 

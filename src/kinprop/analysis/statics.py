@@ -55,6 +55,7 @@ from kinprop.engine.statics import (
     statics_state,
 )
 from kinprop.engine.statics_rates import StaticsRates, statics_rates
+from kinprop.engine.status import Status
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.loads import LoadCase, PointLoad
@@ -422,12 +423,13 @@ EQ_RCOND = 1e-10
 
 @dataclass(frozen=True)
 class Equilibrium:
-    """The pose at which the released inputs need no effort: ``status`` ``converged``,
-    ``not_converged`` or ``failed`` (a step the position solve could not follow on the
-    branch); ``stiffness`` the reduced tangent stiffness ``d tau / d q`` there (solver units:
-    per radian for an angle), ``stable`` when its symmetric part is positive definite."""
+    """The pose at which the released inputs need no effort: ``status`` (:class:`kinprop.Status`)
+    ``converged``, ``not_converged`` or ``infeasible`` (no equilibrium step could be taken: the
+    loads are not held, or the position solve could not follow a step on the branch);
+    ``stiffness`` the reduced tangent stiffness ``d tau / d q`` there (solver units: per radian
+    for an angle), ``stable`` when its symmetric part is positive definite."""
 
-    status: str
+    status: Status
     message: str
     model: Model
     statics: Statics
@@ -438,7 +440,7 @@ class Equilibrium:
 
     @property
     def converged(self) -> bool:
-        return self.status == "converged"
+        return self.status is Status.CONVERGED
 
 
 def _tau_scale(pf: PointForces, laws: Sequence[Any], model: Model, eng: Engine, st: Any) -> float:
@@ -477,16 +479,16 @@ def equilibrium(
     laws, _ = model_laws(model, eng, st0)
     w = eng.weights_for(np.array(cols, np.int64), weights)
     w_half = np.sqrt(w) if w is not None else np.ones(len(cols))
-    st, status, message, K, it = st0, "not_converged", "", np.zeros((len(cols), len(cols))), 0
+    st, status, message, K, it = st0, Status.NOT_CONVERGED, "", np.zeros((len(cols), len(cols))), 0
     for it in range(1, max_iter + 1):
         r, A, _, _ = eng.poses(st)
         pf = applied_points(model, eng, np.array(r), np.array(A), case)
         tau, K, msg = reduced_stiffness(eng, st, pf, cols, laws)
         if msg != "ok":
-            status, message = "failed", msg
+            status, message = Status.INFEASIBLE, msg
             break
         if float(np.max(np.abs(tau), initial=0.0)) <= tol * _tau_scale(pf, laws, model, eng, st):
-            status, message = "converged", f"converged in {it - 1} step(s)"
+            status, message = Status.CONVERGED, f"converged in {it - 1} step(s)"
             break
         dq = -w_half * np.linalg.lstsq(K * w_half[None, :], tau, rcond=EQ_RCOND)[0]
         size = float(np.max(np.abs(dq * eng.col_scale[cols])))
@@ -495,7 +497,7 @@ def equilibrium(
         sol = eng.propagate({labels[c]: float(st.Q[c] + dq[k]) for k, c in enumerate(cols)}, free=["q"], start=st,
                             tol=1e-13)  # fmt: skip
         if not sol.converged:
-            status, message = "failed", f"the equilibrium step could not be followed: {sol.message}"
+            status, message = Status.INFEASIBLE, f"the equilibrium step could not be followed: {sol.message}"
             break
         st = sol.state
     else:

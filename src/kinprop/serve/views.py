@@ -13,7 +13,8 @@ import numpy as np
 from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import output_names
 from kinprop.analysis.points import joint_hardpoints, named_points
-from kinprop.io.units import angle_indices, from_solver_units, unit_of
+from kinprop.analysis.units import unit_of
+from kinprop.engine.units import angle_indices, from_solver_units
 from kinprop.model import Model
 from kinprop.plot.scene import Scene, bounds, build_scene, scale
 from kinprop.plot.style import AXIS, FADED_ALPHA, MARKERS, POINT, segment_colour
