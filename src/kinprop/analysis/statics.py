@@ -56,9 +56,11 @@ from kinprop.engine.statics import (
 )
 from kinprop.engine.statics_rates import StaticsRates, statics_rates
 from kinprop.engine.status import Status
+from kinprop.engine.units import address_scale
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.loads import LoadCase, PointLoad
+from kinprop.propagation.sensitivity import design_sensitivity
 from kinprop.spatial import Array
 
 COMPONENTS = ("fx", "fy", "fz", "mx", "my", "mz")
@@ -524,9 +526,6 @@ def equilibrium_sensitivity(
     coordinates' response by the implicit-function theorem). ``loads`` as the equilibrium
     took them; preloads at ``reference``'s pose (the model the equilibrium started from;
     default: the equilibrium's own)."""
-    from kinprop.analysis.units import derivative_scale
-    from kinprop.propagation.sensitivity import design_sensitivity
-
     model = eq.model
     eng = engine or compile_engine(model)
     st = eng.state_of(model)
@@ -542,8 +541,8 @@ def equilibrium_sensitivity(
     laws, _ = model_laws(model, eng, st if reference is None else eng.state_of(reference))
     dtau = statics_rates(eng, st, pf, X, cols, laws).efforts  # (K, nd)
     D = -np.linalg.solve(eq.stiffness, dtau.T)
-    so = np.array([derivative_scale(model, n, eng) for n in names])
-    si = np.array([derivative_scale(model, c, eng) for c in sens.columns])
+    so = np.array([address_scale(model, n, eng) for n in names])
+    si = np.array([address_scale(model, c, eng) for c in sens.columns])
     return D * so[:, None] / si[None, :], list(names), list(sens.columns)
 
 
