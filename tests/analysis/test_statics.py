@@ -462,7 +462,7 @@ def test_double_wishbone_design_derivatives_of_loads() -> None:
              "force:TR@braking_1g", "force:spring", "effort:LCA@cornering_1g"]  # fmt: skip
     wrt = ["UBJ.s_j[0]", "LBJ.s_i[2]", "TR.length", "UCA.s_i[1]"]
     D = output_sensitivity(base, names, wrt)
-    assert set(D.attrs["methods"].values()) == {DIRECT}
+    assert set(D.attrs["method"].values()) == {DIRECT}
     for c in wrt:
         fd = _richardson_of_resolved(base, names, c, 0.1)
         scale = np.maximum(np.abs(fd), 1.0)

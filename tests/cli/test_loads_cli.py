@@ -108,13 +108,13 @@ def test_plot_draws_the_reported_forces(tmp_path: Path) -> None:
 def test_sensitivity_of_loads_names_its_method() -> None:
     """``kinprop sensitivity --of force:TR@CASE``: the exact (direct) derivative, the same number
     as ``kp.output_sensitivity``, and each row's method in the JSON."""
-    from kinprop.analysis.sensitivity import DIRECT, TANGENT_DIFFERENCE
+    from kinprop.analysis.sensitivity import CENTRAL, DIRECT
 
     p = run_kinprop("sensitivity", EXAMPLES / "double_wishbone.yaml", "--of", "force:TR@braking_1g", "--of", "camber",
                     "--wrt", "TR.length", "--json")  # fmt: skip
     assert p.returncode == 0, p.stderr
     data = json.loads(p.stdout)
-    assert data["methods"] == {"force:TR@braking_1g": DIRECT, "camber": TANGENT_DIFFERENCE}
+    assert data["method"] == {"force:TR@braking_1g": DIRECT, "camber": CENTRAL}
     model = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
     D = kp.output_sensitivity(model, ["force:TR@braking_1g"], ["TR.length"])
     assert data["matrix"][0][0] == pytest.approx(D.iloc[0, 0], rel=1e-9)

@@ -11,6 +11,7 @@ from kinprop.imports import import_model
 from kinprop.imports.chrono import chrono_hardpoints
 from kinprop.io.hardpoints import model_from_hardpoints
 from kinprop.io.loader import STYLES, ModelFile, build_model, build_or_report, describe_found, parse_document
+from kinprop.io.scales import warn_scales
 from kinprop.model import Model
 
 
@@ -29,9 +30,13 @@ def load_model(path: str | Path) -> Model:
         raise ModelError([Problem("file", f"not UTF-8 text (byte {exc.start})", file)]) from None
     data, dups = parse_document(text, file)
     if file.endswith(".json") and isinstance(data, dict) and "Template" in data and "kinprop" not in data:
-        return model_from_hardpoints(chrono_hardpoints(data, file)[0], file)
+        model = model_from_hardpoints(chrono_hardpoints(data, file)[0], file)
+        warn_scales(model, file, stacklevel=2)  # implausible sizes for the declared unit (io/scales.py)
+        return model
     if not dups:
-        return model_from_data(data, file)
+        model = model_from_data(data, file)
+        warn_scales(model, file, stacklevel=2)
+        return model
     try:
         model_from_data(data, file)
     except ModelError as exc:  # the last of each duplicate was kept: report the rest too
