@@ -382,7 +382,9 @@ class Engine:
         plan = self._plans.get(key)
         if plan is None:
             rows, cols = self.pattern
-            plan = build_plan(self.n_rows, self.n_columns, rows, cols, free, self._variable_of, weights, self.row_scale)
+            rotations = [v.start for v in self.layout.group("C")]
+            plan = build_plan(self.n_rows, self.n_columns, rows, cols, free, self._variable_of, weights, self.row_scale,
+                              np.array(rotations, dtype=np.int64))  # fmt: skip
             self._plans[key] = plan
         return plan
 
