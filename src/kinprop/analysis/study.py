@@ -164,12 +164,15 @@ def _model_payload(model: Model) -> dict[str, Any]:
         "units": dict(model.units),
         "elements": model.elements,
         "vehicle": model.vehicle,
+        "loads": model.loads,
+        "torsion_springs": model.torsion_springs,
     }
 
 
 def _model_from_payload(p: Mapping[str, Any]) -> Model:
     return Model(p["mechanism"], Design(p["design"]), as_coordinates(p["coordinates"]), p["units"],
-                 elements=p.get("elements", ()), vehicle=p.get("vehicle"))  # fmt: skip
+                 elements=p.get("elements", ()), vehicle=p.get("vehicle"), loads=p.get("loads"),
+                 torsion_springs=p.get("torsion_springs", ()))  # fmt: skip
 
 
 def _model_hash(model: Model) -> str:
