@@ -76,7 +76,7 @@ def test_plot_draws_the_reported_forces(tmp_path: Path) -> None:
     from kinprop.plot.forces import force_arrows
 
     out = tmp_path / "loads.png"
-    p = run_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--load-case", "braking_1g", "--plot", out)
+    p = invoke_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--load-case", "braking_1g", "--plot", out)
     assert p.returncode == 0, p.stderr
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     model = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
@@ -101,7 +101,7 @@ def test_plot_draws_the_reported_forces(tmp_path: Path) -> None:
     radius = np.linalg.norm(np.array(pts["contact_patch"]) - np.array(pts["wheel_centre"]))
     assert np.allclose(load.origin, contact_point(centre, axis, radius))
     assert np.allclose(load.force, case.wheels["upright"])
-    bad = run_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--plot", tmp_path / "loads.svg")
+    bad = invoke_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--plot", tmp_path / "loads.svg")
     assert bad.returncode == 2 and "--plot" in one_error_line(bad)
 
 
@@ -110,8 +110,8 @@ def test_sensitivity_of_loads_names_its_method() -> None:
     as ``kp.output_sensitivity``, and each row's method in the JSON."""
     from kinprop.analysis.sensitivity import CENTRAL, DIRECT
 
-    p = run_kinprop("sensitivity", EXAMPLES / "double_wishbone.yaml", "--of", "force:TR@braking_1g", "--of", "camber",
-                    "--wrt", "TR.length", "--json")  # fmt: skip
+    p = invoke_kinprop("sensitivity", EXAMPLES / "double_wishbone.yaml", "--of", "force:TR@braking_1g",
+                       "--of", "camber", "--wrt", "TR.length", "--json")  # fmt: skip
     assert p.returncode == 0, p.stderr
     data = json.loads(p.stdout)
     assert data["method"] == {"force:TR@braking_1g": DIRECT, "camber": CENTRAL}
