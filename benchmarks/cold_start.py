@@ -15,7 +15,9 @@ everything it needs before answering, what the batch commands do). Each run is a
 the ``kinprop`` entry point next to this interpreter (the venv's), so imports are included.
 
 Each figure is the median wall time; the CPU time (user + system) of the same runs is printed
-beside it, a figure that depends less on other work on the machine.
+beside it, a figure that depends less on other work on the machine. The package's bytecode is
+compiled first (``compileall``), as ``pip install`` does: an editable install under
+``PYTHONDONTWRITEBYTECODE`` would otherwise compile kinprop's sources in every run (~0.25 s).
 
     python benchmarks/cold_start.py [--warm-repeats N] [--no-cold]
 """
@@ -23,6 +25,8 @@ beside it, a figure that depends less on other work on the machine.
 from __future__ import annotations
 
 import argparse
+import compileall
+import importlib.util
 import os
 import resource
 import statistics
@@ -79,6 +83,14 @@ def wait_for_build(cache: str, timeout: float = 900.0) -> float:
     raise SystemExit(f"the background kernel build did not finish in {timeout:.0f} s")
 
 
+def compile_bytecode() -> None:
+    """Byte-compile the kinprop package the entry point imports (what ``pip install`` does)."""
+    spec = importlib.util.find_spec("kinprop")
+    if spec is not None and spec.submodule_search_locations:
+        for folder in spec.submodule_search_locations:
+            compileall.compile_dir(folder, quiet=1)
+
+
 def measure(
     warm_repeats: int = 5, compiled_cold: bool = True, cold: bool = True, cache_dir: str | None = None
 ) -> dict[str, float]:
@@ -86,6 +98,7 @@ def measure(
     "cold_jit": s}`` (wall; ``*_cpu``: CPU seconds of the same runs); the temporary caches are
     removed afterwards. Without ``cold``, the warm runs use ``cache_dir`` (a complete kernel
     cache) or a cache built by the warm-up first."""
+    compile_bytecode()
     res: dict[str, float] = {}
     n = max(1, warm_repeats)
     with tempfile.TemporaryDirectory(prefix="kinprop_cold_") as tmp:

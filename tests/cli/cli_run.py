@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import json
 import os
 import resource
 import subprocess
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 
 #: address-space limit of a child process: runaway memory fails fast instead of swapping
@@ -35,6 +37,62 @@ def run_kinprop(
         env=full_env,
         cwd=cwd,
     )
+
+
+#: the child of :func:`run_kinprop_cases`: each case through typer's CliRunner, under an alarm;
+#: ``warnings.catch_warnings`` per case, so each case shows its warnings as a fresh process would
+_CASES_CHILD = r"""
+import json, signal, sys, traceback, warnings
+from typer.testing import CliRunner
+from kinprop.cli import app
+
+class TimedOut(BaseException):
+    pass
+
+def alarm(signum, frame):
+    raise TimedOut
+
+signal.signal(signal.SIGALRM, alarm)
+cases, each = json.load(sys.stdin), int(sys.argv[1])
+out = []
+for argv in cases:
+    with warnings.catch_warnings():
+        signal.alarm(each)
+        try:
+            r = CliRunner().invoke(app, argv, prog_name="kinprop")
+            row = [r.exit_code, r.stdout, r.stderr]
+            if r.exception is not None and not isinstance(r.exception, SystemExit):
+                row[2] += "".join(traceback.format_exception(r.exception))
+        except TimedOut:
+            row = [None, "", f"timed out after {each} s"]
+        finally:
+            signal.alarm(0)
+    out.append(row)
+sys.stdout.write(json.dumps(out))
+"""
+
+
+def run_kinprop_cases(
+    cases: Sequence[Sequence[object]], timeout: int = 90, env: dict[str, str] | None = None
+) -> list[subprocess.CompletedProcess[str]]:
+    """Each of ``cases`` (argument lists) as ``kinprop ARGS``, all in ONE fresh process limited
+    to :data:`MEMORY_LIMIT` (with ``env`` added to its environment), each case stopped after
+    ``timeout`` seconds (exit code None): a bounded run without an interpreter, the library's
+    imports and its kernels per case."""
+    p = subprocess.run(
+        [sys.executable, "-c", _CASES_CHILD, str(timeout)],
+        input=json.dumps([[str(a) for a in args] for args in cases]),
+        capture_output=True,
+        text=True,
+        timeout=timeout * len(cases) + 120,
+        preexec_fn=_limit_memory,
+        env={k: v for k, v in os.environ.items() if k != "FORCE_COLOR"} | (env or {}),
+    )
+    assert p.returncode == 0, p.stderr[-3000:]
+    return [
+        subprocess.CompletedProcess(["kinprop", *map(str, args)], code, stdout, stderr)
+        for args, (code, stdout, stderr) in zip(cases, json.loads(p.stdout), strict=True)
+    ]
 
 
 def invoke_kinprop(*args: object) -> subprocess.CompletedProcess[str]:

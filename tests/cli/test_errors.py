@@ -63,7 +63,7 @@ def _strict(text: str) -> object:
 
 def test_json_has_no_nan_or_infinity(examples) -> None:
     """With nothing free (the fourbar has no lengths) the singular-value ratio is NaN: it is null in JSON."""
-    p = run_kinprop("propagate", examples / "fourbar.yaml", "--set", "O2.q=70", "--free", "l", "--json")
+    p = invoke_kinprop("propagate", examples / "fourbar.yaml", "--set", "O2.q=70", "--free", "l", "--json")
     assert p.returncode == 1, p.stderr
     obj = _strict(p.stdout)
     assert obj["status"] == "no_free"
@@ -73,7 +73,7 @@ def test_json_has_no_nan_or_infinity(examples) -> None:
         # past its toggles the double rocker cannot follow: failed steps (NaN values) in the JSON
         ["sweep", examples / "fourbar_double_rocker.yaml", "--drive", "O2=0:360:4", "--json"],
     ):
-        p = run_kinprop(*args)
+        p = invoke_kinprop(*args)
         assert p.returncode == 1, p.stderr
         _strict(p.stdout)
 
@@ -85,11 +85,11 @@ def test_user_text_is_printed_literally(examples, tmp_path) -> None:
     model = weird / "m[i].yaml"
     shutil.copy(examples / "fourbar.yaml", model)
     out = weird / "[green]out.yaml"
-    p = run_kinprop("assemble", model, "-o", out)
+    p = invoke_kinprop("assemble", model, "-o", out)
     assert p.returncode == 0, p.stderr
     assert f"wrote {out}" in p.stdout
     assert f"assemble {model}" in p.stdout.replace("\n", "")
-    line = one_error_line(run_kinprop("check", weird / "[b]missing :smile:.yaml"))
+    line = one_error_line(invoke_kinprop("check", weird / "[b]missing :smile:.yaml"))
     assert "[b]missing :smile:.yaml" in line and "😄" not in line
 
 

@@ -1,17 +1,20 @@
 """Optional extras fail clearly (issue 11, item 4).
 
-Every command runs in a fresh process in which the optional libraries cannot be imported (a
+The commands run in a fresh process in which the optional libraries cannot be imported (a
 ``sitecustomize`` meta-path hook makes ``import pandas`` and the others raise
-ModuleNotFoundError, exactly as on a plain ``pip install kinprop``). Each command either works
-or prints one ``error:`` line naming the extra to install, exit 2 — never a traceback.
+ModuleNotFoundError, exactly as on a plain ``pip install kinprop``), one after the other in the
+same process (:func:`cli_run.run_kinprop_cases`). Each command either works or prints one
+``error:`` line naming the extra to install, exit 2 — never a traceback.
 """
 
 from __future__ import annotations
 
 import os
+import subprocess
+from pathlib import Path
 
 import pytest
-from cli_run import one_error_line, run_kinprop
+from cli_run import one_error_line, run_kinprop, run_kinprop_cases
 
 HOOK = '''
 import sys
@@ -71,17 +74,29 @@ def test_hook_blocks_the_extras(tmp_path) -> None:
     assert p.returncode == 1 and "ModuleNotFoundError: No module named 'pandas'" in p.stderr
 
 
-@pytest.mark.parametrize(("args", "extra"), COMMANDS, ids=[" ".join(c[0][:1] + c[0][-2:]) for c in COMMANDS])
-def test_command_without_extras(args, extra, examples, tmp_path) -> None:
-    argv = [a.format(ex=examples, tmp=tmp_path) for a in args]
-    p = run_kinprop(*argv, env=_env(tmp_path, ALL_EXTRAS), timeout=120)
+@pytest.fixture(scope="module")
+def outcomes(examples, tmp_path_factory) -> list[tuple[subprocess.CompletedProcess[str], Path]]:
+    """Every command once, all in one process without the extras; command k writes under its own
+    directory."""
+    base = tmp_path_factory.mktemp("extras")
+    tmps = [base / str(k) for k in range(len(COMMANDS))]
+    argvs = []
+    for (args, _), tmp in zip(COMMANDS, tmps, strict=True):
+        tmp.mkdir()
+        argvs.append([a.format(ex=examples, tmp=tmp) for a in args])
+    return list(zip(run_kinprop_cases(argvs, timeout=120, env=_env(base, ALL_EXTRAS)), tmps, strict=True))
+
+
+@pytest.mark.parametrize("k", range(len(COMMANDS)), ids=[" ".join(c[0][:1] + c[0][-2:]) for c in COMMANDS])
+def test_command_without_extras(k, outcomes) -> None:
+    extra, (p, tmp) = COMMANDS[k][1], outcomes[k]
     if extra is None:
         assert p.returncode == 0, p.stderr[-3000:]
         assert "Traceback" not in p.stderr
     else:
         line = one_error_line(p)
         assert f"pip install 'kinprop[{extra}]'" in line, line
-        assert not (tmp_path / "s").exists()
+        assert not (tmp / "s").exists()
 
 
 def test_dask_scheduler_needs_the_dask_extra(examples, tmp_path) -> None:

@@ -14,9 +14,9 @@ import time
 from pathlib import Path
 
 import pytest
-from cli_run import run_kinprop
+from cli_run import invoke_kinprop, run_kinprop_cases
 
-from kinprop.jit import kernel_version
+from kinprop.jit import JIT, kernel_version
 
 ROOT = Path(__file__).resolve().parents[2]
 SLIDER = ["propagate", ROOT / "examples" / "slider_crank.yaml", "--set", "J12.s_j=-2.8,0.2,0.1", "--free", "q"]
@@ -49,7 +49,9 @@ def test_first_run_answers_uncompiled_and_builds_the_cache_in_the_background(tmp
     finally:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(pid, signal.SIGKILL)
-    compiled = run_kinprop(*SLIDER, "--json", env={"KINPROP_JIT": "on"})
+    if not JIT:
+        pytest.skip("this test process runs the kernels uncompiled (KINPROP_JIT)")
+    compiled = invoke_kinprop(*SLIDER, "--json")  # this process compiles (KINPROP_JIT=on)
     assert compiled.returncode == 0, compiled.stderr
     a, b = json.loads(p.stdout), json.loads(compiled.stdout)
     assert a["coordinates"].keys() == b["coordinates"].keys()
@@ -70,17 +72,26 @@ def test_a_complete_cache_is_used_without_a_note(tmp_path):
     assert not list(cache.glob("*/building.lock"))
 
 
-@pytest.mark.parametrize(
-    "args",
-    [
-        ["check", ROOT / "examples" / "mcpherson.yaml", "--json"],
-        ["propagate", ROOT / "examples" / "stewart.yaml", "--set", "L3.length=0.53", "--json"],
-        ["propagate", ROOT / "examples" / "fourbar.yaml", "--set", "O2.q=75", "--json"],
-    ],
-)
-def test_uncompiled_kernels_give_the_compiled_numbers(args):
-    off = run_kinprop(*args, env={"KINPROP_JIT": "off"})
-    on = run_kinprop(*args, env={"KINPROP_JIT": "on"})
+#: commands whose JSON must not depend on whether the kernels are compiled
+UNCOMPILED = [
+    ["check", ROOT / "examples" / "mcpherson.yaml", "--json"],
+    ["propagate", ROOT / "examples" / "stewart.yaml", "--set", "L3.length=0.53", "--json"],
+    ["propagate", ROOT / "examples" / "fourbar.yaml", "--set", "O2.q=75", "--json"],
+]
+
+
+@pytest.fixture(scope="module")
+def uncompiled() -> list[subprocess.CompletedProcess[str]]:
+    """:data:`UNCOMPILED`, all in one process that runs the kernels as Python (KINPROP_JIT=off)."""
+    return run_kinprop_cases(UNCOMPILED, timeout=300, env={"KINPROP_JIT": "off"})
+
+
+@pytest.mark.parametrize("k", range(len(UNCOMPILED)), ids=[f"{c[0]} {c[1].stem}" for c in UNCOMPILED])
+def test_uncompiled_kernels_give_the_compiled_numbers(k, uncompiled):
+    if not JIT:
+        pytest.skip("this test process runs the kernels uncompiled (KINPROP_JIT)")
+    off = uncompiled[k]
+    on = invoke_kinprop(*UNCOMPILED[k])  # this process: compiled
     assert off.returncode == on.returncode == 0, (off.stderr, on.stderr)
     a, b = json.loads(off.stdout), json.loads(on.stdout)
     _close(a, b)

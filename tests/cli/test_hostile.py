@@ -1,14 +1,18 @@
 """Hostile values and option combinations: every run ends, within memory, with a clear exit
-code (issue 11, item 2). Each command runs in a fresh process limited to 4 GB of address
-space and a timeout; before the fix a RuntimeWarning re-emission loop in cli/continuation.py
-made the first two run until the machine ran out of memory, and a 10^15-variant grid was
-allocated before anything was checked.
+code (issue 11, item 2). The commands run in a fresh process limited to 4 GB of address space,
+one after the other, each under a timeout (:func:`cli_run.run_kinprop_cases`: one interpreter
+for all of them); before the fix a RuntimeWarning re-emission loop in cli/continuation.py made
+the first two run until the machine ran out of memory, and a 10^15-variant grid was allocated
+before anything was checked.
 """
 
 from __future__ import annotations
 
+import subprocess
+from pathlib import Path
+
 import pytest
-from cli_run import one_error_line, run_kinprop
+from cli_run import one_error_line, run_kinprop_cases
 
 BIG = 10**12
 
@@ -69,13 +73,24 @@ CASES = [
 ]
 
 
-@pytest.mark.parametrize(("args", "codes", "needle"), CASES, ids=[" ".join(c[0][:4])[:60] for c in CASES])
-def test_hostile_input_is_bounded(args, codes, needle, examples, tmp_path) -> None:
-    argv = [a.format(tmp=tmp_path) for a in args]
-    argv[1] = str(examples / argv[1])
-    p = run_kinprop(*argv, timeout=90)
+@pytest.fixture(scope="module")
+def outcomes(examples, tmp_path_factory) -> list[tuple[list[str], subprocess.CompletedProcess[str], Path]]:
+    """Every case once, all in one bounded process; case k writes under its own directory."""
+    base = tmp_path_factory.mktemp("hostile")
+    argvs, tmps = [], [base / str(k) for k in range(len(CASES))]
+    for (args, _, _), tmp in zip(CASES, tmps, strict=True):
+        tmp.mkdir()
+        argv = [a.format(tmp=tmp) for a in args]
+        argv[1] = str(examples / argv[1])
+        argvs.append(argv)
+    return list(zip(argvs, run_kinprop_cases(argvs), tmps, strict=True))
+
+
+@pytest.mark.parametrize("k", range(len(CASES)), ids=[" ".join(c[0][:4])[:60] for c in CASES])
+def test_hostile_input_is_bounded(k, outcomes) -> None:
+    (_, codes, needle), (argv, p, tmp) = CASES[k], outcomes[k]
     assert p.returncode in codes, (argv, p.returncode, p.stdout[-1500:], p.stderr[-1500:])
     assert "Traceback" not in p.stderr and "MemoryError" not in p.stderr, p.stderr[-3000:]
     if needle is not None:
         assert needle in one_error_line(p)
-    assert not (tmp_path / "s").exists()  # a refused study creates nothing
+    assert not (tmp / "s").exists()  # a refused study creates nothing

@@ -15,14 +15,14 @@ import pytest
 import kinprop as kp
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cli_run import one_error_line, run_kinprop
+from cli_run import invoke_kinprop, one_error_line
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
 def test_json_and_csv_match_the_library(tmp_path: Path) -> None:
     out = tmp_path / "loads.csv"
-    p = run_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--load-case", "braking_1g", "--json", "--csv", out)
+    p = invoke_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--load-case", "braking_1g", "--json", "--csv", out)
     assert p.returncode == 0, p.stderr
     data = json.loads(p.stdout)
     model = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
@@ -38,22 +38,22 @@ def test_json_and_csv_match_the_library(tmp_path: Path) -> None:
 
 
 def test_bad_case_and_unheld_loads() -> None:
-    line = one_error_line(run_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--load-case", "nope"))
+    line = one_error_line(invoke_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--load-case", "nope"))
     assert "'nope'" in line and "bump_3g" in line
     # the offset slider-crank declares no input: a piston force moves it
-    p = run_kinprop("loads", EXAMPLES / "slider_crank_offset.yaml", "--force", "slider.origin=100,0,0")
+    p = invoke_kinprop("loads", EXAMPLES / "slider_crank_offset.yaml", "--force", "slider.origin=100,0,0")
     assert p.returncode == 2  # no named point 'origin' on the slider
-    p = run_kinprop("loads", EXAMPLES / "slider_crank_offset.yaml", "--moment", "crank=0,0,5")
+    p = invoke_kinprop("loads", EXAMPLES / "slider_crank_offset.yaml", "--moment", "crank=0,0,5")
     assert p.returncode == 1, p.stderr
     assert "unbalanced" in p.stderr
-    p = run_kinprop("loads", EXAMPLES / "slider_crank_offset.yaml", "--moment", "crank=0,0,5", "--input", "O2")
+    p = invoke_kinprop("loads", EXAMPLES / "slider_crank_offset.yaml", "--moment", "crank=0,0,5", "--input", "O2")
     assert p.returncode == 0, p.stderr
     assert "effort O2.q: -5 force m" in p.stdout
 
 
 def test_equilibrium_option() -> None:
     dw = EXAMPLES / "double_wishbone.yaml"
-    p = run_kinprop("loads", dw, "--wheel", "upright=0,0,11000", "--equilibrium", "--json")
+    p = invoke_kinprop("loads", dw, "--wheel", "upright=0,0,11000", "--equilibrium", "--json")
     assert p.returncode == 0, p.stderr
     data = json.loads(p.stdout)
     eq = data["equilibrium"]
@@ -76,7 +76,7 @@ def test_plot_draws_the_reported_forces(tmp_path: Path) -> None:
     from kinprop.plot.forces import force_arrows
 
     out = tmp_path / "loads.png"
-    p = run_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--load-case", "braking_1g", "--plot", out)
+    p = invoke_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--load-case", "braking_1g", "--plot", out)
     assert p.returncode == 0, p.stderr
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     model = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
@@ -101,7 +101,7 @@ def test_plot_draws_the_reported_forces(tmp_path: Path) -> None:
     radius = np.linalg.norm(np.array(pts["contact_patch"]) - np.array(pts["wheel_centre"]))
     assert np.allclose(load.origin, contact_point(centre, axis, radius))
     assert np.allclose(load.force, case.wheels["upright"])
-    bad = run_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--plot", tmp_path / "loads.svg")
+    bad = invoke_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--plot", tmp_path / "loads.svg")
     assert bad.returncode == 2 and "--plot" in one_error_line(bad)
 
 
@@ -110,8 +110,8 @@ def test_sensitivity_of_loads_names_its_method() -> None:
     as ``kp.output_sensitivity``, and each row's method in the JSON."""
     from kinprop.analysis.sensitivity import CENTRAL, DIRECT
 
-    p = run_kinprop("sensitivity", EXAMPLES / "double_wishbone.yaml", "--of", "force:TR@braking_1g", "--of", "camber",
-                    "--wrt", "TR.length", "--json")  # fmt: skip
+    p = invoke_kinprop("sensitivity", EXAMPLES / "double_wishbone.yaml", "--of", "force:TR@braking_1g",
+                       "--of", "camber", "--wrt", "TR.length", "--json")  # fmt: skip
     assert p.returncode == 0, p.stderr
     data = json.loads(p.stdout)
     assert data["method"] == {"force:TR@braking_1g": DIRECT, "camber": CENTRAL}

@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from cli_run import one_error_line, run_kinprop
+from cli_run import invoke_kinprop, one_error_line
 from typer.testing import CliRunner
 
 from kinprop.cli import app
@@ -18,7 +18,7 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 def test_yaml_syntax_error_names_the_file_and_line(tmp_path):
     bad = tmp_path / "syn.yaml"
     bad.write_text("kinprop: 1\nname: x\nunits: {length: m\n  angle: rad}\n")
-    line = one_error_line(run_kinprop("check", bad))
+    line = one_error_line(invoke_kinprop("check", bad))
     assert line.startswith(f"error: {bad}: line 4, column ") and "unicode string" not in line
 
 

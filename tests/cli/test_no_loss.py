@@ -3,7 +3,8 @@
 Output paths equal to the input or to each other are refused before any work; ``-o`` keeps a
 hardpoint-style model hardpoint style; an interrupted study (SIGINT, SIGKILL) resumes in a new
 process to exactly the rows of an uninterrupted run; SIGTERM is handled like Ctrl-C; a refused
-command creates nothing.
+command creates nothing. Commands run in this process (:func:`cli_run.invoke_kinprop`) unless
+the process is the point (signals, resuming in another process).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import yaml
-from cli_run import kinprop_cmd, one_error_line, run_kinprop
+from cli_run import invoke_kinprop, kinprop_cmd, one_error_line, run_kinprop
 
 from kinprop import load_model, propagate
 from kinprop.analysis.points import joint_hardpoints
@@ -46,7 +47,7 @@ def test_outputs_never_overwrite_the_input_or_each_other(model, outputs) -> None
     before = model.read_bytes()
     args = [o.format(m=model, d=model.parent / "x", name=model.name) for o in outputs]
     (model.parent / "x").mkdir()
-    p = run_kinprop("propagate", model, "--set", SET, *args)
+    p = invoke_kinprop("propagate", model, "--set", SET, *args)
     line = one_error_line(p)
     assert "refusing to overwrite" in line or "the same file as" in line
     assert model.read_bytes() == before
@@ -55,10 +56,10 @@ def test_outputs_never_overwrite_the_input_or_each_other(model, outputs) -> None
 
 def test_convert_and_plot_refuse_the_input(model) -> None:
     before = model.read_bytes()
-    assert "refusing to overwrite" in one_error_line(run_kinprop("convert", model, "--to", "frames", "-o", model))
+    assert "refusing to overwrite" in one_error_line(invoke_kinprop("convert", model, "--to", "frames", "-o", model))
     html = model.with_suffix(".html")
     html.write_text("keep")
-    line = one_error_line(run_kinprop("plot", model, "--compare", html, "-o", html))
+    line = one_error_line(invoke_kinprop("plot", model, "--compare", html, "-o", html))
     assert "refusing to overwrite" in line and html.read_text() == "keep"
     assert model.read_bytes() == before
 
@@ -67,7 +68,7 @@ def test_output_keeps_hardpoint_style(examples, tmp_path) -> None:
     """-o on a hardpoint-style model writes hardpoint style, and it reloads to the same result."""
     src = examples / "slider_crank_hardpoints.yaml"
     out = tmp_path / "after.yaml"
-    p = run_kinprop("propagate", src, "--set", "J12.s_j=0,-2.4,1.4", "-o", out)
+    p = invoke_kinprop("propagate", src, "--set", "J12.s_j=0,-2.4,1.4", "-o", out)
     assert p.returncode == 0, p.stderr
     data = yaml.safe_load(out.read_text())
     assert data["style"] == "hardpoints" and data["body_frames"] == "global"
@@ -83,22 +84,24 @@ def test_output_keeps_hardpoint_style(examples, tmp_path) -> None:
 
 def test_frame_style_output_stays_frame_style(model, tmp_path) -> None:
     out = tmp_path / "after.yaml"
-    assert run_kinprop("propagate", model, "--set", SET, "-o", out).returncode == 0
+    assert invoke_kinprop("propagate", model, "--set", SET, "-o", out).returncode == 0
     assert "style" not in yaml.safe_load(out.read_text())
 
 
 def test_refused_commands_create_nothing(examples, tmp_path) -> None:
     study = tmp_path / "study"
     args = ["study", examples / "fourbar.yaml", "--vary", "B.s_i[0]=0.39:0.41", "--samples", "8", "-o", study]
-    line = one_error_line(run_kinprop(*args, "--output-name", "bogus"))
+    line = one_error_line(invoke_kinprop(*args, "--output-name", "bogus"))
     assert "bogus" in line and not study.exists()
-    p = run_kinprop(*args, "--engine", "reference")  # the rerun is not blocked
+    p = invoke_kinprop(*args, "--engine", "reference")  # the rerun is not blocked
     assert p.returncode == 0, p.stderr
     assert len(pd.read_parquet(study)) == 8
     # a missing directory is an error, not created
-    line = one_error_line(run_kinprop("assemble", examples / "fourbar.yaml", "-o", tmp_path / "no" / "dir" / "o.yaml"))
+    line = one_error_line(
+        invoke_kinprop("assemble", examples / "fourbar.yaml", "-o", tmp_path / "no" / "dir" / "o.yaml")
+    )
     assert "does not exist" in line and not (tmp_path / "no").exists()
-    assert "is a directory" in one_error_line(run_kinprop("assemble", examples / "fourbar.yaml", "--csv", tmp_path))
+    assert "is a directory" in one_error_line(invoke_kinprop("assemble", examples / "fourbar.yaml", "--csv", tmp_path))
 
 
 def test_a_sweep_option_that_fails_at_the_end_fails_before_the_first_step(examples, tmp_path, monkeypatch) -> None:
@@ -138,16 +141,25 @@ def _parts(path: Path) -> int:
     return len(list(path.glob("part-*.parquet"))) if path.exists() else 0
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL, signal.SIGTERM], ids=["SIGINT", "SIGKILL", "SIGTERM"])
-def test_study_resumes_in_a_new_process(examples, tmp_path, sig) -> None:
-    """Interrupt a study after a few chunks, resume it in a new process: the rows equal an
-    uninterrupted run's, bit for bit (the study identity is a content hash, stable per process)."""
-    full = tmp_path / "full"
+@pytest.fixture(scope="module")
+def uninterrupted(examples, tmp_path_factory) -> pd.DataFrame:
+    """The rows of the study run to its end in a process of its own (once for the three signals)."""
+    full = tmp_path_factory.mktemp("study") / "full"
     p = run_kinprop(*_study_args(examples, full), timeout=300)
     assert p.returncode == 0, p.stderr
     want = pd.read_parquet(full).sort_values("variant", ignore_index=True)
     assert len(want) == 600 and want["converged"].all()
+    return want
 
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL], ids=["SIGINT", "SIGKILL"])
+def test_study_resumes_in_a_new_process(examples, tmp_path, sig, uninterrupted) -> None:
+    """Interrupt a study after a few chunks, resume it in a new process: the rows equal an
+    uninterrupted run's (in a third process), bit for bit (the study identity is a content hash,
+    stable per process). SIGTERM reaches the study as SIGINT does (the same KeyboardInterrupt,
+    raised by kinprop's handler: ``kinprop.cli.app.Terminated``); that it does, and exits 143,
+    is :func:`test_sigterm_leaves_a_complete_parquet_sweep`'s."""
+    want = uninterrupted
     cut = tmp_path / "cut"
     proc = subprocess.Popen(kinprop_cmd(*_study_args(examples, cut)), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     deadline = time.monotonic() + 120
@@ -157,7 +169,7 @@ def test_study_resumes_in_a_new_process(examples, tmp_path, sig) -> None:
     _, stderr = proc.communicate(timeout=60)
     done = _parts(cut)
     assert 3 <= done < CHUNKS, f"interrupted after {done} of {CHUNKS} chunks"
-    if sig != signal.SIGKILL:  # Ctrl-C and SIGTERM: the interrupt message, exit 130 / 143 (128 + signal)
+    if sig != signal.SIGKILL:  # Ctrl-C: the interrupt message, exit 130 (128 + signal)
         assert proc.returncode == 128 + sig, stderr.decode()
         assert "--resume" in stderr.decode()
     # no half-written part: every stored part reads

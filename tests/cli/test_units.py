@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-from cli_run import run_kinprop
+from cli_run import invoke_kinprop
 
 import kinprop as kp
 from kinprop.analysis.sensitivity import design_sensitivity
@@ -21,7 +21,7 @@ from kinprop.engine.units import changes_to_internal, from_solver_units, to_solv
 
 
 def _json(*args) -> dict:
-    p = run_kinprop(*args)
+    p = invoke_kinprop(*args)
     assert p.returncode == 0, p.stderr
     return json.loads(p.stdout)
 
@@ -94,7 +94,7 @@ def test_sensitivity_per_model_units(examples) -> None:
 
 def test_study_stores_model_units(examples, tmp_path) -> None:
     path, out = examples / "fourbar.yaml", tmp_path / "s"
-    p = run_kinprop("study", path, "--vary", "O2.q=60:70", "--free", "A.q", "--free", "O4.q", "--samples", "4",
+    p = invoke_kinprop("study", path, "--vary", "O2.q=60:70", "--free", "A.q", "--free", "O4.q", "--samples", "4",
                     "--engine", "reference", "-o", out)  # fmt: skip
     assert p.returncode == 0, p.stderr
     df = pd.read_parquet(out).sort_values("variant")

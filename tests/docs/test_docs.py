@@ -9,8 +9,8 @@ states the expected exit code (otherwise 0).
 
 ``kinprop`` commands run in this process (``typer``'s CliRunner in the scratch directory, the
 kernels compiled once for the whole test run; a new process per command would import the
-library and load the kernels again, ~1.5 s each); ``python`` commands and snippets run in a new
-process.
+library and load the kernels again, ~1.5 s each), and so do ``python`` snippets (each with
+fresh globals, in the scratch directory); ``python`` commands (a script) run in a new process.
 
 A block that must not run in CI is marked, on the line before its fence, with
 ``<!-- doc-test: skip REASON -->`` (e.g. ``scripts/paper.sh`` builds a virtualenv, a benchmark
@@ -24,6 +24,8 @@ above it printed (all its commands), to the doc's precision, sign included.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
 import re
 import shlex
@@ -176,6 +178,21 @@ def _numbers(lines: list[str]) -> list[str]:
     return nums
 
 
+def _run_snippet(code: str, where: str, cwd: Path) -> tuple[str | None, str]:
+    """Run a python snippet in this process, as a script (fresh globals) in ``cwd``: ``(its
+    traceback or None when it ran to its end, what it printed on stdout and stderr)``."""
+    here, out = Path.cwd(), io.StringIO()
+    os.chdir(cwd)
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(out):
+            exec(compile(code, where, "exec"), {"__name__": "__main__"})
+    except Exception:
+        return traceback.format_exc(), out.getvalue()
+    finally:
+        os.chdir(here)
+    return None, out.getvalue()
+
+
 def _check_numbers(block: Block, printed: str) -> None:
     """Every number of a marked table or paragraph is among the numbers ``printed``."""
     where = f"{block.doc.relative_to(ROOT)}:{block.line}"
@@ -191,10 +208,9 @@ def _run_block(block: Block, cwd: Path) -> str:
     """Run a code block; returns what its commands printed (a snippet: stdout and stderr)."""
     where = f"{block.doc.relative_to(ROOT)}:{block.line}"
     if block.lang == "python":
-        p = subprocess.run([sys.executable, "-c", "\n".join(block.body)], capture_output=True, text=True, cwd=cwd,
-                           timeout=TIMEOUT)  # fmt: skip
-        assert p.returncode == 0, f"{where}: python snippet failed:\n{p.stderr[-3000:]}"
-        return p.stdout + p.stderr
+        failure, printed = _run_snippet("\n".join(block.body), where, cwd)
+        assert failure is None, f"{where}: python snippet failed:\n{failure[-3000:]}"
+        return printed
     outputs = []
     for cmd in block.commands():
         argv = _argv(cmd.text)

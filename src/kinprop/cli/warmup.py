@@ -2,9 +2,9 @@
 
 The first command-line run with an empty kernel cache (kinprop.jit) runs its job uncompiled
 and starts this module in a background process, which compiles every kernel entry point
-(single solves, batches serial and threaded, sequences, poses, sensitivities) into the cache
-and then writes the cache's completion marker; later runs load the compiled kernels. A lock
-file keeps concurrent first runs from starting more than one build.
+(single solves, batches serial and threaded, sequences, poses, sensitivities, the statics'
+cut-joint rows) into the cache and then writes the cache's completion marker; later runs load
+the compiled kernels. A lock file keeps concurrent first runs from starting more than one build.
 """
 
 from __future__ import annotations
@@ -81,6 +81,7 @@ def build() -> None:
         engine = kp.compile(model)
         kp.propagate(model, change, engine=engine)
         kp.mobility(model)
+        kp.statics(kp.assemble(model, engine=engine).after, engine=engine)  # the cut rows' partials
         sol = engine.propagate(change, ("q", "s"))
         engine.kinematics(sol.state)
         engine.retract(sol.state, np.zeros(engine.n_columns))

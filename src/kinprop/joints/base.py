@@ -98,7 +98,8 @@ class JointType:
     def placement(self, q: Array) -> tuple[Array, Array]:
         """``(A''(q), d''(q))``: orientation and origin of frame j in frame i."""
         A, d = np.empty((3, 3)), np.empty(3)
-        type(self).placement_kernel(np.asarray(q, dtype=float), A, d)
+        # a writable copy: a model's read-only coordinates would compile the kernel a second time
+        type(self).placement_kernel(np.array(q, dtype=float), A, d)
         return A, d
 
     def motion(self, q: Array) -> tuple[Array, Array]:
@@ -107,7 +108,7 @@ class JointType:
         For Euler parameters these are the paper's tangent columns ``H'' = 2E(p)`` and
         ``dd''/dp = -tilde(d'') H''`` (eq. 39; PAPER-NOTES, S-T joint).
         """
-        q = np.asarray(q, dtype=float)
+        q = np.array(q, dtype=float)  # writable, as in placement()
         A, d = self.placement(q)
         dd, H = np.zeros((3, self.n_coordinates)), np.zeros((3, self.n_coordinates))
         type(self).motion_kernel(q, A, d, dd, H)

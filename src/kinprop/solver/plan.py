@@ -16,9 +16,9 @@ Chosen by structure, once per free set, from the Jacobian's sparsity pattern:
 
 from __future__ import annotations
 
+from graphlib import TopologicalSorter
 from typing import NamedTuple
 
-import networkx as nx
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
@@ -86,15 +86,22 @@ def _order_square(rows: Array, cols: Array, r_loc: Array, c_loc: Array) -> list[
     match = maximum_bipartite_matching(pat, perm_type="column")  # row -> column
     if np.any(match < 0):
         return None
-    g = nx.DiGraph()
-    g.add_nodes_from(range(n))
-    g.add_edges_from((int(c), int(match[r])) for r, c in zip(r_loc, c_loc, strict=True) if c != match[r])
-    cond = nx.condensation(g)
+    # row r, matched to column match[r], also reads column c: c's block is solved first
+    dep = c_loc != match[r_loc]
+    src, dst = c_loc[dep], match[r_loc[dep]]
+    g = sp.csr_matrix((np.ones(src.size), (src, dst)), shape=(n, n))
+    n_blocks, label = connected_components(g, directed=True, connection="strong")
+    order = TopologicalSorter({b: () for b in range(n_blocks)})
+    for a, b in np.unique(np.stack([label[src], label[dst]], axis=1), axis=0).tolist():
+        if a != b:
+            order.add(b, a)
+    by_block = np.argsort(label, kind="stable")
+    start = np.concatenate([[0], np.cumsum(np.bincount(label, minlength=n_blocks))])
     row_of = np.empty(n, dtype=np.int64)
     row_of[match] = np.arange(n)
     out = []
-    for node in nx.topological_sort(cond):
-        members = np.array(sorted(cond.nodes[node]["members"]), dtype=np.int64)
+    for b in order.static_order():
+        members = by_block[start[b] : start[b + 1]]
         out.append((rows[row_of[members]], cols[members]))
     return out
 

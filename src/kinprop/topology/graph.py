@@ -8,13 +8,20 @@ Joints marked ``cut: false`` and joints named by a coupling (their coordinate is
 the coupling row) are kept in the tree. Each cut joint closes a loop whose junction body is the
 lowest common ancestor of its two bodies: case 1 when the pair is still joined by a tree joint,
 case 2 otherwise (eqs. 44-51).
+
+The graph work is scipy's (``scipy.sparse.csgraph``: Kruskal's spanning tree, connected
+components); the tree is then oriented from the world breadth first, each body's children in
+the order the spanning tree took their joints (cheapest first).
 """
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass
 
-import networkx as nx
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
 from kinprop.errors import ModelError, Problem
 from kinprop.model.mechanism import Mechanism
@@ -86,14 +93,39 @@ def _loop_paths(
     )
 
 
+def _spanning_tree(n_nodes: int, edges: list[tuple[int, int, str, float]]) -> dict[int, list[tuple[int, str]]]:
+    """Minimum spanning forest of a multigraph given as ``(u, v, key, weight)`` edges with
+    distinct weights (so the forest is unique): each node's tree neighbours with the joining
+    edge's key, cheapest edge first. Of parallel edges only the cheapest can be a tree edge;
+    the weights are shifted to be positive (scipy reads a zero as no edge; a spanning forest
+    has the same number of edges whatever the shift)."""
+    best: dict[tuple[int, int], tuple[float, str]] = {}
+    for u, v, key, w in edges:
+        pair = (min(u, v), max(u, v))
+        if u != v and (pair not in best or w < best[pair][0]):
+            best[pair] = (w, key)
+    adjacent: dict[int, list[tuple[int, str]]] = {k: [] for k in range(n_nodes)}
+    if not best:
+        return adjacent
+    (us, vs), (ws, keys) = zip(*best, strict=True), zip(*best.values(), strict=True)
+    ws = np.array(ws)
+    shifted = ws - ws.min() + 1.0
+    tree = minimum_spanning_tree(sp.csr_matrix((shifted, (us, vs)), shape=(n_nodes, n_nodes))).tocoo()
+    weight = dict(zip(zip(us, vs, strict=True), zip(ws, keys, strict=True), strict=True))
+    taken = sorted((weight[min(a, b), max(a, b)], int(a), int(b)) for a, b in zip(tree.row, tree.col, strict=True))
+    for (_, key), a, b in taken:
+        adjacent[a].append((b, key))
+        adjacent[b].append((a, key))
+    return adjacent
+
+
 def build_topology(mech: Mechanism) -> Topology:
     """Spanning tree, cut joints and loops; raises :class:`ModelError` naming unreachable bodies."""
-    G = nx.MultiGraph()
-    G.add_node(WORLD)
-    G.add_nodes_from(mech.body_names)
-    for b in mech.bodies:
-        if b.fixed:
-            G.add_edge(WORLD, b.name, key=f"{WORLD}:{b.name}", weight=-1.0)
+    names = [WORLD, *mech.body_names]
+    node = {b: k for k, b in enumerate(names)}
+    # fixed bodies hang from the world by edges below every joint's (in file order: weights distinct)
+    edges = [(0, node[b.name], f"{WORLD}:{b.name}", -1.0 + k / 10.0 / len(names))
+             for k, b in enumerate(mech.bodies) if b.fixed]  # fmt: skip
     n = max(len(mech.joints), 1)
     keep = mech.coupled_joints
     for k, j in enumerate(mech.joints):
@@ -101,21 +133,35 @@ def build_topology(mech: Mechanism) -> Topology:
         if j.cut is True or not jt.tree:
             continue
         forced = j.cut is False or j.name in keep
-        G.add_edge(j.body_i, j.body_j, key=j.name, weight=jt.n_coordinates + k / (10.0 * n) - (1000 if forced else 0))
-    T = nx.minimum_spanning_tree(G, weight="weight", algorithm="kruskal")
-    tree_keys = {key for _, _, key in T.edges(keys=True)}
+        w = jt.n_coordinates + k / (10.0 * n) - (1000 if forced else 0)
+        edges.append((node[j.body_i], node[j.body_j], j.name, w))
+    adjacent = _spanning_tree(len(names), edges)
+
+    # orient the tree from the world, breadth first (parent before child)
+    parent: dict[str, str] = {}
+    depth: dict[str, int] = {WORLD: 0}
+    tree_edges: list[tuple[str, str, str]] = []  # (parent, child, joint)
+    queue = deque([0])
+    while queue:
+        u = queue.popleft()
+        for v, key in adjacent[u]:
+            if names[v] in depth:
+                continue
+            depth[names[v]] = depth[names[u]] + 1
+            parent[names[v]] = names[u]
+            tree_edges.append((names[u], names[v], key))
+            queue.append(v)
+    reach = set(depth)
+    tree_keys = {key for *_, key in tree_edges}
 
     problems: list[Problem] = []
-    reach = nx.node_connected_component(T, WORLD)
-    full = nx.MultiGraph()
-    full.add_nodes_from(mech.body_names)
-    full.add_edges_from((j.body_i, j.body_j) for j in mech.joints)
-    fixed = {b.name for b in mech.bodies if b.fixed}
     grounded: set[str] = set()
     if len(reach) - 1 < len(mech.body_names):  # reach holds WORLD
-        for comp in nx.connected_components(full):
-            if comp & fixed:
-                grounded |= comp
+        ij = np.array([(node[j.body_i], node[j.body_j]) for j in mech.joints], dtype=np.int64).reshape(-1, 2)
+        full = sp.csr_matrix((np.ones(len(ij)), (ij[:, 0], ij[:, 1])), shape=(len(names), len(names)))
+        _, label = connected_components(full, directed=False)
+        fixed = {label[node[b.name]] for b in mech.bodies if b.fixed}
+        grounded = {b for b in mech.body_names if label[node[b]] in fixed}
     for b in mech.body_names:
         if b in reach:
             continue
@@ -145,20 +191,14 @@ def build_topology(mech: Mechanism) -> Topology:
     if problems:
         raise ModelError(problems)
 
-    # orient the tree from the world (BFS: parent before child)
     joints = {j.name: j for j in mech.joints}
-    parent: dict[str, str] = {}
-    depth: dict[str, int] = {WORLD: 0}
     parent_joint: dict[str, str] = {}
     tree: list[TreeJoint] = []
     order: list[str] = []
-    for u, v, key in nx.edge_bfs(T, WORLD):
-        depth[v] = depth[u] + 1
+    for u, v, key in tree_edges:
         if u == WORLD:
-            parent[v] = WORLD
             continue
         j = joints[key]
-        parent[v] = u
         parent_joint[v] = key
         tree.append(TreeJoint(key, u, v, reversed=(j.body_j == u)))
         order.append(v)
