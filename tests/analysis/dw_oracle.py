@@ -67,4 +67,6 @@ def solve(hp: dict[str, np.ndarray], theta_deg: float, tie_rod: float | None = N
         "caster": math.degrees(math.atan2(-k[0], k[2])),
         "kpi": math.degrees(math.atan2(-k[1], k[2])),
         "wheel_centre_dz": float(centre[2] - hp["WC"][2]),
+        "centre_y": float(centre[1]),
+        "centre_z": float(centre[2]),
     }

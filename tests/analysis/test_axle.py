@@ -51,13 +51,30 @@ def _theta_at(travel: float) -> float:
     return brentq(lambda t: solve(HMMWV, t)["wheel_centre_dz"] - travel, -8.0, 8.0, xtol=1e-13)
 
 
-def test_roll_steer_against_two_travel_solves_of_the_independent_solver(axle):
-    """Roll steer and camber: body roll +-phi as opposite wheel travels; the oracle's toe and
-    camber at the two travels of the left wheel, differenced centrally."""
+def _theta_rolled(phi_deg: float) -> float:
+    """The left lower-arm angle at body roll ``phi``: the road plane turned by ``phi`` about the
+    x axis through the midpoint of the wheel-centre references (y = 0, z = z_ref; the left side
+    up for phi > 0), the wheel centre on the turned plane through its reference."""
+    phi = math.radians(phi_deg)
+    ref = HMMWV["WC"]
+    n = np.array([0.0, math.sin(phi), math.cos(phi)])  # the plane's normal turned about -x
+    p = np.array([ref[0], ref[1] * math.cos(phi), ref[2] - ref[1] * math.sin(phi)])
+
+    def off(t):
+        s = solve(HMMWV, t)
+        return n @ (np.array([ref[0], s["centre_y"], s["centre_z"]]) - p)
+
+    return brentq(off, -8.0, 8.0, xtol=1e-13)
+
+
+def test_roll_steer_against_the_independent_solver_on_the_rolled_road_plane(axle):
+    """Roll steer and camber: the oracle's toe and camber of the left wheel at body roll +-phi
+    (its centre on the rolled plane, closed form), differenced centrally; the right wheel's
+    roll steer is the left's mirrored."""
     phi = 1.0
-    got = roll_gradients(axle, "upright_L", "upright_R", held={"RACK.q": 0.0}, angle=phi)
-    y = HMMWV["WC"][1]
-    up, down = (solve(HMMWV, _theta_at(-y * math.sin(math.radians(s * phi)))) for s in (1, -1))
+    got = roll_gradients(axle, "upright_L", "upright_R", angle=phi)
+    up, down = (solve(HMMWV, _theta_rolled(s * phi)) for s in (1, -1))
+    assert up["wheel_centre_dz"] < 0 < down["wheel_centre_dz"]  # roll to the right: the left wheel droops
     assert got["roll_steer:upright_L"] == pytest.approx((up["toe"] - down["toe"]) / (2 * phi), abs=1e-8)
     assert got["roll_camber:upright_L"] == pytest.approx((up["camber"] - down["camber"]) / (2 * phi), abs=1e-8)
     assert got["roll_steer:upright_R"] == pytest.approx(-got["roll_steer:upright_L"], abs=1e-9)

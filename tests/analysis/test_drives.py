@@ -11,8 +11,8 @@ import pytest
 from analysis_helpers import EXAMPLES
 from dw_oracle import HMMWV, solve
 
-from kinprop import load_model
-from kinprop.analysis.drives import outputs_at, travel_sweep
+from kinprop import load_model, sweep
+from kinprop.analysis.drives import outputs_at
 from kinprop.errors import AddressError
 
 pytestmark = pytest.mark.filterwarnings("ignore::kinprop.SingularityWarning")
@@ -21,9 +21,11 @@ FILE = EXAMPLES / "double_wishbone_hardpoints.yaml"
 
 def test_uniform_travel_steps_against_the_independent_solver():
     model = load_model(FILE)
+    got = sweep(model, ["travel=-40:40:4"], outputs=["wheel_centre_dz", "camber", "toe", "caster"]).frame
     travels = np.linspace(-40.0, 40.0, 5)
-    got = travel_sweep(model, travels, ["wheel_centre_dz", "camber", "toe", "caster", "LCA.q"])
+    np.testing.assert_array_equal(got["travel"], travels)  # equal millimetre steps, the drive's own column
     np.testing.assert_allclose(got["wheel_centre_dz"], travels, atol=1e-8)
+    assert "upright_travel.q" not in got.columns  # the drive joint is the travel column
     for k, theta in enumerate(got["LCA.q"]):  # degrees (the model's angle unit)
         truth = solve(HMMWV, float(theta))
         assert truth["wheel_centre_dz"] == pytest.approx(travels[k], abs=1e-7)
@@ -51,3 +53,9 @@ def test_plain_names_pass_through_and_bad_names_are_refused():
     assert v["camber@travel=0"] == pytest.approx(0.0, abs=1e-9)
     with pytest.raises(AddressError, match="no =VALUE"):
         outputs_at(model, ["camber=2@travel=3"])
+    with pytest.raises(AddressError, match="expected travel, travel:WHEEL, roll"):
+        outputs_at(model, ["camber@bogus=3"])
+    with pytest.raises(AddressError, match="one condition range"):
+        outputs_at(model, ["slope:camber@travel=3"])
+    with pytest.raises(AddressError, match="axle of two wheels"):
+        outputs_at(model, ["camber@roll=1"])

@@ -8,10 +8,10 @@ Vehicle Dynamics*, ch. 17 and 19; Dixon, *Suspension Geometry and Computation*, 
   positive above the ground). At a symmetric state it lies on ``y = 0`` at the corners' own
   ``roll_centre_height``; in heave or roll it migrates.
 * ``roll_gradients`` — **roll steer** and **roll camber** (deg/deg): the wheels' toe and camber
-  per degree of body roll. Body roll ``phi`` (positive: rolling about +x, the left side up) is
-  applied as the opposite wheel travels it causes with the body held, ``travel = -y_C sin(phi)``
-  for a wheel centre at ``y_C``, each held by one more constraint row (:mod:`kinprop.analysis.
-  drives`), the rack held; central over ``+-angle``.
+  per degree of body roll, central over ``+-angle``. Body roll ``phi`` (positive: rolling about
+  +x, the left side up) is the ``roll`` drive of :mod:`kinprop.analysis.drives` (the road plane
+  rolled under the chassis about the x axis through the midpoint of the wheel-centre
+  references; each wheel centre kept at its height above it), the rack held.
 * ``ackermann`` — **Ackermann percentage** at a rack travel: ``100 (delta_i - delta_o) /
   (delta_i - delta_o,ack)`` with the road-wheel steer angles ``delta = -toe`` change of the
   inner and outer wheel and ``cot(delta_o,ack) - cot(delta_i) = t / L`` (track ``t`` between
@@ -63,28 +63,17 @@ def roll_centre(model: Model, left: str, right: str, travel_inputs: Mapping[str,
     return {"y": float(rc[0]), "z": float(rc[1]), "height": float(rc[1] - ground)}
 
 
-def roll_gradients(
-    model: Model, left: str, right: str, *, held: Mapping[str, float] | None = None, angle: float = 1.0
-) -> dict[str, float]:
+def roll_gradients(model: Model, left: str, right: str, *, angle: float = 1.0) -> dict[str, float]:
     """Roll steer and roll camber (deg/deg) of both wheels (module docstring): keys
-    ``roll_steer:WHEEL``, ``roll_camber:WHEEL``. ``held``: coordinates held (``{"RACK.q": 0}``,
-    model units); ``angle``: the roll half-range in degrees."""
-    ctx = OutputContext.of(model)
-    y = {w: float(ctx.body_point(w, "wheel_centre")[1]) for w in (left, right)}
-    hold = "".join(f"&{k}={v}" for k, v in (held or {}).items())
-    out: dict[str, float] = {}
-    names = []
-    for sign in (1, -1):
-        phi = math.radians(sign * angle)
-        cond = "&".join(f"metric:{w}.wheel_centre_dz={-y[w] * math.sin(phi)!r}" for w in (left, right)) + hold
-        names += [f"metric:{w}.{m}@{cond}" for w in (left, right) for m in ("toe", "camber")]
-    v = outputs_at(model, names)
-    half = len(names) // 2
-    for k, name in enumerate(names[:half]):
-        w, m = name.split("@")[0][len("metric:") :].split(".")
-        key = "roll_steer" if m == "toe" else "roll_camber"
-        out[f"{key}:{w}"] = (v[name] - v[names[half + k]]) / (2 * angle)
-    return out
+    ``roll_steer:WHEEL``, ``roll_camber:WHEEL``; ``angle``: the roll half-range in degrees.
+    The declared inputs other than the wheels' (a rack) are held."""
+    names = {
+        f"{key}:{w}": f"slope:metric:{w}.{m}@roll={-angle!r}deg..{angle!r}deg"
+        for w in (left, right)
+        for key, m in (("roll_steer", "toe"), ("roll_camber", "camber"))
+    }
+    v = outputs_at(model, list(names.values()))  # angle per angle: the same in degrees and radians
+    return {k: v[n] for k, n in names.items()}
 
 
 def ackermann(model: Model, inner: str, outer: str, rack: str, travel: float, wheelbase: float) -> float:

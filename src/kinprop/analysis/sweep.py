@@ -44,6 +44,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from kinprop.analysis.drives import ROLL, DrivenOutputs, augment, expand_driven, is_drive, is_driven, wheel_for
 from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs, output_function
 from kinprop.analysis.units import derivative_scale, unit_of
@@ -80,9 +81,13 @@ class Drive:
     angle: bool = False
     #: coordinates the joint has (for the label)
     size: int = 1
+    #: the column's name when not the coordinate's (a drive of kinprop.analysis.drives: ``travel``)
+    name: str = ""
 
     @property
     def label(self) -> str:
+        if self.name:
+            return self.name
         return f"{self.joint}.q" if self.size == 1 else f"{self.joint}.q[{self.index}]"
 
     @property
@@ -168,9 +173,15 @@ def parse_drive(model: Model, text: str, engine: Engine | None = None) -> Drive:
     is ``START:STOP:STEPS``, a list ``v1,v2,...`` or a CSV column ``@FILE.csv[:COLUMN]``, in
     the model's units. Angles in a list or a CSV column are unwrapped along the sequence (a
     jump of more than half a turn between neighbours is taken the short way)."""
+    name, eq, spec = text.strip().partition("=")
+    if eq and is_drive(name.strip()):  # wheel travel or body roll (kinprop.analysis.drives)
+        if name.strip() != ROLL:
+            wheel_for(model, name.strip())
+        deg = name.strip() == ROLL and model.units.get("angle") == "deg"
+        return Drive(name.strip(), 0, _drive_values(text, spec.strip()), deg, 1, name.strip())
     m = _DRIVE.match(text.strip())
     if not m:
-        raise AddressError(f"--drive {text!r}: expected JOINT=START:STOP:STEPS (e.g. O2=0:360:360)")
+        raise AddressError(f"--drive {text!r}: expected JOINT=START:STOP:STEPS (e.g. O2=0:360:360), travel=, roll=")
     joint = m.group("joint")
     size, angles = _coordinate_info(engine if engine is not None else compile_engine(model.mechanism), model, joint)
     index = int(m.group("index") or 0)
@@ -426,6 +437,12 @@ def sweep(
     dr = tuple(parse_drive(model, d, engine) if isinstance(d, str) else d for d in drives)
     if not dr:
         raise AddressError("a sweep needs at least one --drive")
+    by_output = [d.joint for d in dr if is_drive(d.joint)]
+    hidden: frozenset[str] = frozenset()
+    if by_output:  # wheel travel, body roll: joints of their own, solved with the mechanism
+        drv = augment(model, by_output, engine)
+        model, engine, free, hidden = drv.model, compile_engine(drv.model), drv.free(free, by_output), drv.joints
+        dr = tuple(e for d in dr for e in _drive_joints(drv, d))
     n = {d.values.size for d in dr}
     if len(n) != 1:
         raise AddressError(f"--drive: all drives move together and need the same number of values, found {sorted(n)}")
@@ -437,8 +454,11 @@ def sweep(
         raise AddressError("--set: a driven coordinate cannot also be set")
     names = list(default_outputs(model) if outputs is None else outputs)
     changes = changes_to_internal(model, changes or {}, engine) if check_units(units) else dict(changes or {})
+    driven = expand_driven(model, [n for n in names if is_driven(n)], engine)
+    names = [n for n in names if not is_driven(n)]
+    at = DrivenOutputs(model, driven, free=free, tol=tol, max_iter=max_iter, engine=engine) if driven else None
     fout, expanded = output_function(model, names, engine=engine)
-    coord_cols = coordinate_columns(model, engine)
+    coord_cols = [c for c in coordinate_columns(model, engine) if c[1] not in hidden]
     drive_cols = [d.label for d in dr]
     # unit factors, once (io.units' conversions are linear): model -> solver for the drives,
     # solver -> model for the coordinate columns
@@ -449,7 +469,9 @@ def sweep(
     keep = [i for i, e in enumerate(expanded) if e not in taken]
     expanded = [expanded[i] for i in keep]
     out_scale = np.array([derivative_scale(model, e, engine) for e in expanded])  # metric angles: the angle unit
-    columns = list(dict.fromkeys(["step", *drive_cols, *META[1:], *(c for c, *_ in coord_cols), *expanded, "message"]))
+    driven_scale = {n: derivative_scale(model, n, engine) for n in driven}
+    columns = list(dict.fromkeys(["step", *drive_cols, *META[1:], *(c for c, *_ in coord_cols), *expanded, *driven,
+                                  "message"]))  # fmt: skip
     rows: list[dict[str, Any]] = []
     good = model
     sink = (
@@ -493,6 +515,8 @@ def sweep(
                 )
             except Exception:  # one output that cannot be evaluated here: never blank the others
                 row.update(_each_output(good, names, expanded, out_scale, engine, message))
+            if at is not None:  # outputs at a drive position: from this step, one engine solve each
+                row.update({n: float(v[0]) * driven_scale[n] for n, v in at.values([good]).items()})
         rows.append(row)
         if sink is not None:
             sink.write(row)
@@ -538,7 +562,17 @@ def sweep(
     frame.attrs["column_units"] = {
         c: u for c in columns if c not in (*META, "message") and (u := unit_of(model, c, engine))
     }
-    return SweepResult(frame, dr, expanded, good)
+    return SweepResult(frame, dr, expanded + driven, good)
+
+
+def _drive_joints(drv, d: Drive) -> list[Drive]:
+    """A drive of :mod:`kinprop.analysis.drives` as the coordinates of its joints (``travel`` of
+    an axle: one per wheel, labelled ``travel:WHEEL``)."""
+    addrs = drv.addresses[d.joint]
+    if len(addrs) == 1:
+        return [Drive(addrs[0].split(".")[0], 0, d.values, d.angle, 1, d.name)]
+    wheels = [a.split(".")[0].removesuffix("_travel") for a in addrs]
+    return [Drive(a.split(".")[0], 0, d.values, d.angle, 1, f"travel:{w}") for a, w in zip(addrs, wheels, strict=True)]
 
 
 def _diagnosis(model: Model, sol: Solution, free: Sequence[str]) -> str:
