@@ -10,10 +10,12 @@ import numpy as np
 import pytest
 from analysis_helpers import EXAMPLES
 from dw_oracle import HMMWV, solve
+from scipy.optimize import brentq
 
 from kinprop import load_model, sweep
 from kinprop.analysis.drives import outputs_at
 from kinprop.errors import AddressError
+from kinprop.io.commands import sensitivities
 
 pytestmark = pytest.mark.filterwarnings("ignore::kinprop.SingularityWarning")
 FILE = EXAMPLES / "double_wishbone_hardpoints.yaml"
@@ -59,3 +61,30 @@ def test_plain_names_pass_through_and_bad_names_are_refused():
         outputs_at(model, ["slope:camber@travel=3"])
     with pytest.raises(AddressError, match="axle of two wheels"):
         outputs_at(model, ["camber@roll=1"])
+
+
+def _at_travel(hp, travel: float, name: str) -> float:
+    theta = brentq(lambda t: solve(hp, t)["wheel_centre_dz"] - travel, -8.0, 8.0, xtol=1e-14)
+    return solve(hp, theta)[name]
+
+
+def test_sensitivity_at_a_travel_and_of_bump_steer_against_the_oracle_differenced():
+    """d(camber at 30 mm) and d(bump steer over -30..30 mm) by a hardpoint, the travel held:
+    central differences of the independent solver with the hardpoint moved (design position
+    kept: the tie rod's length from its points)."""
+    model = load_model(FILE)
+    of = ["camber@travel=30", "slope:toe@travel=-30..30", "kpi"]
+    sens = sensitivities(model, ["hardpoint:UBJ[y]", "hardpoint:TR.i[z]"], of, ("q",), None)
+    assert sens.rows == of
+    assert sens.units_of == ["deg", "deg/mm", "deg"]
+    h = 1e-3
+    for col, (key, axis) in enumerate((("UBJ", 1), ("TR_I", 2))):
+        ends = []
+        for sign in (1, -1):
+            hp = {k: v.copy() for k, v in HMMWV.items()}
+            hp[key][axis] += sign * h
+            bump = (_at_travel(hp, 30.0, "toe") - _at_travel(hp, -30.0, "toe")) / 60.0
+            ends.append(np.array([_at_travel(hp, 30.0, "camber"), bump]))
+        truth = (ends[0] - ends[1]) / (2 * h)
+        np.testing.assert_allclose(sens.matrix[:2, col], truth, rtol=1e-5, atol=1e-9)
+    assert sens.matrix[2, 1] == 0.0  # the tie rod does not move the steering axis

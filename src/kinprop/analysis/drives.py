@@ -50,6 +50,7 @@ import numpy as np
 from kinprop.analysis.context import OutputContext
 from kinprop.analysis.metrics import _find_point, wheel_bodies
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
+from kinprop.analysis.sensitivity import output_sensitivity_matrix
 from kinprop.analysis.targets import ANGLES, LENGTHS, _number
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine, State
@@ -359,6 +360,8 @@ def parse_driven(model: Model, name: str, engine: Engine | None = None) -> Drive
     cfg = []
     for c in parts:
         key, _, val = c.partition("=")
+        if ".." in val:
+            raise AddressError(f"{where}: a range A..B is a slope's: slope:{out.strip()}@{c}")
         k, kind = _condition_key(model, key, where)
         cfg.append((k, _value(model, kind, val, where)))
     if len({k for k, _ in cfg}) != len(cfg):
@@ -440,6 +443,46 @@ class DrivenOutputs:
         return out
 
 
+def driven_sensitivity(
+    model: Model,
+    of: Sequence[str],
+    wrt: Sequence[str],
+    free: Sequence[str] = ("q",),
+    weights: Mapping[str, float] | None = None,
+    *,
+    tol: float = 1e-10,
+    max_iter: int = 50,
+) -> tuple[Array, list[str], list[str]]:
+    """``(D, of, design column labels)``: derivatives of outputs at drive positions (``of``,
+    module docstring) with respect to the design addresses ``wrt`` (no ``hardpoint:``; see
+    :func:`kinprop.propagation.hardpoints.global_columns`), in solver units: at each drive
+    position solved from the model's state, the implicit-function tangent with the drive held
+    (:func:`kinprop.analysis.sensitivity.output_sensitivity_matrix`); a slope's is the
+    difference of its two ends' over the span."""
+    calc = DrivenOutputs(model, of, free=free, tol=tol, max_iter=max_iter)
+    held = [k for cfg in calc.configs for k, _ in cfg if not is_drive(k)]
+    loose = [k for k in held if k.split(".")[0] not in model.mechanism.inputs]
+    if loose:
+        raise AddressError(f"sensitivity at a drive position: {loose[0]!r} is not a declared input (held there)")
+    states, ok = calc.states([model])
+    per: dict[tuple, dict[str, Array]] = {}
+    columns: list[str] = []
+    for c, cfg in enumerate(calc.configs):
+        if not ok[c][0]:
+            raise ConvergenceError(f"sensitivity at {cfg}: the drive position could not be reached")
+        at = calc.engine.model_of(states[c][0], calc.driven.model)
+        names = list(dict.fromkeys(s.output for s in calc.specs if cfg in s.configs))
+        drives = [k for k, _ in cfg if is_drive(k)]
+        D, rows, columns, _ = output_sensitivity_matrix(at, names, wrt, calc.driven.free(free, drives), weights,
+                                                        engine=calc.engine, units="solver")  # fmt: skip
+        per[cfg] = dict(zip(rows, np.asarray(D), strict=True))
+    out = np.zeros((len(calc.specs), len(columns)))
+    for r, s in enumerate(calc.specs):
+        end = per[s.configs[-1]][s.output]
+        out[r] = end if s.span is None else (end - per[s.configs[0]][s.output]) / s.span
+    return out, [s.name for s in calc.specs], columns
+
+
 def outputs_at(
     model: Model, names: Sequence[str], *, engine: Engine | None = None, tol: float = 1e-10, max_iter: int = 50
 ) -> dict[str, float]:
@@ -461,5 +504,5 @@ def outputs_at(
     return {n: out[n] for n in names}
 
 
-__all__ = ["Driven", "DrivenOutput", "DrivenOutputs", "augment", "expand_driven", "is_drive", "is_driven",
-           "outputs_at", "parse_driven", "travel_input"]  # fmt: skip
+__all__ = ["Driven", "DrivenOutput", "DrivenOutputs", "augment", "driven_sensitivity", "expand_driven", "is_drive",
+           "is_driven", "outputs_at", "parse_driven", "travel_input"]  # fmt: skip

@@ -25,14 +25,14 @@ def is_metric(name: str) -> bool:
 def _driven(name: str) -> tuple[str, str, bool] | None:
     """``(output, condition name, is a slope)`` of an output at a drive position
     (:mod:`kinprop.analysis.drives`); the condition as a quantity: a travel is a length
-    (``metric:wheel_centre_dz``), ``roll`` an angle, a coordinate itself."""
+    (``wheel_centre_dz``), ``roll`` an angle, a coordinate itself."""
     if "@" not in name:
         return None
     body, _, conds = name.partition("@")
     slope = body.startswith("slope:")
     cond = conds.split("&")[0].partition("=")[0].strip()
     if cond == "travel" or cond.startswith("travel:"):
-        cond = "metric:wheel_centre_dz"
+        cond = "wheel_centre_dz"
     elif cond != "roll" and "." not in cond and cond not in ("wheel_centre_dz", "wheel_travel"):
         cond = f"{cond}.q"
     return body[len("slope:") :] if slope else body, cond, slope

@@ -12,6 +12,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from kinprop.analysis.drives import driven_sensitivity, expand_driven, is_driven
 from kinprop.analysis.mobility import MobilityReport, row_names
 from kinprop.analysis.sensitivity import design_sensitivity, output_sensitivity_matrix
 from kinprop.analysis.sweep import Drive, parse_drive
@@ -198,6 +199,16 @@ class Sensitivities(NamedTuple):
 def _solver_matrix(
     assembled: Model, wrt: Sequence[str], of: Sequence[str] | None, free: Sequence[str], weights: Any
 ) -> tuple[np.ndarray, list[str], list[str]]:
+    if of and any(is_driven(o) for o in of):  # outputs at a drive position (analysis/drives.py)
+        names = expand_driven(assembled, of)
+        plain = [o for o in names if not is_driven(o)]
+        Dd, rows_d, columns = driven_sensitivity(assembled, [o for o in names if is_driven(o)], wrt, free, weights)
+        parts = dict(zip(rows_d, Dd, strict=True))
+        if plain:
+            Dp, rows_p, cols_p, _ = output_sensitivity_matrix(assembled, plain, wrt, free, weights, units="solver")
+            at = [cols_p.index(c) for c in columns]
+            parts |= {r: np.asarray(Dp)[k, at] for k, r in enumerate(rows_p)}
+        return np.array([parts[o] for o in names]).reshape(len(names), len(columns)), names, list(columns)
     if of:
         matrix, rows, columns, _ = output_sensitivity_matrix(assembled, of, wrt, free, weights, units="solver")
         return np.asarray(matrix), list(rows), list(columns)
