@@ -36,7 +36,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from kinprop.analysis.metrics import metric_names
-from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
+from kinprop.analysis.drives import DrivenOutputs, expand_driven, is_driven
+from kinprop.analysis.outputs import evaluate_outputs
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
@@ -226,7 +227,7 @@ def model_unit_scale(
     labels = column_labels(engine.layout)
     names = list(outputs) if outputs is not None else _default_outputs(model)
     qlabels = [lab for lab in labels if parse_address(lab).field == "q"]
-    cols = [*addresses, *qlabels, *(expand_outputs(model, names, engine) if names else [])]
+    cols = [*addresses, *qlabels, *(expand_driven(model, names, engine) if names else [])]
     scale = {c: derivative_scale(model, c, engine) for c in dict.fromkeys(cols)}
     return {k: v for k, v in scale.items() if v != 1.0}
 
@@ -249,7 +250,9 @@ def evaluate_chunk(eng: Engine, spec: StudySpec, values: Array, start: int) -> p
     point_cols = {f"{name}[{ax}]" for _, _, name in points for ax in "xyz"}
     out_names = spec.outputs if spec.outputs is not None else _default_outputs(model)
     if out_names:
-        out_names = [x for x in expand_outputs(model, out_names, eng) if x not in point_cols]
+        out_names = [x for x in expand_driven(model, out_names, eng) if x not in point_cols]
+    driven = [x for x in out_names if is_driven(x)]  # outputs at a drive position: solved below
+    out_names = [x for x in out_names if not is_driven(x)]
     rows: dict[str, Any] = {"variant": np.arange(start, start + n, dtype=np.int64)}
     for k, a in enumerate(spec.addresses):
         rows[a] = values[:, k]
@@ -294,6 +297,14 @@ def evaluate_chunk(eng: Engine, spec: StudySpec, values: Array, start: int) -> p
             vals = _outputs_for(eng, model.with_state(*states[i]), out_names)
             for key, v in vals.items():
                 outs.setdefault(key, np.full(n, np.nan))[i] = v
+    if driven:  # every converged variant at each drive position: one batched engine solve each
+        done = np.flatnonzero(conv)
+        at = DrivenOutputs(model, driven, free=spec.free, tol=spec.tol, max_iter=spec.max_iter, engine=eng)
+        vals = at.values([model.with_state(*eng.unpack(res.state[i])) for i in done]) if done.size else {}
+        for key in driven:
+            outs[key] = np.full(n, np.nan)
+            if done.size:
+                outs[key][done] = vals[key]
     rows["converged"] = conv
     rows["status"] = status.astype(str)
     rows["iterations"] = iters
@@ -424,7 +435,7 @@ def run_study(
         first.update({key: values[0, cols].reshape(3, 3) for key, cols in whole.items()})
         apply_changes(base, first, eng0)
     if outputs:  # unknown output names fail here, before any directory is created
-        expand_outputs(base, list(outputs), eng0)
+        expand_driven(base, list(outputs), eng0)
     if scale is None and model_units:
         scale = model_unit_scale(model, addrs, outputs, eng0)
     spec = StudySpec(

@@ -46,11 +46,15 @@ def unit_of(model: Model, name: str, engine: Engine | None = None) -> str:
     the angle unit; a load output (``reaction:J.fz``) -> the force unit (force x length for a moment);
     an output at a drive position (``camber@travel=50``) -> the output's; a slope
     (``slope:toe@travel=-50..50``) -> the output's per the condition's (``deg/mm``)."""
+    if name == "travel" or name.startswith("travel:"):  # a drive's column (kinprop.analysis.drives)
+        return model.units.get("length", "m")
+    if name == "roll":
+        return model.units.get("angle", "rad")
     driven = _driven(name)
     if driven is not None:
         out, cond, slope = driven
         u = unit_of(model, out, engine)
-        per = model.units.get("angle", "rad") if cond == "roll" else unit_of(model, cond, engine)
+        per = unit_of(model, cond, engine)
         return f"{u or '1'}/{per or '1'}" if slope else u
     if is_load_output(name):
         return load_output_unit(model, name)
