@@ -17,7 +17,7 @@ from typer.testing import CliRunner
 from kinprop.cli import app
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "analysis"))
-from dw_oracle import HMMWV, solve  # noqa: E402
+from dw_oracle import HMMWV, solve
 
 pytestmark = pytest.mark.filterwarnings("ignore::kinprop.SingularityWarning")
 EXAMPLES = Path(__file__).parents[2] / "examples"

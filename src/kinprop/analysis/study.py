@@ -35,8 +35,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.drives import DrivenOutputs, expand_driven, is_driven
+from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import evaluate_outputs
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
