@@ -14,6 +14,7 @@ from scipy.optimize import brentq
 
 from kinprop import load_model, sweep
 from kinprop.analysis.drives import outputs_at
+from kinprop.analysis.targets import propagate_targets
 from kinprop.errors import AddressError
 from kinprop.io.commands import sensitivities
 
@@ -88,3 +89,25 @@ def test_sensitivity_at_a_travel_and_of_bump_steer_against_the_oracle_difference
         truth = (ends[0] - ends[1]) / (2 * h)
         np.testing.assert_allclose(sens.matrix[:2, col], truth, rtol=1e-5, atol=1e-9)
     assert sens.matrix[2, 1] == 0.0  # the tie rod does not move the steering axis
+
+
+def test_the_tie_rod_height_that_zeroes_bump_steer_is_the_oracles_root():
+    """docs/analysis/suspension.md's worked example: the target solver's tie-rod inner height
+    for zero bump steer over +-50 mm (static toe kept) is the root of the independent solver's
+    bump steer in that height (scipy brentq)."""
+    model = load_model(FILE)
+    res = propagate_targets(
+        model, ["slope:toe@travel=-50..50mm=0deg/m", "toe@travel=0=0"], ["TR.s_i[2]", "TR.length"], tol=1e-10
+    )
+    assert res.status == "met"
+    z = float(res.after.design["TR.s_i"][2])
+
+    def bump(height: float) -> float:
+        hp = {k: v.copy() for k, v in HMMWV.items()}
+        hp["TR_I"][2] = height
+        return (_at_travel(hp, 50.0, "toe") - _at_travel(hp, -50.0, "toe")) / 100.0
+
+    truth = brentq(bump, 50.0, 70.0, xtol=1e-12)
+    assert z == pytest.approx(truth, abs=1e-6)
+    assert z == pytest.approx(59.7907, abs=1e-4)  # the number the guide prints
+    assert outputs_at(res.after, ["slope:toe@travel=-50..50"])["slope:toe@travel=-50..50"] == pytest.approx(0, abs=1e-9)
