@@ -14,6 +14,7 @@ import numpy as np
 
 from kinprop.analysis.drives import driven_sensitivity, expand_driven, is_driven
 from kinprop.analysis.mobility import MobilityReport, row_names
+from kinprop.analysis.points import hardpoint_table
 from kinprop.analysis.sensitivity import design_sensitivity, output_sensitivity_matrix
 from kinprop.analysis.sweep import Drive, parse_drive
 from kinprop.engine import Engine
@@ -59,6 +60,7 @@ def check_json(model: Model, rep: MobilityReport, evaluated_at: str) -> dict[str
         "model": model.source,
         "name": mech.name,
         "units": dict(model.units),
+        "hardpoints": hardpoint_table(model),
         "bodies": [
             {
                 "name": b.name,
