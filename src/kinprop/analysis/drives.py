@@ -48,7 +48,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from kinprop.analysis.context import OutputContext
-from kinprop.analysis.metrics import _find_point, wheel_bodies
+from kinprop.analysis.metrics import _find_point, is_first_order, wheel_bodies
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
 from kinprop.analysis.sensitivity import output_sensitivity_matrix
 from kinprop.analysis.targets import ANGLES, LENGTHS, _number
@@ -385,18 +385,19 @@ def expand_driven(model: Model, names: Sequence[str], engine: Engine | None = No
     return out
 
 
-class DrivenOutputs:
-    """The values of driven outputs of models of one mechanism, solved by one augmented engine
-    (compiled once): ``values(models)`` for a study's variants or a sweep's steps."""
+class _Positions:
+    """Driven outputs of one family of drives (travel and coordinates, or roll), solved by one
+    augmented engine (compiled once)."""
 
     def __init__(self, model: Model, names: Sequence[str], *, free: Sequence[str] = ("q",), tol: float = 1e-10,
                  max_iter: int = 50, engine: Engine | None = None) -> None:  # fmt: skip
         self.specs = [parse_driven(model, n, engine) for n in names]
         drives = list(dict.fromkeys(d for s in self.specs for d in s.drives))
         if ROLL in drives and any(d.startswith(TRAVEL) for d in drives):
-            raise AddressError("roll and travel conditions together are not supported: give one drive per output")
+            raise AddressError("a roll and a travel condition in one output are not supported")
         self.driven = augment(model, drives, engine)
         self.engine = compile_engine(self.driven.model)
+        self.base_engine = engine if engine is not None else compile_engine(model)
         self.free, self.tol, self.max_iter = tuple(free), tol, max_iter
         self.configs = list(dict.fromkeys(cfg for s in self.specs for cfg in s.configs))
 
@@ -420,6 +421,16 @@ class DrivenOutputs:
             ok.append(np.asarray(res.converged, bool))
         return out_states, ok
 
+    def base_model(self, state: State) -> Model:
+        """The model (without the drive joints) at an augmented ``state``: outputs are evaluated
+        on it, so that first-order metrics move the suspension by its own inputs."""
+        design, coords = self.engine.unpack(state)
+        drop = self.driven.joints
+        return self.driven.base.with_state(
+            Design({k: v for k, v in design.items() if k.split(".")[0] not in drop}),
+            {k: v for k, v in coords.items() if k not in drop},
+        )
+
     def values(self, models: Sequence[Model]) -> dict[str, Array]:
         """``{name: values}`` over ``models`` in solver units (NaN where a configuration failed)."""
         n = len(models)
@@ -429,8 +440,8 @@ class DrivenOutputs:
             names = list(dict.fromkeys(s.output for s in self.specs if cfg in s.configs))
             vals = {o: np.full(n, np.nan) for o in names}
             for i in np.flatnonzero(ok[c]):
-                m = self.engine.model_of(states[c][i], self.driven.model)
-                got = evaluate_outputs(m, names, units="solver", engine=self.engine)
+                m = self.base_model(states[c][i])
+                got = evaluate_outputs(m, names, units="solver", engine=self.base_engine)
                 for o in names:
                     vals[o][i] = got[o]
             plain[cfg] = vals
@@ -441,6 +452,24 @@ class DrivenOutputs:
             else:
                 out[s.name] = (plain[s.configs[1]][s.output] - plain[s.configs[0]][s.output]) / s.span
         return out
+
+
+class DrivenOutputs:
+    """The values of driven outputs (module docstring) of models of one mechanism:
+    ``values(models)`` for a study's variants or a sweep's steps, each drive position one
+    batched engine solve. Roll positions and travel positions are solved by two augmented
+    engines (a roll joint and a wheel's travel joint would both set the wheel's height)."""
+
+    def __init__(self, model: Model, names: Sequence[str], *, free: Sequence[str] = ("q",), tol: float = 1e-10,
+                 max_iter: int = 50, engine: Engine | None = None) -> None:  # fmt: skip
+        specs = [parse_driven(model, n, engine) for n in names]
+        groups = ([s.name for s in specs if ROLL in s.drives], [s.name for s in specs if ROLL not in s.drives])
+        opts = {"free": free, "tol": tol, "max_iter": max_iter, "engine": engine}
+        self.parts = [_Positions(model, g, **opts) for g in groups if g]  # type: ignore[arg-type]
+
+    def values(self, models: Sequence[Model]) -> dict[str, Array]:
+        """``{name: values}`` over ``models`` in solver units (NaN where a configuration failed)."""
+        return {k: v for p in self.parts for k, v in p.values(models).items()}
 
 
 def driven_sensitivity(
@@ -459,28 +488,41 @@ def driven_sensitivity(
     position solved from the model's state, the implicit-function tangent with the drive held
     (:func:`kinprop.analysis.sensitivity.output_sensitivity_matrix`); a slope's is the
     difference of its two ends' over the span."""
-    calc = DrivenOutputs(model, of, free=free, tol=tol, max_iter=max_iter)
-    held = [k for cfg in calc.configs for k, _ in cfg if not is_drive(k)]
-    loose = [k for k in held if k.split(".")[0] not in model.mechanism.inputs]
-    if loose:
-        raise AddressError(f"sensitivity at a drive position: {loose[0]!r} is not a declared input (held there)")
-    states, ok = calc.states([model])
     per: dict[tuple, dict[str, Array]] = {}
     columns: list[str] = []
-    for c, cfg in enumerate(calc.configs):
-        if not ok[c][0]:
-            raise ConvergenceError(f"sensitivity at {cfg}: the drive position could not be reached")
-        at = calc.engine.model_of(states[c][0], calc.driven.model)
-        names = list(dict.fromkeys(s.output for s in calc.specs if cfg in s.configs))
-        drives = [k for k, _ in cfg if is_drive(k)]
-        D, rows, columns, _ = output_sensitivity_matrix(at, names, wrt, calc.driven.free(free, drives), weights,
-                                                        engine=calc.engine, units="solver")  # fmt: skip
-        per[cfg] = dict(zip(rows, np.asarray(D), strict=True))
-    out = np.zeros((len(calc.specs), len(columns)))
-    for r, s in enumerate(calc.specs):
-        end = per[s.configs[-1]][s.output]
-        out[r] = end if s.span is None else (end - per[s.configs[0]][s.output]) / s.span
-    return out, [s.name for s in calc.specs], columns
+    rows: dict[str, DrivenOutput] = {}
+    s_calc: dict[str, int] = {}
+    for calc in DrivenOutputs(model, of, free=free, tol=tol, max_iter=max_iter).parts:
+        for s in calc.specs:
+            rows[s.name] = s
+            if (s.output.startswith("metric:") or "." not in s.output) and is_first_order(s.output.split(".")[-1]):
+                raise AddressError(f"--of {s.name!r}: derivatives of first-order metrics at a drive position are "
+                                   "not available (their velocity analysis would hold the drive)")  # fmt: skip
+        held = [k for cfg in calc.configs for k, _ in cfg if not is_drive(k)]
+        loose = [k for k in held if k.split(".")[0] not in model.mechanism.inputs]
+        if loose:
+            raise AddressError(f"sensitivity at a drive position: {loose[0]!r} is not a declared input (held there)")
+        states, ok = calc.states([model])
+        for c, cfg in enumerate(calc.configs):
+            if not ok[c][0]:
+                raise ConvergenceError(f"sensitivity at {cfg}: the drive position could not be reached")
+            at = calc.engine.model_of(states[c][0], calc.driven.model)
+            names = list(dict.fromkeys(s.output for s in calc.specs if cfg in s.configs))
+            drives = [k for k, _ in cfg if is_drive(k)]
+            loose_free = calc.driven.free(free, drives)
+            D, out_rows, columns, _ = output_sensitivity_matrix(at, names, wrt, loose_free, weights,
+                                                                engine=calc.engine, units="solver")  # fmt: skip
+            per[(id(calc), cfg)] = dict(zip(out_rows, np.asarray(D), strict=True))
+            for s in calc.specs:
+                if cfg in s.configs:
+                    rows[s.name] = s
+                    s_calc[s.name] = id(calc)
+    out = np.zeros((len(of), len(columns)))
+    for r, name in enumerate(of):
+        spec, key = rows[name], s_calc[name]
+        end = per[(key, spec.configs[-1])][spec.output]
+        out[r] = end if spec.span is None else (end - per[(key, spec.configs[0])][spec.output]) / spec.span
+    return out, list(of), columns
 
 
 def outputs_at(
