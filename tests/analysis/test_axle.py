@@ -14,9 +14,10 @@ from dw_oracle import HMMWV, solve
 from scipy.optimize import brentq
 
 from kinprop import propagate
-from kinprop.analysis.axle import ackermann, roll_centre, roll_gradients
+from kinprop.analysis.axle import ackermann, roll_centre, roll_gradients, steering_ratio, track_change
 from kinprop.analysis.metrics import suspension_metrics
 from kinprop.analysis.outputs import evaluate_outputs
+from kinprop.errors import AddressError
 from kinprop.io import model_from_data
 from kinprop.io.axle import mirror_corner
 
@@ -80,7 +81,7 @@ def test_roll_steer_against_the_independent_solver_on_the_rolled_road_plane(axle
     assert got["roll_steer:upright_R"] == pytest.approx(-got["roll_steer:upright_L"], abs=1e-9)
 
 
-def _trapezoid(track=1500.0, arm=150.0, beta_deg=15.0, rack_half=500.0):
+def _trapezoid(track=1500.0, arm=150.0, beta_deg=15.0, rack_half=500.0, vehicle=None):
     """A planar trapezoidal steering linkage (all points in z = 0): kingpins vertical at
     y = +-track/2, steering arms behind them turned inboard by beta, a rack along y at x = -arm cos beta."""
     beta = math.radians(beta_deg)
@@ -112,6 +113,8 @@ def _trapezoid(track=1500.0, arm=150.0, beta_deg=15.0, rack_half=500.0):
     units = {"length": "mm", "angle": "deg", "axes": "ISO8855"}
     data = {"kinprop": 1, "name": "trapezoid", "style": "hardpoints", "units": units,
             "bodies": bodies, "joints": joints, "inputs": ["RACK"]}  # fmt: skip
+    if vehicle:
+        data["vehicle"] = vehicle
     return model_from_data(data, "trapezoid.yaml"), (track, arm, beta, rack_half)
 
 
@@ -162,3 +165,33 @@ def test_shipped_axles_are_mirror_images(file, arm):
     for name, value in left.items():
         mirrored = -right[name] if name == "wheel_centre_dy" else right[name]
         assert value == pytest.approx(mirrored, abs=1e-9), name
+
+
+def test_track_change_in_heave_and_roll_against_the_independent_solver(axle):
+    """Half-track change (the contact point's lateral move, outboard positive) at a travel of
+    each wheel, and the axle's track change in heave (both wheels) and roll: the oracle's
+    contact point (470 mm below the centre in the wheel plane)."""
+    ref = HMMWV["WC"][1]
+    got = track_change(axle, "upright_L", "upright_R", travel=40.0)
+    corner = solve(HMMWV, _theta_at(40.0))
+    assert got["half_track_change:upright_L"] == pytest.approx(corner["contact_y"] - ref, abs=1e-7)
+    assert got["track_change"] == pytest.approx(2 * (corner["contact_y"] - ref), abs=1e-7)
+    rolled = track_change(axle, "upright_L", "upright_R", roll=2.0)
+    left, right = (solve(HMMWV, _theta_rolled(s * 2.0)) for s in (1, -1))  # the right wheel mirrors the left at -roll
+    assert rolled["half_track_change:upright_L"] == pytest.approx(left["contact_y"] - ref, abs=1e-7)
+    assert rolled["half_track_change:upright_R"] == pytest.approx(right["contact_y"] - ref, abs=1e-7)
+    assert rolled["track_change"] == pytest.approx(left["contact_y"] + right["contact_y"] - 2 * ref, abs=1e-7)
+
+
+def test_steering_ratio_of_a_planar_trapezoid_against_its_closed_form():
+    """360 / c over the mean road-wheel angle's slope in rack travel: the closed-form steer
+    angles (circle intersections) differenced over the same +-1 mm, at the centre and at 40 mm."""
+    c = 50.0  # mm of rack per steering-wheel turn
+    model, geo = _trapezoid(vehicle={"wheelbase": 2800.0, "cg_height": 500.0, "rack_travel_per_turn": c})
+    for at in (0.0, 40.0):
+        slopes = [(_closed_steer(at + 1, side, *geo) - _closed_steer(at - 1, side, *geo)) / 2 for side in (1.0, -1.0)]
+        truth = 360.0 / c / abs(math.degrees(sum(slopes) / 2))
+        assert steering_ratio(model, "knuckle_L", "knuckle_R", at=at) == pytest.approx(truth, rel=1e-9)
+    bare, _ = _trapezoid()
+    with pytest.raises(AddressError, match="rack_travel_per_turn"):
+        steering_ratio(bare, "knuckle_L", "knuckle_R")

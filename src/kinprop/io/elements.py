@@ -93,7 +93,7 @@ def elements_to_data(elements: tuple[Element, ...], style: str, pose: Pose | Non
 def vehicle_to_data(vehicle: Vehicle | None) -> dict[str, Any] | None:
     if vehicle is None:
         return None
-    return {k: getattr(vehicle, k) for k in VehicleSpec.model_fields}
+    return {k: getattr(vehicle, k) for k in VehicleSpec.model_fields if getattr(vehicle, k) is not None}
 
 
 __all__ = ["build_elements", "build_vehicle", "elements_to_data", "vehicle_to_data"]
