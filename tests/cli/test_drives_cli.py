@@ -50,6 +50,18 @@ def test_sweep_by_wheel_travel_in_equal_millimetre_steps(tmp_path):
     np.testing.assert_allclose(f["toe@travel=20 [deg]"], _at_travel(HMMWV, 20.0, "toe"), atol=1e-7)
 
 
+def test_first_order_metrics_in_a_travel_sweep_move_the_suspension_by_its_own_input():
+    """camber_gain along a travel sweep (the velocity analysis drives the lower arm, not the
+    held travel joint) against the oracle's camber differenced centrally in travel."""
+    r = run("sweep", CORNER, "--drive", "travel=-40:40:2", "--out", "camber_gain", "--json")
+    assert r.exit_code == 0, r.output
+    h = 1e-3
+    for row in json.loads(r.stdout)["rows"]:
+        t = row["travel"]
+        truth = (_at_travel(HMMWV, t + h, "camber") - _at_travel(HMMWV, t - h, "camber")) / (2 * h)
+        assert row["camber_gain"] == pytest.approx(truth, abs=1e-7), t
+
+
 def test_sweep_by_body_roll_moves_the_wheels_oppositely():
     r = run("sweep", AXLE, "--drive", "roll=-2:2:2", "--out", "metric:upright_L.wheel_centre_dz",
             "--out", "metric:upright_R.wheel_centre_dz", "--json")  # fmt: skip

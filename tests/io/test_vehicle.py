@@ -12,7 +12,7 @@ from kinprop.io.vehicle import anti_geometry, load_vehicle
 from kinprop.resources import examples_dir
 
 EXAMPLES = examples_dir()
-FILE = EXAMPLES / "generic_vehicle.yaml"
+FILE = EXAMPLES / "vehicles" / "generic_vehicle.yaml"
 
 
 def _copy(tmp_path, **changes):
@@ -25,8 +25,8 @@ def _copy(tmp_path, **changes):
         else:
             data[key] = value
     for axle in ("front", "rear"):
-        if axle in data and (EXAMPLES / data[axle]).is_file():
-            data[axle] = str(EXAMPLES / data[axle])
+        if axle in data and (FILE.parent / data[axle]).is_file():
+            data[axle] = str((FILE.parent / data[axle]).resolve())
     path = tmp_path / "vehicle.yaml"
     path.write_text(yaml.safe_dump(data))
     return path

@@ -96,6 +96,17 @@ class Driven:
         """The free set of a solve driving ``drives``: ``free`` plus the inputs they release."""
         return tuple(dict.fromkeys([*free, *(r for d in drives for r in self.released[d])]))
 
+    def base_of(self, engine: Engine, state: State) -> Model:
+        """The model without the drive joints at an augmented ``state`` (``engine``: the
+        augmented model's): outputs are evaluated on it, so that first-order metrics move the
+        suspension by its own inputs."""
+        design, coords = engine.unpack(state)
+        drop = self.joints
+        return self.base.with_state(
+            Design({k: v for k, v in design.items() if k.split(".")[0] not in drop}),
+            {k: v for k, v in coords.items() if k not in drop},
+        )
+
     def state(self, engine: Engine, model: Model) -> State:
         """The augmented engine's state of ``model`` (a model of the base mechanism: a study's
         variant, a sweep's step): its design and coordinates with the drive joints placed where
@@ -421,16 +432,6 @@ class _Positions:
             ok.append(np.asarray(res.converged, bool))
         return out_states, ok
 
-    def base_model(self, state: State) -> Model:
-        """The model (without the drive joints) at an augmented ``state``: outputs are evaluated
-        on it, so that first-order metrics move the suspension by its own inputs."""
-        design, coords = self.engine.unpack(state)
-        drop = self.driven.joints
-        return self.driven.base.with_state(
-            Design({k: v for k, v in design.items() if k.split(".")[0] not in drop}),
-            {k: v for k, v in coords.items() if k not in drop},
-        )
-
     def values(self, models: Sequence[Model]) -> dict[str, Array]:
         """``{name: values}`` over ``models`` in solver units (NaN where a configuration failed)."""
         n = len(models)
@@ -440,7 +441,7 @@ class _Positions:
             names = list(dict.fromkeys(s.output for s in self.specs if cfg in s.configs))
             vals = {o: np.full(n, np.nan) for o in names}
             for i in np.flatnonzero(ok[c]):
-                m = self.base_model(states[c][i])
+                m = self.driven.base_of(self.engine, states[c][i])
                 got = evaluate_outputs(m, names, units="solver", engine=self.base_engine)
                 for o in names:
                     vals[o][i] = got[o]

@@ -439,6 +439,7 @@ def sweep(
         raise AddressError("a sweep needs at least one --drive")
     by_output = [d.joint for d in dr if is_drive(d.joint)]
     hidden: frozenset[str] = frozenset()
+    user, user_engine, drv = model, engine, None
     if by_output:  # wheel travel, body roll: joints of their own, solved with the mechanism
         drv = augment(model, by_output, engine)
         model, engine, free, hidden = drv.model, compile_engine(drv.model), drv.free(free, by_output), drv.joints
@@ -454,10 +455,11 @@ def sweep(
         raise AddressError("--set: a driven coordinate cannot also be set")
     names = list(default_outputs(model) if outputs is None else outputs)
     changes = changes_to_internal(model, changes or {}, engine) if check_units(units) else dict(changes or {})
-    driven = expand_driven(model, [n for n in names if is_driven(n)], engine)
+    # outputs are evaluated on the user's model (without drive joints) at each step's state
+    driven = expand_driven(user, [n for n in names if is_driven(n)], user_engine)
     names = [n for n in names if not is_driven(n)]
-    at = DrivenOutputs(model, driven, free=free, tol=tol, max_iter=max_iter, engine=engine) if driven else None
-    fout, expanded = output_function(model, names, engine=engine)
+    at = DrivenOutputs(user, driven, free=free, tol=tol, max_iter=max_iter, engine=user_engine) if driven else None
+    fout, expanded = output_function(user, names, engine=user_engine)
     coord_cols = [c for c in coordinate_columns(model, engine) if c[1] not in hidden]
     drive_cols = [d.label for d in dr]
     # unit factors, once (io.units' conversions are linear): model -> solver for the drives,
@@ -473,7 +475,7 @@ def sweep(
     columns = list(dict.fromkeys(["step", *drive_cols, *META[1:], *(c for c, *_ in coord_cols), *expanded, *driven,
                                   "message"]))  # fmt: skip
     rows: list[dict[str, Any]] = []
-    good = model
+    good = user
     sink = (
         open_sink(output, columns, labels=header_labels(model, columns, engine))
         if isinstance(output, (str, Path))
@@ -502,7 +504,7 @@ def sweep(
             }
         )
         if converged:
-            good = engine.model_of(state, model)
+            good = engine.model_of(state, model) if drv is None else drv.base_of(engine, state)
             for col, joint, idx, deg in coord_cols:
                 if col in drive_cols:
                     continue  # the driven value exactly as given (not degrees -> radians -> degrees)
@@ -514,7 +516,7 @@ def sweep(
                     zip(expanded, (float(values[i]) * s for i, s in zip(keep, out_scale, strict=True)), strict=True)
                 )
             except Exception:  # one output that cannot be evaluated here: never blank the others
-                row.update(_each_output(good, names, expanded, out_scale, engine, message))
+                row.update(_each_output(good, names, expanded, out_scale, user_engine, message))
             if at is not None:  # outputs at a drive position: from this step, one engine solve each
                 row.update({n: float(v[0]) * driven_scale[n] for n, v in at.values([good]).items()})
         rows.append(row)
