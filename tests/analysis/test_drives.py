@@ -111,3 +111,14 @@ def test_the_tie_rod_height_that_zeroes_bump_steer_is_the_oracles_root():
     assert z == pytest.approx(truth, abs=1e-6)
     assert z == pytest.approx(59.7907, abs=1e-4)  # the number the guide prints
     assert outputs_at(res.after, ["slope:toe@travel=-50..50"])["slope:toe@travel=-50..50"] == pytest.approx(0, abs=1e-9)
+
+
+def test_an_undriven_drive_joint_follows_the_wheel():
+    """A rack position in the same call as a travel position: the travel joint, not driven
+    there, follows the wheel (the rack steers with the arms held, as alone)."""
+    axle = load_model(EXAMPLES / "hmmwv_front_axle.yaml")
+    alone = outputs_at(axle, ["metric:upright_L.toe@RACK.q=10", "metric:upright_L.wheel_centre_dz@RACK.q=10"])
+    mixed = outputs_at(axle, [*alone, "metric:upright_L.toe@travel:upright_L=30"])
+    for k, v in alone.items():
+        assert mixed[k] == pytest.approx(v, abs=1e-10)
+    assert alone["metric:upright_L.wheel_centre_dz@RACK.q=10"] != 0.0  # steering moves the wheel centre: held arms

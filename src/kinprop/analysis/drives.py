@@ -93,8 +93,11 @@ class Driven:
     joints: frozenset[str] = field(default_factory=frozenset)
 
     def free(self, free: Sequence[str], drives: Sequence[str]) -> tuple[str, ...]:
-        """The free set of a solve driving ``drives``: ``free`` plus the inputs they release."""
-        return tuple(dict.fromkeys([*free, *(r for d in drives for r in self.released[d])]))
+        """The free set of a solve driving ``drives``: ``free``, the inputs they release and the
+        drive joints not driven there (they follow the wheels)."""
+        driven = {a for d in drives for a in self.addresses[d]}
+        loose = [a for addrs in self.addresses.values() for a in addrs if a not in driven]
+        return tuple(dict.fromkeys([*free, *(r for d in drives for r in self.released[d]), *loose]))
 
     def base_of(self, engine: Engine, state: State) -> Model:
         """The model without the drive joints at an augmented ``state`` (``engine``: the
