@@ -130,6 +130,12 @@ def wheel_for(model: Model, name: str) -> list[str]:
     return [wheel]
 
 
+def has_travel(model: Model) -> bool:
+    """Whether the model can be driven by ``travel``: wheel bodies, each with its reference."""
+    wheels = wheel_bodies(model)
+    return bool(wheels) and all(_find_point(model, w, "wheel_centre_ref", on_wheel=False) for w in wheels)
+
+
 def _reference(model: Model, wheel: str) -> Array:
     found = _find_point(model, wheel, "wheel_centre_ref", on_wheel=False)
     if found is None:
@@ -550,5 +556,5 @@ def outputs_at(
     return {n: out[n] for n in names}
 
 
-__all__ = ["Driven", "DrivenOutput", "DrivenOutputs", "augment", "driven_sensitivity", "expand_driven", "is_drive",
-           "is_driven", "outputs_at", "parse_driven", "travel_input"]  # fmt: skip
+__all__ = ["Driven", "DrivenOutput", "DrivenOutputs", "augment", "driven_sensitivity", "expand_driven", "has_travel",
+           "is_drive", "is_driven", "outputs_at", "parse_driven", "travel_input"]  # fmt: skip

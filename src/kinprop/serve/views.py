@@ -10,9 +10,11 @@ from typing import Any
 
 import numpy as np
 
+from kinprop.analysis.drives import has_travel
 from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import output_names
 from kinprop.analysis.points import joint_hardpoints, named_points
+from kinprop.analysis.targets import LENGTHS
 from kinprop.io.units import angle_indices, from_solver_units, unit_of
 from kinprop.model import Model
 from kinprop.plot.scene import Scene, bounds, build_scene, scale
@@ -24,6 +26,8 @@ GROUPS = {"s_i": "s", "s_j": "s", "C_i": "C", "C_j": "C", "length": "l"}
 SLIDER_DEG, SLIDER_FRACTION = 45.0, 0.25
 #: default half-range of a curve's drive
 CURVE_DEG, CURVE_FRACTION = 10.0, 0.05
+#: the wheel-travel drive's default curve: +-50 mm, in the model's length unit
+TRAVEL_CURVE_M = 0.05
 
 
 def _xyz(v: np.ndarray) -> list[float]:
@@ -108,8 +112,20 @@ def _coordinate_components(model: Model) -> list[dict[str, Any]]:
                 }
             )
     # single coordinates first: a sweep drives a joint's whole coordinate vector (the others
-    # of a multi-coordinate joint stay as they are)
-    return sorted(out, key=lambda c: (not c["slider_ok"], c["size"] > 1))
+    # of a multi-coordinate joint stay as they are); a suspension's wheel travel before them
+    return _travel_drive(model) + sorted(out, key=lambda c: (not c["slider_ok"], c["size"] > 1))
+
+
+def _travel_drive(model: Model) -> list[dict[str, Any]]:
+    """The wheel-travel drive (``travel``, kinprop.analysis.drives) of a model whose wheels have
+    a ``wheel_centre_ref``: a sweep in equal length steps, +-50 mm by default."""
+    if not has_travel(model):
+        return []
+    length = model.units.get("length", "m")
+    half = TRAVEL_CURVE_M / LENGTHS.get(length, 1.0)
+    return [{"spec": "travel", "address": "travel", "joint": "", "type": "wheel travel", "angle": False,
+             "unit": length, "value": 0.0, "curve": [-half, half], "slider": [-half, half], "slider_ok": False,
+             "size": 1}]  # fmt: skip
 
 
 def default_curve_outputs(model: Model, drives: list[dict[str, Any]]) -> list[str]:
