@@ -29,7 +29,7 @@ from kinprop.analysis.metrics import wheel_bodies
 from kinprop.analysis.outputs import evaluate_outputs
 from kinprop.errors import ModelError, Problem
 from kinprop.io.files import load_model
-from kinprop.io.loader import build_or_report, parse_document
+from kinprop.io.loader import build_or_report, parse_document, read_text
 from kinprop.io.schema import VehicleFile
 from kinprop.model import Model
 from kinprop.model.elements import Vehicle
@@ -66,11 +66,7 @@ def load_vehicle(path: str | Path) -> VehicleModel:
     :class:`ModelError` naming the file and the key."""
     path = Path(path)
     file = str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelError([Problem("file", f"cannot read: {exc.strerror or exc}", file)]) from None
-    data, dups = parse_document(text, file)
+    data, dups = parse_document(read_text(path), file)
     if dups:
         raise ModelError(dups)
     if not isinstance(data, dict):
