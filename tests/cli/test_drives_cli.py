@@ -74,6 +74,23 @@ def test_sweep_by_body_roll_moves_the_wheels_oppositely():
     assert left[0] == pytest.approx(right[2], abs=1e-9) and left[1] == pytest.approx(0.0, abs=1e-9)
 
 
+def test_a_travel_and_the_rack_drive_together():
+    """One wheel's travel with the rack: toe at each step against the rack alone at that
+    travel (outputs at a drive position, the same engine)."""
+    r = run("sweep", AXLE, "--drive", "travel:upright_L=-10:10:2", "--drive", "RACK=-5:5:2",
+            "--out", "metric:upright_L.toe", "--json")  # fmt: skip
+    assert r.exit_code == 0, r.output
+    rows = json.loads(r.stdout)["rows"]
+    assert [(x["travel:upright_L"], x["RACK.q"]) for x in rows] == [(-10.0, -5.0), (0.0, 0.0), (10.0, 5.0)]
+    from kinprop import load_model
+    from kinprop.analysis.drives import outputs_at
+
+    axle = load_model(AXLE)
+    for x in rows:
+        name = f"metric:upright_L.toe@travel:upright_L={x['travel:upright_L']}&RACK.q={x['RACK.q']}"
+        assert x["metric:upright_L.toe"] == pytest.approx(outputs_at(axle, [name])[name], abs=1e-9)
+
+
 def test_study_outputs_at_a_travel_and_bump_steer_against_the_oracle(tmp_path):
     out = tmp_path / "study"
     r = run("study", CORNER, "--vary", "hardpoint:TR.i[z]=44:64", "--method", "grid", "--samples", "3",
@@ -93,6 +110,8 @@ def test_bad_drives_and_driven_outputs_exit_2():
     for args in (
         ("sweep", CORNER, "--drive", "roll=-1:1:2"),
         ("sweep", CORNER, "--drive", "travel:nowheel=-1:1:2"),
+        ("sweep", CORNER, "--drive", "travel=-1:1:2", "--drive", "LCA=-1:1:2"),
+        ("sweep", CORNER, "--drive", "travel=a:1:2"),
         ("sweep", CORNER, "--drive", "LCA=-1:1:2", "--out", "toe@travel=1..2"),
         ("sensitivity", CORNER, "--wrt", "hardpoint:UBJ[y]", "--of", "toe@bogus=3"),
         ("study", CORNER, "--vary", "TR.s_i[2]=50:60", "--samples", "2", "--out", "slope:toe@travel=5", "-o", "x"),

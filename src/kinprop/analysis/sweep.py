@@ -442,8 +442,12 @@ def sweep(
     user, user_engine, drv = model, engine, None
     if by_output:  # wheel travel, body roll: joints of their own, solved with the mechanism
         drv = augment(model, by_output, engine)
+        released = {r.split(".")[0] for d in by_output for r in drv.released[d]}
+        both = [d.joint for d in dr if d.joint in released]
+        if both:
+            raise AddressError(f"--drive: {both[0]} moves the wheel that {by_output[0]} drives; drive one of them")
         model, engine, free, hidden = drv.model, compile_engine(drv.model), drv.free(free, by_output), drv.joints
-        dr = tuple(e for d in dr for e in _drive_joints(drv, d))
+        dr = tuple(e for d in dr for e in (_drive_joints(drv, d) if is_drive(d.joint) else [d]))
     n = {d.values.size for d in dr}
     if len(n) != 1:
         raise AddressError(f"--drive: all drives move together and need the same number of values, found {sorted(n)}")
