@@ -15,6 +15,7 @@ from scipy.optimize import brentq
 
 from kinprop import propagate
 from kinprop.analysis.axle import ackermann, roll_centre, roll_gradients, steering_ratio, track_change
+from kinprop.analysis.drives import outputs_at
 from kinprop.analysis.metrics import suspension_metrics
 from kinprop.analysis.outputs import evaluate_outputs
 from kinprop.errors import AddressError
@@ -195,3 +196,20 @@ def test_steering_ratio_of_a_planar_trapezoid_against_its_closed_form():
     bare, _ = _trapezoid()
     with pytest.raises(AddressError, match="rack_travel_per_turn"):
         steering_ratio(bare, "knuckle_L", "knuckle_R")
+
+
+def test_road_wheel_steer_as_the_drive_against_the_trapezoids_closed_form():
+    """The inner wheel's steer angle driven in equal degrees (steer:knuckle_L, a revolute about
+    the vertical and one dot-1 row): the outer wheel's angle and the rack travel against the
+    closed form (the rack travel that turns the inner knuckle so far, by brentq)."""
+    model, geo = _trapezoid()
+    for delta in (5.0, 15.0):
+        s = brentq(lambda x, d=delta: _closed_steer(x, 1.0, *geo) - math.radians(d), -40.0, 0.0, xtol=1e-13)
+        names = [f"metric:knuckle_L.toe@steer:knuckle_L={delta}", f"metric:knuckle_R.toe@steer:knuckle_L={delta}",
+                 f"RACK.q@steer:knuckle_L={delta}"]  # fmt: skip
+        v = outputs_at(model, names)
+        assert v[names[0]] == pytest.approx(-delta, abs=1e-9)  # the left wheel's steer is -toe
+        outer = (math.degrees(_closed_steer(s, -1.0, *geo)) + 180.0) % 360.0 - 180.0
+        assert v[names[1]] == pytest.approx(outer, abs=1e-8)  # the right wheel's steer is +toe
+        assert 0 < outer < delta  # the outer wheel turns less (a trapezoid's Ackermann)
+        assert v[names[2]] == pytest.approx(s, abs=1e-7)

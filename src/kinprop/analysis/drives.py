@@ -19,6 +19,11 @@ the mechanism by one constraint row each, and solved by the engine like any othe
   plane rolls under the fixed chassis: the wheel centres keep their heights above it (travel
   ``-(y - y_0) tan(phi)`` of a wheel centre at ``y``).
 
+* ``steer:WHEEL`` — the **road-wheel steer angle** (angle, positive to the left): a body on a
+  revolute joint ``WHEEL_steer`` about the vertical through the wheel centre, and one dot-1 row
+  (eq. 1) holding the spin axis across that body's x axis; it releases the input that steers
+  the wheel (the first declared input, not its travel input, that turns it about z: a rack).
+
 Driving one releases the declared input that moved the wheel (the first input in ``inputs:``
 whose motion moves the wheel centre; a rack declared after the arms stays held). Drive joints
 are added only when a drive or a condition names them; every other joint, body, address and
@@ -61,7 +66,9 @@ from kinprop.model.design import as_coordinates, parse_address
 from kinprop.model.mechanism import Body, Joint, Mechanism
 from kinprop.spatial import Array
 
-TRAVEL, ROLL = "travel", "roll"
+TRAVEL, ROLL, STEER = "travel", "roll", "steer"
+#: joint frame whose z'' is the body's x axis (a steer body's forward direction)
+_ALONG_X = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 #: joint frame of a revolute turning about -x (z'' = -x): positive roll lifts the left (+y) side
 _ABOUT_MINUS_X = np.array([[0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
 
@@ -72,8 +79,9 @@ def is_driven(name: str) -> bool:
 
 
 def is_drive(name: str) -> bool:
-    """Whether ``name`` is a drive of this module (``travel``, ``travel:WHEEL``, ``roll``)."""
-    return name in (TRAVEL, ROLL) or name.startswith(f"{TRAVEL}:")
+    """Whether ``name`` is a drive of this module (``travel``, ``travel:WHEEL``, ``roll``,
+    ``steer:WHEEL``)."""
+    return name in (TRAVEL, ROLL) or name.startswith((f"{TRAVEL}:", f"{STEER}:"))
 
 
 # --- the drive joints -----------------------------------------------------------------------
@@ -124,7 +132,7 @@ def wheel_for(model: Model, name: str) -> list[str]:
         if not wheels:
             raise AddressError("'travel' needs a wheel body (named points wheel_centre and spin_axis)")
         return wheels
-    wheel = name[len(TRAVEL) + 1 :]
+    wheel = name.partition(":")[2]
     if wheel not in wheels:
         raise AddressError(f"{name!r}: no wheel body {wheel!r}; wheels: {', '.join(wheels) or 'none'}")
     return [wheel]
@@ -171,10 +179,31 @@ def travel_input(model: Model, wheel: str, engine: Engine | None = None) -> str:
     )
 
 
+def steer_input(model: Model, wheel: str, engine: Engine | None = None) -> str:
+    """The declared input that steers ``wheel`` (the first in ``inputs:``, other than its travel
+    input, whose motion turns the wheel about the vertical): the one a steer drive releases."""
+    eng = engine if engine is not None else compile_engine(model)
+    st = eng.state_of(model)
+    present = drive_joints(model)
+    inputs = [a if "." in a else f"{a}.q" for a in model.mechanism.inputs if a.split(".")[0] not in present]
+    body = model.mechanism.body_names.index(wheel)
+    try:
+        bump: str | None = travel_input(model, wheel, eng)
+    except AddressError:  # a steering linkage without wheel travel
+        bump = None
+    for a in inputs:
+        if a == bump:
+            continue
+        ms = eng.motion(st, {b: float(b == a) for b in inputs})
+        if ms.ok and abs(ms.V[body, 5]) > 1e-9:
+            return a
+    raise AddressError(f"road-wheel steer of {wheel!r}: no declared input steers it (a rack in 'inputs:')")
+
+
 def drive_joints(model: Model) -> set[str]:
     """The drive joints a model already has (an augmented model's: ``WHEEL_travel``, ``roll``)."""
     names = set(model.mechanism.joint_names)
-    out = {j for j in names if j.endswith("_travel") and f"{j}_hold" in names}
+    out = {j for j in names if j.endswith(("_travel", "_steer")) and f"{j}_hold" in names}
     return out | ({ROLL} if ROLL in names and "roll_plane" in model.mechanism.body_names else set())
 
 
@@ -235,6 +264,24 @@ def augment(model: Model, drives: Sequence[str], engine: Engine | None = None) -
             released[d] = tuple(travel_input(model, w, eng) for w in wheels)
             angle[d] = True
             continue
+        if d.startswith(f"{STEER}:"):
+            (w,) = wheel_for(model, d)
+            if f"{w}_steer" in present:
+                addresses[d], released[d], angle[d] = (f"{w}_steer.q",), (steer_input(model, w, eng),), True
+                continue
+            at = ctx.body_point(w, "wheel_centre")
+            axis = ctx.body_point(w, "spin_axis") - at
+            body = joint = fresh(f"{w}_steer")
+            bodies.append(Body(body))
+            joints.append(Joint(joint, "revolute", ground.name, body, frozenset({"s_i", "C_i", "s_j"}), False))
+            design |= {f"{joint}.s_i": Ag.T @ (at - rg), f"{joint}.C_i": Ag.T, f"{joint}.s_j": at}
+            hold_name = fresh(f"{w}_steer_hold")  # the spin axis across the steer body's x axis (eq. 1)
+            joints.append(Joint(hold_name, "dot-1", body, w, frozenset({"C_i", "C_j"}), cut=True))
+            design |= {f"{hold_name}.C_i": _ALONG_X, f"{hold_name}.C_j": _frame_along(ctx.kin.A[w].T @ axis)}
+            inputs.append(joint)
+            added |= {joint, hold_name}
+            addresses[d], released[d], angle[d] = (f"{joint}.q",), (steer_input(model, w, eng),), True
+            continue
         for w in wheel_for(model, d):
             key = f"{TRAVEL}:{w}"
             if key in addresses:
@@ -267,6 +314,21 @@ def augment(model: Model, drives: Sequence[str], engine: Engine | None = None) -
     return Driven(_with_drive_state(drv, model), model, addresses, released, angle, frozenset(added))
 
 
+def _frame_along(z: Array) -> Array:
+    """A rotation whose third column (z'') is along ``z``."""
+    z = np.asarray(z, float) / np.linalg.norm(z)
+    x = np.cross([0.0, 0.0, 1.0] if abs(z[2]) < 0.9 else [1.0, 0.0, 0.0], z)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(z, x), z])
+
+
+def steer_angle(axis: Array) -> float:
+    """The road-wheel steer angle (rad, positive to the left, ISO 8855) of a wheel whose
+    outboard spin axis is ``axis``: the angle of its heading in the ground plane."""
+    ax, ay = float(axis[0]), float(axis[1])
+    return math.atan2(-ax, ay) if ay >= 0 else math.atan2(ax, -ay)
+
+
 def _with_drive_state(drv: Driven, model: Model) -> Model:
     """The augmented model at ``model``'s design and coordinates: the drive coordinates where
     the wheels are (a travel: the wheel centre's height over its reference; roll: 0 when the
@@ -280,6 +342,10 @@ def _with_drive_state(drv: Driven, model: Model) -> Model:
                 for w in wheel_bodies(model)
             )
             coords[addrs[0].split(".")[0]] = np.array([-math.atan2(dz_l - dz_r, y_l - y_r)])
+        elif d.startswith(f"{STEER}:"):
+            w = d.partition(":")[2]
+            axis = ctx.body_point(w, "spin_axis") - ctx.body_point(w, "wheel_centre")
+            coords[addrs[0].split(".")[0]] = np.array([steer_angle(axis)])
         elif d != TRAVEL:
             w = d[len(TRAVEL) + 1 :]
             dz = ctx.body_point(w, "wheel_centre")[2] - _reference(model, w)[2]
@@ -322,13 +388,16 @@ def _condition_key(model: Model, name: str, where: str) -> tuple[str, str]:
         return name, "length"
     if name == ROLL:
         return name, "angle"
+    if name.startswith(f"{STEER}:"):
+        wheel_for(model, name)
+        return name, "angle"
     try:
         addr = parse_address(name if "." in name else f"{name}.q")
     except Exception:
         addr = None
     if addr is None or addr.field != "q" or addr.joint not in model.mechanism.joint_names:
-        raise AddressError(f"{where}: condition {name!r}: expected travel, travel:WHEEL, roll or a joint "
-                           "coordinate JOINT.q[k]")  # fmt: skip
+        raise AddressError(f"{where}: condition {name!r}: expected travel, travel:WHEEL, roll, steer:WHEEL or a "
+                           "joint coordinate JOINT.q[k]")  # fmt: skip
     angles = model.mechanism.joint(addr.joint).jtype.angle_indices
     return str(addr), "angle" if (addr.index or 0) in angles else "length"
 

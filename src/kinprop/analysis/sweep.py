@@ -44,7 +44,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from kinprop.analysis.drives import ROLL, DrivenOutputs, augment, expand_driven, is_drive, is_driven, wheel_for
+from kinprop.analysis.drives import ROLL, STEER, DrivenOutputs, augment, expand_driven, is_drive, is_driven, wheel_for
 from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs, output_function
 from kinprop.analysis.units import derivative_scale, unit_of
@@ -177,11 +177,13 @@ def parse_drive(model: Model, text: str, engine: Engine | None = None) -> Drive:
     if eq and is_drive(name.strip()):  # wheel travel or body roll (kinprop.analysis.drives)
         if name.strip() != ROLL:
             wheel_for(model, name.strip())
-        deg = name.strip() == ROLL and model.units.get("angle") == "deg"
+        deg = name.strip().startswith((ROLL, STEER)) and model.units.get("angle") == "deg"
         return Drive(name.strip(), 0, _drive_values(text, spec.strip()), deg, 1, name.strip())
     m = _DRIVE.match(text.strip())
     if not m:
-        raise AddressError(f"--drive {text!r}: expected JOINT=START:STOP:STEPS (e.g. O2=0:360:360), travel=, roll=")
+        raise AddressError(
+            f"--drive {text!r}: expected JOINT=START:STOP:STEPS (e.g. O2=0:360:360), travel=, roll=, steer:WHEEL="
+        )
     joint = m.group("joint")
     size, angles = _coordinate_info(engine if engine is not None else compile_engine(model.mechanism), model, joint)
     index = int(m.group("index") or 0)

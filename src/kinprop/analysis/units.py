@@ -25,7 +25,7 @@ def is_metric(name: str) -> bool:
 def _driven(name: str) -> tuple[str, str, bool] | None:
     """``(output, condition name, is a slope)`` of an output at a drive position
     (:mod:`kinprop.analysis.drives`); the condition as a quantity: a travel is a length
-    (``wheel_centre_dz``), ``roll`` an angle, a coordinate itself."""
+    (``wheel_centre_dz``), ``roll`` and ``steer:WHEEL`` angles (``roll``), a coordinate itself."""
     if "@" not in name:
         return None
     body, _, conds = name.partition("@")
@@ -33,6 +33,8 @@ def _driven(name: str) -> tuple[str, str, bool] | None:
     cond = conds.split("&")[0].partition("=")[0].strip()
     if cond == "travel" or cond.startswith("travel:"):
         cond = "wheel_centre_dz"
+    elif cond.startswith("steer:"):
+        cond = "roll"
     elif cond != "roll" and "." not in cond and cond not in ("wheel_centre_dz", "wheel_travel"):
         cond = f"{cond}.q"
     return body[len("slope:") :] if slope else body, cond, slope
@@ -48,7 +50,7 @@ def unit_of(model: Model, name: str, engine: Engine | None = None) -> str:
     (``slope:toe@travel=-50..50``) -> the output's per the condition's (``deg/mm``)."""
     if name == "travel" or name.startswith("travel:"):  # a drive's column (kinprop.analysis.drives)
         return model.units.get("length", "m")
-    if name == "roll":
+    if name == "roll" or name.startswith("steer:"):
         return model.units.get("angle", "rad")
     driven = _driven(name)
     if driven is not None:
