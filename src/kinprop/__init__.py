@@ -46,7 +46,6 @@ _EXPORTS = {
     "assemble": "kinprop.propagation",
     "propagate": "kinprop.propagation",
     "propagate_continuation": "kinprop.propagation",
-    "SolveResult": "kinprop.solver",
 }
 
 if _TYPE_CHECKING:
@@ -59,7 +58,6 @@ if _TYPE_CHECKING:
     from kinprop.io import dump_model, load_model
     from kinprop.model import Body, Design, Joint, LoadCase, Mechanism, Model, PointLoad
     from kinprop.propagation import Propagation, assemble, propagate, propagate_continuation
-    from kinprop.solver import SolveResult
 
 
 def __getattr__(name: str) -> _Any:
@@ -95,7 +93,6 @@ __all__ = [
     "Propagation",
     "SingularityWarning",
     "Solution",
-    "SolveResult",
     "State",
     "Statics",
     "Status",

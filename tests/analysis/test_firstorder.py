@@ -206,7 +206,7 @@ def test_hmmwv_gains_match_central_differences() -> None:
 
 def test_units_and_names() -> None:
     base = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
-    from kinprop.io.units import unit_of
+    from kinprop.analysis.units import unit_of
 
     assert unit_of(base, "camber_gain") == "deg/mm"
     assert unit_of(base, "metric:upright.anti_dive") == "%"
@@ -238,7 +238,7 @@ def test_first_order_targets_are_met() -> None:
     base = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
     res = propagate_targets(base, ["camber_gain=-0.025", "anti_dive=60", "motion_ratio:spring=0.46"],
                             ["hardpoint:UCA", "hardpoint:LCA"])  # fmt: skip
-    assert res.status == "met"
+    assert res.targets_status == "met"
     got = evaluate_outputs(res.after, ["camber_gain", "anti_dive", "motion_ratio:spring"])
     assert got["camber_gain"] == pytest.approx(-0.025, rel=1e-8)
     assert got["anti_dive"] == pytest.approx(60.0, rel=1e-8)

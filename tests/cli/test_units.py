@@ -16,7 +16,8 @@ from cli_run import run_kinprop
 import kinprop as kp
 from kinprop.analysis.sensitivity import design_sensitivity
 from kinprop.analysis.tolerance import tolerance_analysis
-from kinprop.io.units import changes_to_internal, derivative_scale, from_solver_units, to_solver_units, unit_of
+from kinprop.analysis.units import derivative_scale, unit_of
+from kinprop.engine.units import changes_to_internal, from_solver_units, to_solver_units
 
 
 def _json(*args) -> dict:

@@ -18,9 +18,10 @@ import yaml
 from typer.testing import CliRunner
 
 import kinprop as kp
+from kinprop.analysis.units import derivative_scale, unit_of
 from kinprop.cli import app
+from kinprop.engine.units import from_solver_units, to_solver_units
 from kinprop.io import model_from_data
-from kinprop.io.units import derivative_scale, from_solver_units, to_solver_units, unit_of
 from kinprop.io.writer import dump_model
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"

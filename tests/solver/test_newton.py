@@ -109,14 +109,14 @@ def test_no_free_columns():
     for free, changes in (((), {}), (("T1.q",), {"T1.q": [0.1]})):
         prop = propagate(model, changes, free=free)
         res = prop.result
-        assert (res.status, res.iterations, res.n_free, res.rank) == ("no_free", 0, 0, 0)
+        assert (res.status, res.iterations, res.free.size, res.rank) == ("no_free", 0, 0, 0)
         assert not res.converged
         assert "no free variables" in res.message
         assert prop.after.coordinates["T1"][0] == (0.1 if changes else 0.3)
     # already assembled and nothing free: converged without a step
     rm = assembled(4)
     res = propagate(rm.model, {}, free=()).result
-    assert (res.status, res.iterations, res.n_free) == ("converged", 0, 0)
+    assert (res.status, res.iterations, res.free.size) == ("converged", 0, 0)
 
 
 # --- weighted minimum norm -----------------------------------------------------------------------

@@ -33,7 +33,7 @@ from kinprop.analysis.context import OutputContext, WheelSpec
 from kinprop.analysis.drives import outputs_at
 from kinprop.analysis.metrics import _radius, contact_point
 from kinprop.analysis.outputs import evaluate_outputs
-from kinprop.analysis.targets import LENGTHS
+from kinprop.engine.units import METRES_PER
 from kinprop.errors import AddressError
 from kinprop.model import Model
 
@@ -108,7 +108,7 @@ def steering_ratio(
     of each wheel, positive to the left), its slope central over ``at +- step`` of rack (default
     1 mm in the model's length unit)."""
     if step is None:
-        step = LENGTHS["mm"] / LENGTHS[model.units.get("length", "m")]
+        step = METRES_PER["mm"] / METRES_PER[model.units.get("length", "m")]
     c = model.vehicle.rack_travel_per_turn if model.vehicle is not None else None
     if c is None:
         raise AddressError("steering_ratio needs 'vehicle: rack_travel_per_turn' (rack travel per steering-wheel turn)")

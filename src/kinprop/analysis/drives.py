@@ -56,10 +56,11 @@ from kinprop.analysis.context import OutputContext
 from kinprop.analysis.metrics import _find_point, is_first_order, wheel_bodies
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
 from kinprop.analysis.sensitivity import output_sensitivity_matrix
-from kinprop.analysis.targets import ANGLES, LENGTHS, _number
+from kinprop.analysis.targets import _number
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine, State
 from kinprop.engine import compile as compile_engine
+from kinprop.engine.units import METRES_PER, RADIANS_PER
 from kinprop.errors import AddressError, ConvergenceError
 from kinprop.model import Design, Model
 from kinprop.model.design import as_coordinates, parse_address
@@ -406,16 +407,15 @@ def _value(model: Model, kind: str, text: str, where: str) -> float:
     """A condition value (model units unless a unit is written) in solver units."""
     v, unit = _number(text, where)
     if kind == "angle":
-        if unit and unit not in ANGLES:
+        if unit and unit not in RADIANS_PER:
             raise AddressError(f"{where}: unit {unit!r} is not an angle unit (deg, rad)")
-        deg = unit == "deg" if unit else model.units.get("angle") == "deg"
-        return math.radians(v) if deg else v
+        return v * RADIANS_PER[unit or model.units.get("angle", "rad")]
     length = model.units.get("length", "m")
     if not unit:
         return v
-    if unit not in LENGTHS or length not in LENGTHS:
+    if unit not in METRES_PER or length not in METRES_PER:
         raise AddressError(f"{where}: unit {unit!r} does not fit a length (model length unit {length})")
-    return v * LENGTHS[unit] / LENGTHS[length]
+    return v * METRES_PER[unit] / METRES_PER[length]
 
 
 def parse_driven(model: Model, name: str, engine: Engine | None = None) -> DrivenOutput:

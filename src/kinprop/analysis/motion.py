@@ -28,9 +28,10 @@ from kinprop.analysis.context import HARD, POINT, OutputContext
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
 from kinprop.engine.motion import MotionState
+from kinprop.engine.status import Status, message
+from kinprop.engine.units import from_solver_units, to_solver_units
 from kinprop.errors import AddressError
 from kinprop.model import Model
-from kinprop.propagation.units import from_solver_units, to_solver_units
 from kinprop.spatial import Array
 
 AXES = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
@@ -245,10 +246,10 @@ def motion(
     solver_acc = None if accelerations is None else solver(accelerations)
     ms = eng.motion(st, solver_rates, solver_acc)
     if ms.residual > ASSEMBLED_TOL:
-        msg = f"not an assembly (||Phi|| = {ms.residual:.3g}): assemble the model first"
+        msg = message(Status.NOT_ASSEMBLED, residual=ms.residual)
         nan = {f.name: np.full_like(getattr(ms, f.name), np.nan) for f in fields(ms)
                if f.name in ("qdot", "V", "qddot", "dV") and getattr(ms, f.name) is not None}  # fmt: skip
-        ms = replace(ms, status="not_assembled", message=msg, **nan)
+        ms = replace(ms, status=Status.NOT_ASSEMBLED, message=msg, **nan)
 
     def by_joint(x: Array | None) -> dict[str, Array] | None:
         if x is None:

@@ -39,10 +39,10 @@ from kinprop.analysis.statics import is_load_output, load_value
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
+from kinprop.engine.units import check_units
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.design import Address, parse_address
-from kinprop.propagation.units import check_units
 from kinprop.spatial import Array
 
 AXES = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}

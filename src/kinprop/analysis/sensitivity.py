@@ -26,11 +26,11 @@ from kinprop.analysis.metrics import WheelSpec
 from kinprop.analysis.outputs import output_function
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
+from kinprop.engine.units import check_units
 from kinprop.model import Model
 from kinprop.propagation.hardpoints import free_addresses, free_weights, global_columns, is_global
 from kinprop.propagation.propagate import engine_for
 from kinprop.propagation.sensitivity import Sensitivity, design_sensitivity, weight_vector
-from kinprop.propagation.units import check_units
 from kinprop.spatial import Array
 
 if TYPE_CHECKING:  # pandas (the 'data' extra) is imported only when a frame is built

@@ -47,6 +47,7 @@ from kinprop.engine.statics import (
     reduced_stiffness,
     statics_state,
 )
+from kinprop.engine.status import Status
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.loads import LoadCase, PointLoad
@@ -318,12 +319,13 @@ EQ_TOL, EQ_MAX_ITER, EQ_TRUST = 1e-12, 50, 0.35
 
 @dataclass(frozen=True)
 class Equilibrium:
-    """The pose at which the released inputs need no effort: ``status`` ``converged``,
-    ``not_converged`` or ``failed`` (a step the position solve could not follow on the
-    branch); ``stiffness`` the reduced tangent stiffness ``d tau / d q`` there (solver units:
-    per radian for an angle), ``stable`` when its symmetric part is positive definite."""
+    """The pose at which the released inputs need no effort: ``status`` (:class:`kinprop.Status`)
+    ``converged``, ``not_converged`` or ``infeasible`` (no equilibrium step could be taken: the
+    loads are not held, or the position solve could not follow a step on the branch);
+    ``stiffness`` the reduced tangent stiffness ``d tau / d q`` there (solver units: per radian
+    for an angle), ``stable`` when its symmetric part is positive definite."""
 
-    status: str
+    status: Status
     message: str
     model: Model
     statics: Statics
@@ -334,7 +336,7 @@ class Equilibrium:
 
     @property
     def converged(self) -> bool:
-        return self.status == "converged"
+        return self.status is Status.CONVERGED
 
 
 def _tau_scale(pf: PointForces, laws: Sequence[Any], model: Model, eng: Engine, st: Any) -> float:
@@ -365,16 +367,16 @@ def equilibrium(
     cols, addresses = input_columns(eng, names)
     labels = eng.column_labels
     laws = element_laws(eng, model.elements, st0)
-    st, status, message, K, it = st0, "not_converged", "", np.zeros((len(cols), len(cols))), 0
+    st, status, message, K, it = st0, Status.NOT_CONVERGED, "", np.zeros((len(cols), len(cols))), 0
     for it in range(1, max_iter + 1):
         r, A, _, _ = eng.poses(st)
         pf = applied_points(model, eng, np.array(r), np.array(A), case)
         tau, K, msg = reduced_stiffness(eng, st, pf, cols, laws)
         if msg != "ok":
-            status, message = "failed", msg
+            status, message = Status.INFEASIBLE, msg
             break
         if float(np.max(np.abs(tau), initial=0.0)) <= tol * _tau_scale(pf, laws, model, eng, st):
-            status, message = "converged", f"converged in {it - 1} step(s)"
+            status, message = Status.CONVERGED, f"converged in {it - 1} step(s)"
             break
         dq = -np.linalg.lstsq(K, tau, rcond=None)[0]
         size = float(np.max(np.abs(dq * eng.col_scale[cols])))
@@ -383,7 +385,7 @@ def equilibrium(
         sol = eng.propagate({labels[c]: float(st.Q[c] + dq[k]) for k, c in enumerate(cols)}, free=["q"], start=st,
                             tol=1e-13)  # fmt: skip
         if not sol.converged:
-            status, message = "failed", f"the equilibrium step could not be followed: {sol.message}"
+            status, message = Status.INFEASIBLE, f"the equilibrium step could not be followed: {sol.message}"
             break
         st = sol.state
     else:

@@ -39,14 +39,14 @@ from kinprop.analysis.drives import DrivenOutputs, expand_driven, is_driven
 from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import evaluate_outputs
 from kinprop.analysis.units import derivative_scale
-from kinprop.engine import Engine
+from kinprop.engine import Engine, Status
 from kinprop.engine import compile as compile_engine
+from kinprop.engine.units import changes_to_internal, check_units
 from kinprop.errors import AddressError
 from kinprop.kinematics.layout import column_labels
 from kinprop.model import Design, Model
 from kinprop.model.design import as_coordinates, parse_address
 from kinprop.propagation.propagate import apply_changes
-from kinprop.propagation.units import changes_to_internal, check_units
 from kinprop.spatial import Array
 
 if TYPE_CHECKING:  # pandas (the data extra) is imported where a frame is built
@@ -279,7 +279,7 @@ def evaluate_chunk(eng: Engine, spec: StudySpec, values: Array, start: int) -> p
     res = eng.solve_batch(st, tuple(spec.free), exclude=changed, tol=spec.tol, max_iter=spec.max_iter)
     conv = res.converged & ok
     iters, resid = res.iterations.copy(), res.residual.copy()
-    status = np.array([res.status(i).value if o else "invalid" for i, o in enumerate(ok)], dtype=object)
+    status = np.array([res.status(i).value if o else Status.INVALID.value for i, o in enumerate(ok)], dtype=object)
     Q = res.state.Q.copy()
     P = np.full((n, len(points), 3), np.nan)
     states: list[tuple[Design, Mapping[str, Array]] | None] = [None] * n

@@ -50,13 +50,13 @@ from kinprop.analysis.outputs import evaluate_outputs, expand_outputs, output_fu
 from kinprop.analysis.units import derivative_scale, unit_of
 from kinprop.engine import Engine, Solution, State, Status
 from kinprop.engine import compile as compile_engine
+from kinprop.engine.units import changes_to_internal, check_units, from_solver_units, to_solver_units
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.propagation.conditioning import SINGULAR_RTOL, conditioning
 from kinprop.propagation.continuation import continuation_of
 from kinprop.propagation.hardpoints import free_addresses
 from kinprop.propagation.propagate import solve_changes
-from kinprop.propagation.units import changes_to_internal, check_units, from_solver_units, to_solver_units
 from kinprop.spatial import Array
 
 _DRIVE = re.compile(r"^(?P<joint>[^\s=\[\].]+)(\.q)?(\[(?P<index>\d+)\])?=(?P<range>.+)$")
@@ -468,7 +468,7 @@ def sweep(
     fout, expanded = output_function(user, names, engine=user_engine)
     coord_cols = [c for c in coordinate_columns(model, engine) if c[1] not in hidden]
     drive_cols = [d.label for d in dr]
-    # unit factors, once (io.units' conversions are linear): model -> solver for the drives,
+    # unit factors, once (kinprop.engine.units' conversions are linear): model -> solver for the drives,
     # solver -> model for the coordinate columns
     to_solver = [float(to_solver_units(model, d.address, [1.0], engine)[0]) for d in dr]
     to_model = {col: float(from_solver_units(model, col, [1.0], engine)[0]) for col, *_ in coord_cols}

@@ -22,7 +22,7 @@ A target spec (CLI ``--target``, Python ``propagate_targets(model, [...])``)::
 * ``WEIGHT`` (default 1) multiplies the target's residual in the least-squares compromise when
   targets conflict (a miss of 1/WEIGHT units counts as one).
 
-:func:`propagate_targets` solves by :func:`kinprop.propagation.targets.solve_targets` (the
+:func:`propagate_targets` solves by :func:`kinprop.engine.targets.solve_targets` (the
 minimum-(weighted-)norm change of the ``free`` design variables: ``hardpoint:J[.i|.j]``,
 ``axis:J``, ``J.s_i``, ``J.length``, groups ``s C l``). Output Jacobians are analytic for
 points, hardpoints, distances, coordinates, design variables and the camber, toe and
@@ -53,7 +53,9 @@ from kinprop.analysis.metrics import (
     wheel_bodies,
 )
 from kinprop.analysis.outputs import _distance_ends, expand_outputs, output_function
-from kinprop.engine import Engine, State
+from kinprop.engine import Engine, State, Status
+from kinprop.engine.targets import Configuration, Row, TargetResult, output_jacobian, solve_targets
+from kinprop.engine.units import METRES_PER, RADIANS_PER, changes_to_internal, check_units
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.design import parse_address
@@ -61,12 +63,8 @@ from kinprop.propagation.hardpoints import body_rotation, free_addresses, free_w
 from kinprop.propagation.point_jacobians import PointJacobians, PointSpec
 from kinprop.propagation.poses import joint_values
 from kinprop.propagation.propagate import Propagation, engine_for, propagation_of
-from kinprop.propagation.targets import Configuration, Row, TargetResult, output_jacobian, solve_targets
-from kinprop.propagation.units import changes_to_internal, check_units
 from kinprop.spatial import Array
 
-LENGTHS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "inch": 0.0254}
-ANGLES = {"deg": 1.0, "rad": 180.0 / math.pi}
 _NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/]*)\s*$")
 _JOINT_OUT = re.compile(r"^joint:(?P<joint>[^.\s]+)\.(?P<name>[a-z_0-9]+)(\[(?P<k>\d)\])?$")
 
@@ -115,27 +113,17 @@ def _kind(model: Model, output: str) -> str:
 
 
 def _unit_factor(model: Model, kind: str, unit: str, where: str) -> float:
-    """Factor from ``unit`` to the internal unit of ``kind`` (no unit: the display unit)."""
+    """Factor from ``unit`` to the internal unit of ``kind`` (no unit: the display unit), from
+    the one table of factors (:mod:`kinprop.engine.units`)."""
     length_unit = model.units.get("length", "m")
-    if kind == "deg":  # internal: degrees (metrics are computed in degrees)
-        if not unit:
-            return 1.0 if model.units.get("angle", "rad") == "deg" else 180 / math.pi
-        if unit in ANGLES:
-            return ANGLES[unit]
-    elif kind == "rad":
-        if not unit:
-            return math.pi / 180 if model.units.get("angle") == "deg" else 1.0
-        if unit in ANGLES:
-            return ANGLES[unit] * math.pi / 180
-    elif kind == "gain":  # internal: degrees per length unit; given in the model's angle per length unit
-        if not unit:
-            return 1.0 if model.units.get("angle", "rad") == "deg" else 180 / math.pi
-    elif kind == "length":
-        if not unit:
-            return 1.0
-        if unit in LENGTHS and length_unit in LENGTHS:
-            return LENGTHS[unit] / LENGTHS[length_unit]
-    elif not unit:
+    angle = unit or model.units.get("angle", "rad")
+    if kind in ("deg", "gain") and angle in RADIANS_PER and (kind == "deg" or not unit):
+        return RADIANS_PER[angle] / RADIANS_PER["deg"]  # internal: degrees (metrics are computed in degrees)
+    if kind == "rad" and angle in RADIANS_PER:
+        return RADIANS_PER[angle]
+    if kind == "length" and (not unit or (unit in METRES_PER and length_unit in METRES_PER)):
+        return METRES_PER[unit] / METRES_PER[length_unit] if unit else 1.0
+    if kind not in ("deg", "rad", "gain", "length") and not unit:
         return 1.0
     raise AddressError(f"{where}: unit {unit!r} does not fit this output ({kind}; model length unit {length_unit})")
 
@@ -265,7 +253,7 @@ def _config_outputs(model: Model, engine: Engine, names: list[str]) -> Callable[
     return outputs
 
 
-_DEG = 180.0 / math.pi
+_DEG = 1.0 / RADIANS_PER["deg"]  # metrics are computed in degrees
 _XYZ = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
 
 
@@ -387,8 +375,18 @@ class TargetPropagation:
         return self.result.converged
 
     @property
-    def status(self) -> str:
+    def status(self) -> Status:
+        """The solve's :class:`kinprop.Status` (``converged`` also for a compromise)."""
         return self.result.status
+
+    @property
+    def targets_status(self) -> str:
+        """``met``, ``compromise`` or, when not converged, the status."""
+        return self.result.targets_status
+
+    @property
+    def met(self) -> bool:
+        return self.result.met
 
     def before_model(self, k: int = 0) -> Model:
         return self.engine.model_of(self.result.before[k], self.model)
@@ -432,9 +430,9 @@ class TargetPropagation:
         for spec, t in zip(self.specs, self.result.targets, strict=True):
             k, kind = 1.0, _kind(self.model, spec.output)
             if kind == "rad" and deg and spec.slope is None:
-                k = 180 / math.pi
+                k = 1.0 / RADIANS_PER["deg"]
             elif kind in ("deg", "gain") and not deg:  # a metric angle (degrees inside) in a radian model
-                k = math.pi / 180
+                k = RADIANS_PER["deg"]
             row = {"target": spec.text, "output": spec.output, "unit": self.unit(spec)}
             rows.append(row | {n: t[n] * k for n in ("value", "before", "achieved", "residual")})
         return rows
@@ -446,8 +444,8 @@ class TargetPropagation:
     def __repr__(self) -> str:
         """One line per target (wanted, achieved, unit), not the configurations' arrays."""
         changed = ", ".join(self.design_change) or "nothing"
-        lines = [f"<TargetPropagation of {self.model.mechanism.name!r}: {self.status}; {len(self.specs)} targets, "
-                 f"{len(self.configuration_names)} configurations, changed {changed}>"]  # fmt: skip
+        n = f"{len(self.specs)} targets, {len(self.configuration_names)} configurations"
+        lines = [f"<TargetPropagation of {self.model.mechanism.name!r}: {self.targets_status}; {n}, changed {changed}>"]
         for row in self.table()[:8]:
             lines.append(f"  {row['target']}: wanted {row['value']:.6g}, achieved {row['achieved']:.6g} {row['unit']}")
         return "\n".join(line.rstrip() for line in lines)
@@ -460,7 +458,7 @@ class TargetPropagation:
             + "</tr>"
             for r in self.table()
         )
-        return (f"<p><b>TargetPropagation</b> of {escape(self.model.mechanism.name)}: {escape(self.status)}</p>"
+        return (f"<p><b>TargetPropagation</b> of {escape(self.model.mechanism.name)}: {escape(self.targets_status)}</p>"
                 f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")  # fmt: skip
 
     def joint_positions(self, k: int = 0) -> dict[str, tuple[Array, Array]]:
@@ -529,7 +527,7 @@ def propagate_targets(
     units (``units="solver"``: radians). Target values carry their own unit (module docstring).
     ``weights``: ``{address or group: w}``, a larger weight lets a variable move more.
     ``analytic``: analytic output Jacobians where available (False: central differences of the
-    output map for every output; :mod:`kinprop.propagation.targets`).
+    output map for every output; :mod:`kinprop.engine.targets`).
     """
     eng = engine_for(model, engine)
     start = eng.state_of(model)

@@ -32,12 +32,12 @@ from kinprop.analysis.study import run_study
 from kinprop.analysis.units import derivative_scale, unit_of
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
+from kinprop.engine.units import check_units, to_solver_units
 from kinprop.errors import AddressError
 from kinprop.kinematics.layout import column_labels
 from kinprop.model import Model
 from kinprop.model.design import parse_address
 from kinprop.propagation.hardpoints import global_columns, is_global
-from kinprop.propagation.units import check_units, to_solver_units
 from kinprop.spatial import Array
 
 

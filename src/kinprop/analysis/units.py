@@ -1,20 +1,18 @@
-"""Units of analysis outputs: suspension metrics beside addresses (docs/units.md).
+"""Units of output names: suspension metrics and load outputs beside addresses (docs/units.md).
 
-Addresses (coordinates, design variables, points) are converted by
-:mod:`kinprop.propagation.units`; this module adds the metric names (``metric:W.camber``,
-``camber``), which are computed in degrees and reported in the model's angle unit. The public
-door is :mod:`kinprop.io.units`.
+The factors and the conversions of addresses (coordinates, design variables, points) are
+:mod:`kinprop.engine.units`; this module only names the unit of what the analysis layer adds —
+metric names (``metric:W.camber``, ``camber``; computed in degrees, reported in the model's
+angle unit) and load outputs (``reaction:J.fz``) — with those factors.
 """
 
 from __future__ import annotations
 
-import math
-
 from kinprop.analysis.metrics import METRIC_ALIASES, METRICS, is_angle_valued, is_first_order, metric_unit
 from kinprop.analysis.statics import is_load_output, load_output_unit
 from kinprop.engine import Engine
+from kinprop.engine.units import RADIANS_PER, address_scale, address_unit
 from kinprop.model import Model
-from kinprop.propagation.units import address_scale, address_unit
 
 
 def is_metric(name: str) -> bool:
@@ -84,12 +82,12 @@ def derivative_scale(model: Model, name: str, engine: Engine | None = None) -> f
         scale = derivative_scale(model, out, engine)
         if not slope:
             return scale
-        per = (180.0 / math.pi if model.units.get("angle") == "deg" else 1.0) if cond == "roll" else \
+        per = 1.0 / RADIANS_PER[model.units.get("angle", "rad")] if cond == "roll" else \
             derivative_scale(model, cond, engine)  # fmt: skip
         return scale / per
     if is_metric(name):
         angle_metric = is_angle_valued(name.split(".")[-1])
-        return math.pi / 180.0 if (angle_metric and model.units.get("angle") != "deg") else 1.0
+        return RADIANS_PER["deg"] if (angle_metric and model.units.get("angle") != "deg") else 1.0
     return address_scale(model, name, engine)
 
 

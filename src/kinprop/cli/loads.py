@@ -23,13 +23,13 @@ from kinprop.cli.app import (
     print_json,
 )
 from kinprop.cli.checks import check_outputs, check_suffix
+from kinprop.engine.units import from_solver_units
 from kinprop.errors import AddressError
 from kinprop.io.arguments import parse_assignment
 from kinprop.io.writer import atomic_write, csv_text
 from kinprop.model import Model
 from kinprop.model.loads import LoadCase, PointLoad
 from kinprop.propagation import assemble
-from kinprop.propagation.units import from_solver_units
 
 #: a table entry below this fraction of the table's largest is shown as 0 (round-off)
 ROUNDOFF = 1e-12

@@ -32,10 +32,10 @@ from kinprop.cli.checks import (
 from kinprop.cli.continuation import run_propagation, shown_warnings
 from kinprop.cli.targets import run_targets
 from kinprop.engine import compile as compile_engine
+from kinprop.engine.units import changes_to_internal
 from kinprop.io.arguments import parse_assignments, parse_weights
 from kinprop.io.commands import comparison_csv
 from kinprop.io.results import propagation_json, variable_rows
-from kinprop.io.units import changes_to_internal
 from kinprop.io.writer import atomic_write, dump_model_like
 from kinprop.propagation import Propagation, propagate
 from kinprop.propagation.hardpoints import free_addresses, free_weights, is_global, resolve_changes
@@ -138,7 +138,8 @@ def report(
         if not quiet:  # -q: the outcome line, notes and files only
             out.print(comparison_table(prop, title))
             out.print(
-                f"free: {' '.join(prop.free)}   rank {r.rank} of {r.n_equations} equations, {r.n_free} free columns"
+                f"free: {' '.join(prop.free)}   rank {r.rank} of {prop.engine.n_rows} equations, "
+                f"{r.free.size} free columns"
             )
             out.print(f"||Phi|| history: {'  '.join(f'{x:.6g}' for x in r.residual_history)}")
         out.print(r.message, style="green" if r.converged else "red")

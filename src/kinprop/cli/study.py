@@ -47,7 +47,7 @@ Sets = Annotated[
 
 def _to_internal(model, changes: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     try:
-        from kinprop.io.units import changes_to_internal
+        from kinprop.engine.units import changes_to_internal
     except ImportError:  # pragma: no cover
         return changes
     return changes_to_internal(model, changes)

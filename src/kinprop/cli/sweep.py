@@ -35,9 +35,9 @@ from kinprop.cli.checks import (
     check_suffix,
     check_tol,
 )
+from kinprop.engine.units import changes_to_internal
 from kinprop.io.arguments import parse_assignments
 from kinprop.io.commands import label_units, sweep_json
-from kinprop.io.units import changes_to_internal
 
 #: show a progress bar from this many steps on
 PROGRESS_FROM = 50

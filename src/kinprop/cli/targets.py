@@ -35,9 +35,10 @@ def targets_json(tp: TargetPropagation) -> dict[str, Any]:
     obj = propagation_json(tp.propagation)
     r = tp.result
     obj.update(
-        # the run's status: the targets', not the design-position re-assembly's
-        status=obj["status"] if r.status == "met" else r.status,
-        targets_status=r.status,
+        # the run's status (kinprop.Status): the targets' solve's, not the design-position
+        # re-assembly's when that converged; met or compromise in targets_status
+        status=obj["status"] if r.converged else r.status,
+        targets_status=r.targets_status,
         targets_message=r.message,
         targets=tp.table(),
         conflicts=[[{"target": n, "weight": w} for n, w in g] for g in r.conflicts],
@@ -94,7 +95,7 @@ def run_targets(
     for dest, write in [(output, lambda p, where: dump_model_like(p.after, where, path)), *writers]:
         if dest is None:
             continue
-        if r.status == "met":
+        if r.met:
             write(tp.propagation, dest)
         else:
             err.print(f"not writing {dest}: the targets were not met")
@@ -103,7 +104,7 @@ def run_targets(
     else:
         out.print(targets_table(tp, f"propagate {path} to targets"))
         unit = model.units.get("length", "")
-        moves = tp.design_position_moves() if r.status in ("met", "compromise") else {}
+        moves = tp.design_position_moves() if r.converged else {}
         if moves:
             out.print(f"joints moved at the design position (global, {unit}):")
         for k, (a, b) in moves.items():
@@ -112,10 +113,10 @@ def run_targets(
         for k, d in r.design_change.items():
             if not k.split(".")[1].startswith("s_"):
                 out.print(f"{k} changes by {np.asarray(d).round(9).tolist()}")
-        out.print(Text(r.message, style="green" if r.status == "met" else "red"))
-        if r.status == "met":
+        out.print(Text(r.message, style="green" if r.met else "red"))
+        if r.met:
             for dest in [output, *(p for p, _ in writers)]:
                 if dest is not None:
                     out.print(f"wrote {dest}")
-    if r.status != "met":
+    if not r.met:
         raise typer.Exit(EXIT_NOT_CONVERGED)

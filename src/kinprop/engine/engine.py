@@ -24,7 +24,9 @@ import numpy as np
 
 from kinprop.constraints.coupling import N_COEF
 from kinprop.engine.motion import MotionState, motion_state
-from kinprop.errors import AddressError
+from kinprop.engine.status import message, notes
+from kinprop.engine.units import METRES_PER, UnitTable
+from kinprop.errors import AddressError, ConvergenceError
 from kinprop.jit import get_num_threads, set_parallel_chunksize
 from kinprop.kinematics import kernels
 from kinprop.kinematics.layout import VariableLayout, build_layout, column_labels
@@ -43,8 +45,6 @@ from kinprop.topology import Topology, build_topology
 ROUNDOFF = 16.0
 #: a value beyond this multiple of the model's length scale is rejected as absurd (bounded work)
 ABSURD = 1e6
-#: metres per length unit a model may declare
-METRES_PER_UNIT = {"m": 1.0, "mm": 1e-3}
 #: branch keeping (kinprop.solver.newton.follow): jump test, trust radius of the predictor
 #: (radians, or lengths over the model's length scale), smallest sub-step, sub-step cap
 KAPPA, JUMP_ATOL, TRUST, MIN_STEP, MAX_SUBSTEPS = 0.5, 1e-9, 0.35, 1e-6, 200
@@ -148,54 +148,6 @@ def _scalar_slot(t: Target) -> tuple[str, int, int] | None:
     return None
 
 
-def notes(status: Status, flags: int, substeps: int) -> list[str]:
-    """One line per thing a user should know about a solve (empty: nothing to say)."""
-    out = []
-    if status is Status.CONVERGED and flags & newton.FROM_ESTIMATES and flags & newton.SIGN_FLIP:
-        out.append("ambiguous assembly: det of the free Jacobian changed sign between the estimates and the "
-                   "solution, so it may be another assembly branch than the estimates suggest")  # fmt: skip
-    if status is Status.CONVERGED and flags & newton.SUBDIVIDED:
-        why = " (a full step left the start's branch)" if flags & (newton.JUMPED | newton.SIGN_FLIP) else ""
-        if flags & newton.FLIPPED:
-            why = " (a full step turned a cut joint onto a pose the joint cannot take)"
-        out.append(f"the change was followed in {substeps} sub-steps to stay on the start's branch{why}")
-    return out
-
-
-def message(status: Status, iterations: int, residual: float, tol: float, requested_tol: float, fraction: float = 1.0,
-            substeps: int = 1, flags: int = 0, optimality: float = 0.0) -> str:  # fmt: skip
-    """The one message table of :class:`Status` (every solve, batch row and sweep step says its
-    outcome with it). ``residual`` is the scaled ``||Phi||`` (:attr:`Engine.row_scale`: metres);
-    ``optimality`` the optimality residual (SI; docs/analysis/weights.md), shown when not 0."""
-    bound = (
-        f"{tol:.3g} (round-off floor at this model's length scale; tol {requested_tol:g})"
-        if tol > requested_tol
-        else f"{tol:g}"
-    )
-    if status is Status.CONVERGED:
-        opt = f", optimality {optimality:.3g}" if optimality else ""
-        return f"converged in {iterations} iterations: ||Phi|| = {residual:.3g} < {bound}{opt}"
-    if flags & newton.LEAST_CHANGE_FAILED and not flags & newton.FLIPPED:
-        return (f"assembled (||Phi|| = {residual:.3g}) but the closest assembly to the start was not reached in "
-                f"{iterations} iterations (optimality {optimality:.3g}); method='paper' returns the iteration's own "
-                "end point")  # fmt: skip
-    if status is Status.INFEASIBLE and flags & newton.FLIPPED and fraction == 0.0:
-        return ("the solve converged onto a root with a cut joint turned (its axes reversed): a pose the joint "
-                "itself cannot take; better estimates, or the default branch following")  # fmt: skip
-    if status is Status.NO_FREE:
-        return "no free variables: nothing can move to satisfy the constraints"
-    if status is Status.DIVERGED:
-        return f"diverged at iteration {iterations}: ||Phi|| = {residual:.3g}"
-    if status is Status.INFEASIBLE:
-        return (f"the change can be followed on the start's branch only to {fraction:.6g} of its size "
-                f"(no assembly beyond, or a singular configuration there); {substeps} sub-steps")  # fmt: skip
-    if status is Status.STEP_LIMIT:
-        return (f"sub-step cap reached ({substeps} sub-steps, at {fraction:.6g} of the change): "
-                "the change is too large or too close to a singular configuration to follow")  # fmt: skip
-    steps = f" in all, over {substeps} sub-steps of at most max_iter each" if substeps > 1 else ""
-    return f"not converged after {iterations} iterations{steps}: ||Phi|| = {residual:.3g} >= {bound}"
-
-
 @dataclass(frozen=True, eq=False)
 class Solution:
     """One solve's outcome; the model-level view (design, coordinates) is built on demand."""
@@ -206,7 +158,9 @@ class Solution:
     status: Status
     iterations: int
     residual: float
-    history: Array
+    #: the scaled ``||Phi||`` at the start and after every iteration
+    residual_history: Array
+    #: the free layout columns
     free: Array
     tol: float
     changes: Mapping[str, Array] = field(default_factory=dict)
@@ -253,6 +207,30 @@ class Solution:
     def value(self, address: str) -> Array:
         """Current value of an address (``O2.q``, ``L1.length``, ``J.s_i[1]``)."""
         return self.engine.get(self.state, address)
+
+    @cached_property
+    def jacobian(self) -> Array:
+        """The full Jacobian ``Phi_x`` at the returned state (every column, not only the free ones)."""
+        return self.engine.evaluate(self.state)[1]
+
+    @cached_property
+    def singular_values(self) -> Array:
+        """Singular values of the free-column Jacobian at the returned state, largest first."""
+        Jf = self.jacobian[:, self.free]
+        return np.linalg.svd(Jf, compute_uv=False) if Jf.size else np.zeros(0)
+
+    def raise_for_status(self) -> Solution:
+        """This solution, or :class:`kinprop.errors.ConvergenceError` with its message when it
+        did not converge."""
+        if not self.converged:
+            raise ConvergenceError(self.message)
+        return self
+
+    @property
+    def rank(self) -> int:
+        """Numerical rank of the free-column Jacobian (``s_k > RANK_RTOL * s_1``)."""
+        sv = self.singular_values
+        return int(np.sum(sv > newton.RANK_RTOL * sv[0])) if sv.size and sv[0] > 0 else 0
 
     def __repr__(self) -> str:
         return (f"<Solution {self.status.value}: {self.iterations} iterations, ||Phi|| = {self.residual:.3g}, "
@@ -313,6 +291,9 @@ class Engine:
         self.coupling_slot = {c.name: len(mechanism.joints) + N_COEF * k for k, c in enumerate(mechanism.couplings)}
         self.body_index = {b.name: k for k, b in enumerate(mechanism.bodies)}
         self.n_coordinates = sum(v.size for v in self.layout.group("q"))
+        #: which coordinate components are angles or Euler parameters, for every unit
+        #: conversion (:mod:`kinprop.engine.units`), resolved once here
+        self.unit_table: UnitTable = UnitTable.of(mechanism, self.topology)
         # first column of each column's variable (the Newton loop's ``need`` mask)
         self._variable_of = np.zeros(self.n_columns, dtype=np.int64)
         for v in self.layout.variables:
@@ -647,7 +628,7 @@ class Engine:
     @cached_property
     def unit(self) -> float:
         """Metres per model length unit (1 for a bare mechanism)."""
-        return METRES_PER_UNIT[self.model.units.get("length", "m")] if self.model is not None else 1.0
+        return METRES_PER[self.model.units.get("length", "m")] if self.model is not None else 1.0
 
     @cached_property
     def row_scale(self) -> Array:

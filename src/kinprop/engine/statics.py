@@ -44,6 +44,7 @@ import numpy as np
 
 from kinprop.constraints.basic import DISTANCE, ROWS, basic_rows
 from kinprop.engine.motion import _Frames, cross3, motion_state, spatial_cross
+from kinprop.engine.status import Status, message
 from kinprop.joints.composite import TD_CODE
 from kinprop.kinematics.tables import (
     B_KIND,
@@ -72,7 +73,7 @@ if TYPE_CHECKING:
 RANK_RTOL = 1e-10
 #: relative size above which a self-stress state changes a component (undetermined)
 UNDETERMINED_RTOL = 1e-7
-OK, UNBALANCED, NOT_ASSEMBLED = "ok", "unbalanced", "not_assembled"
+OK, UNBALANCED, NOT_ASSEMBLED = "ok", "unbalanced", Status.NOT_ASSEMBLED
 #: scaled residual norm above which a state is not an assembly (its loads would mean nothing)
 ASSEMBLED_TOL = 1e-6
 
@@ -419,7 +420,7 @@ def statics_state(
         nan = np.full((nj, 2, 6), np.nan)
         return StaticsState(
             NOT_ASSEMBLED if not_assembled else UNBALANCED,
-            f"not an assembly (||Phi|| = {fr.residual:.3g}): assemble the model first" if not_assembled else
+            message(Status.NOT_ASSEMBLED, residual=fr.residual) if not_assembled else
             f"unbalanced: the constraints and the inputs do not hold the loads (residual {resid:.3g} of "
             f"{float(np.linalg.norm(b)):.3g}): the mechanism can move under them (too few inputs, or a "
             "singular pose)",

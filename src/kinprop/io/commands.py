@@ -17,18 +17,18 @@ from kinprop.analysis.mobility import MobilityReport, row_names
 from kinprop.analysis.points import hardpoint_table
 from kinprop.analysis.sensitivity import design_sensitivity, output_sensitivity_matrix
 from kinprop.analysis.sweep import Drive, parse_drive
-from kinprop.engine import Engine
+from kinprop.analysis.units import derivative_scale, unit_of
+from kinprop.engine import Engine, Solution
 from kinprop.engine import compile as compile_engine
+from kinprop.engine.units import changes_to_internal
 from kinprop.io.arguments import parse_assignments
 from kinprop.io.results import comparison_rows, coordinates_json, design_json, point_rows, propagation_json
-from kinprop.io.units import changes_to_internal, derivative_scale, unit_of
 from kinprop.io.writer import csv_text
 from kinprop.model import Model
 from kinprop.propagation import Propagation
 from kinprop.propagation.continuation import ContinuationResult, continuation_of
 from kinprop.propagation.hardpoints import free_weights, global_columns, is_global
 from kinprop.propagation.propagate import propagation_of, solve_changes
-from kinprop.solver import SolveResult
 
 # --- kinprop check ---------------------------------------------------------------------------
 
@@ -250,7 +250,7 @@ def sensitivities(
 
 
 def sensitivity_json(
-    model: str, sens: Sensitivities, free: Sequence[str], weights: Mapping[str, float] | None, assembly: SolveResult
+    model: str, sens: Sensitivities, free: Sequence[str], weights: Mapping[str, float] | None, assembly: Solution
 ) -> dict[str, Any]:
     """What ``kinprop sensitivity --json`` prints (``assembly``: the assembly solved first)."""
     r = assembly

@@ -23,9 +23,9 @@ from typing import Any
 import numpy as np
 
 from kinprop.constraints.coupling import N_COEF
+from kinprop.engine.units import coef_factors
 from kinprop.errors import Problem
 from kinprop.model import Coupling, Joint, Model
-from kinprop.propagation.units import coef_factors
 from kinprop.spatial import Array
 
 

@@ -39,6 +39,7 @@ import numpy as np
 from kinprop.analysis.points import snapshot
 from kinprop.engine import JointFrames
 from kinprop.engine import compile as compile_engine
+from kinprop.engine.units import tree_coordinates
 from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.couplings import build_couplings, couplings_to_data
 from kinprop.io.elements import build_elements, build_vehicle, elements_to_data, vehicle_to_data
@@ -214,10 +215,7 @@ def file_coordinates(jt: Any, values: list[float], deg: bool) -> tuple[Array, st
         p = q[jt.euler]
         if abs(p @ p - 1) > EULER_TOL:
             return q, f"expected Euler parameters with p.p = 1, found p.p = {p @ p:.6g}"
-    if deg and jt.angle_indices:
-        idx = list(jt.angle_indices)
-        q[idx] = np.radians(q[idx])
-    return q, ""
+    return tree_coordinates(q, jt.angle_indices, "deg" if deg else "rad", True), ""
 
 
 def _placed(ref: _Reference, jt: Any, q: Array) -> _Reference:
@@ -502,10 +500,7 @@ def model_to_hardpoints(model: Model, body_frames: str = "global", keep_coordina
         else:
             spec.update(keys)
             kept.add(j.name)
-            qf = np.array(q, dtype=float)
-            if deg and j.jtype.angle_indices:
-                idx = list(j.jtype.angle_indices)
-                qf[idx] = np.degrees(qf[idx])
+            qf = tree_coordinates(q, j.jtype.angle_indices, "deg" if deg else "rad", False)
             spec["q"] = [float(x) + 0.0 for x in qf]
         pair = _pivots_of(model, j.name)
         if pair is not None:

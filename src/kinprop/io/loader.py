@@ -19,6 +19,7 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from kinprop.engine.engine import ABSURD
+from kinprop.engine.units import tree_coordinates
 from kinprop.errors import ModelError, Problem
 from kinprop.io.couplings import build_couplings
 from kinprop.io.elements import build_elements, build_vehicle
@@ -401,10 +402,7 @@ def build_model(spec: ModelFile, file: str) -> Model:
                         f"joints.{name}.q", f"expected Euler parameters with p.p = 1, found p.p = {p @ p:.6g}", file
                     )
                 )
-        if deg and name in tree:
-            idx = list(jt.angle_indices)
-            q[idx] = np.radians(q[idx])
-        coords[name] = q
+        coords[name] = tree_coordinates(q, jt.angle_indices if name in tree else (), spec.units.angle, True)
     if problems:
         raise ModelError(problems)
     units = {"length": spec.units.length, "angle": spec.units.angle}

@@ -7,9 +7,9 @@ from typing import Any
 import numpy as np
 
 from kinprop.analysis.points import joint_hardpoints, named_points
-from kinprop.io.units import from_solver_units, unit_of
-from kinprop.propagation.propagate import Propagation
-from kinprop.propagation.summary import summary_html, summary_text, variable_rows
+from kinprop.analysis.units import unit_of
+from kinprop.engine.units import from_solver_units
+from kinprop.propagation.propagate import Propagation, summary_html, summary_text, variable_rows
 
 
 def _num(v: np.ndarray) -> float | list[float]:

@@ -14,6 +14,7 @@ import numpy as np
 import yaml
 
 from kinprop.engine import compile as compile_engine
+from kinprop.engine.units import tree_coordinates
 from kinprop.io.couplings import couplings_to_data
 from kinprop.io.elements import elements_to_data, vehicle_to_data
 from kinprop.io.hardpoints import model_to_hardpoints
@@ -77,9 +78,8 @@ def model_to_data(model: Model) -> dict[str, Any]:
                 spec[f] = float(v) if f == "length" else _floats(v)
         if j.name in model.coordinates:
             q = np.array(model.coordinates[j.name], dtype=float)
-            if deg and j.name in tree and j.jtype.angle_indices:
-                idx = list(j.jtype.angle_indices)
-                q[idx] = np.degrees(q[idx])
+            if deg and j.name in tree:
+                q = tree_coordinates(q, j.jtype.angle_indices, "deg", False)
             spec["q"] = _floats(q)
         joints[j.name] = spec
     return {

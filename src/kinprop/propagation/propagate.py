@@ -16,28 +16,28 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from functools import cached_property
+from html import escape
+from typing import Any
 
 import numpy as np
 
 from kinprop.engine import Engine, Solution, State, compile
-from kinprop.errors import AddressError, SingularityWarning
-from kinprop.model.model import Model
-from kinprop.propagation.conditioning import SINGULAR_RTOL, conditioning
-from kinprop.propagation.hardpoints import free_addresses, free_weights, pivot_updates, resolve_changes
-from kinprop.propagation.poses import body_poses, joint_values
-from kinprop.propagation.summary import summary_html, summary_text
-from kinprop.propagation.units import (
+from kinprop.engine.units import (
+    address_unit,
     changes_to_internal,
     changes_to_model_units,
     check_units,
     from_solver_units,
     joint_values_to_model_units,
 )
-from kinprop.solver.newton import RANK_RTOL
-from kinprop.solver.result import SolveResult, rank_of
-from kinprop.spatial import Array
+from kinprop.errors import AddressError, SingularityWarning
+from kinprop.model.model import Model
+from kinprop.propagation.conditioning import SINGULAR_RTOL, conditioning
+from kinprop.propagation.hardpoints import free_addresses, free_weights, pivot_updates, resolve_changes
+from kinprop.propagation.poses import body_poses, joint_values
+from kinprop.spatial import Array, log_so3
 
 
 def warn_if_singular(ratio: float, rtol: float = SINGULAR_RTOL, stacklevel: int = 3) -> None:
@@ -65,7 +65,9 @@ def engine_for(model: Model, engine: Engine | None = None) -> Engine:
 
 @dataclass(frozen=True)
 class Propagation:
-    """Before and after of one re-assembly, with the solver's result.
+    """Before and after of one re-assembly: the model-level view of the engine's one solution
+    record, ``result`` (a :class:`kinprop.engine.Solution`: ``status``, ``message``,
+    ``iterations``, ``residual``, ``residual_history``, ``optimality``, ``fraction``, ``rank``).
 
     ``changes``, ``coordinates`` and ``joint_values`` are in the model's declared units
     (``units``); ``solver_changes``, ``solver_joint_values`` and ``before``/``after`` (models
@@ -73,17 +75,26 @@ class Propagation:
 
     before: Model
     after: Model
-    result: SolveResult
-    #: the values set, by address, in solver units (radians); ``changes``: the model's units
-    solver_changes: Mapping[str, Array]
+    #: the engine's solution this propagation reads (the one result record)
+    result: Solution
+    #: the free set as given (groups and addresses)
     free: tuple[str, ...]
     #: unit-independent s_r / s_1 of the free-variable Jacobian at the solution (NaN if not converged)
     singularity_ratio: float = float("nan")
-    engine: Engine | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def engine(self) -> Engine:
+        """The compiled engine the solution came from."""
+        return self.result.engine
 
     @property
     def converged(self) -> bool:
         return self.result.converged
+
+    @property
+    def solver_changes(self) -> Mapping[str, Array]:
+        """The values set, by address, in solver units (radians); ``changes``: the model's units."""
+        return self.result.changes
 
     @property
     def notes(self) -> list[str]:
@@ -97,12 +108,7 @@ class Propagation:
     @cached_property
     def bodies(self) -> dict[str, dict[str, Array]]:
         """Every body's global pose after the propagation: ``{BODY: {"R": (3, 3), "t": (3,)}}``."""
-        eng = engine_for(self.after, self.engine)
-        return body_poses(eng, eng.state_of(self.after))
-
-    @cached_property
-    def _engine(self) -> Engine:
-        return engine_for(self.before, self.engine)
+        return body_poses(self.engine, self.engine.state_of(self.after))
 
     @property
     def units(self) -> dict[str, str]:
@@ -112,20 +118,18 @@ class Propagation:
     @cached_property
     def changes(self) -> dict[str, Array]:
         """The values set, by address, in the model's units (degrees in a degree model)."""
-        return changes_to_model_units(self.before, self.solver_changes, self._engine)
+        return changes_to_model_units(self.before, self.solver_changes, self.engine)
 
     @cached_property
     def coordinates(self) -> dict[str, Array]:
         """Every joint's coordinates after the propagation, in the model's units."""
-        eng = self._engine
-        return {j: from_solver_units(self.after, f"{j}.q", q, eng) for j, q in self.after.coordinates.items()}
+        return {j: from_solver_units(self.after, f"{j}.q", q, self.engine) for j, q in self.after.coordinates.items()}
 
     @cached_property
     def solver_joint_values(self) -> dict[str, dict[str, float | Array]]:
         """Every joint's relative value after the propagation, cut joints included
         (:mod:`kinprop.propagation.poses`), in solver units: radians, the model's length unit."""
-        eng = engine_for(self.after, self.engine)
-        return joint_values(eng, eng.state_of(self.after))
+        return joint_values(self.engine, self.engine.state_of(self.after))
 
     @cached_property
     def joint_values(self) -> dict[str, dict[str, float | Array]]:
@@ -135,7 +139,7 @@ class Propagation:
 
     def changed_variables(self, atol: float = 0.0) -> list[str]:
         """Layout keys whose value differs between before and after."""
-        eng = engine_for(self.before, self.engine)
+        eng = self.engine
         a, b = eng.state_of(self.before), eng.state_of(self.after)
         return [v.key for v in eng.layout.variables if np.max(np.abs(eng.get(a, v.key) - eng.get(b, v.key))) > atol]
 
@@ -147,27 +151,99 @@ class Propagation:
         return summary_html(self)
 
 
-def result_of(engine: Engine, sol: Solution) -> tuple[SolveResult, float]:
-    """The model-level :class:`SolveResult` of a solution (free Jacobian's singular values and
-    rank, the full Jacobian) and the singularity measure (NaN unless converged)."""
-    _, J = engine.evaluate(sol.state)
-    Jf = J[:, sol.free]
-    sv = np.linalg.svd(Jf, compute_uv=False) if Jf.size else np.zeros(0)
-    design, coords = sol.design, sol.coordinates
-    res = SolveResult(sol.converged, sol.iterations, sol.residual, [float(h) for h in sol.history],
-                      rank_of(sv, RANK_RTOL), int(sol.free.size), engine.n_rows, sv, sol.message, (design, coords), J,
-                      sol.status.value, tuple(sol.notes), sol.fraction, sol.optimality)  # fmt: skip
-    ratio = conditioning(engine.row_blocks, Jf) if sol.converged and sol.free.size else float("nan")
-    return res, ratio
+def variable_rows(prop: Propagation) -> list[dict[str, Any]]:
+    """One row per variable: before and after values, their unit, role, max change.
+
+    Values in the model's units (docs/units.md); ``C`` variables report the rotation angle of
+    after relative to before, in the model's angle unit.
+    """
+    asm = prop.engine
+    st_before, st_after = asm.state_of(prop.before), asm.state_of(prop.after)
+    changed = set(prop.changed_variables())
+    set_keys = {k.split("[")[0] for k in prop.solver_changes}
+    model = prop.before
+    angle = model.units.get("angle", "rad")
+    rows: list[dict[str, Any]] = []
+    for v in asm.layout.variables:
+        role = "set" if v.key in set_keys else ("moved" if v.key in changed else "")
+        if v.group == "C":
+            Cb, Ca = prop.before.design[v.key], prop.after.design[v.key]
+            ang = 0.0 if np.array_equal(Ca, Cb) else float(np.linalg.norm(log_so3(Ca @ Cb.T)))
+            ang = float(np.degrees(ang)) if angle == "deg" else ang
+            rows.append(
+                {"variable": v.key, "unit": angle, "before": [0.0], "after": [ang], "change": ang, "role": role}
+            )
+            continue
+        b = from_solver_units(model, v.key, asm.get(st_before, v.key), asm)
+        a = from_solver_units(model, v.key, asm.get(st_after, v.key), asm)
+        unit = address_unit(model, v.key, asm)
+        change = float(np.max(np.abs(a - b))) if a.size else 0.0
+        rows.append(
+            {"variable": v.key, "unit": unit, "before": b.tolist(), "after": a.tolist(), "change": change, "role": role}
+        )
+    return rows
+
+
+#: moved variables listed by a summary before it says "... and N more"
+SUMMARY_ROWS = 8
+
+
+def _short(values: list[float]) -> str:
+    text = ", ".join(f"{x:.6g}" for x in values)
+    return text if len(values) == 1 else f"[{text}]"
+
+
+def summary_text(prop: Propagation) -> str:
+    """A compact ``repr`` of a propagation for a notebook or a REPL (a few lines, not a dump):
+    status, iterations, ``||Phi||``, the changes and the variables that moved most."""
+    r = prop.result
+    name = prop.before.mechanism.name
+    rows = [row for row in variable_rows(prop) if row["role"]]
+    rows.sort(key=lambda row: (row["role"] != "set", -row["change"]))
+    lines = [
+        f"<Propagation of {name!r}: {r.status} in {r.iterations} iterations, ||Phi|| = {r.residual:.3g};"
+        f" free: {' '.join(prop.free)}>"
+    ]
+    for row in rows[:SUMMARY_ROWS]:
+        unit = f" {row['unit']}" if row["unit"] else ""
+        lines.append(f"  {row['role']:>5} {row['variable']}: {_short(row['before'])} -> {_short(row['after'])}{unit}")
+    if len(rows) > SUMMARY_ROWS:
+        lines.append(f"  ... and {len(rows) - SUMMARY_ROWS} more moved variables (prop.changed_variables())")
+    return "\n".join(lines)
+
+
+def summary_html(prop: Propagation) -> str:
+    """``_repr_html_`` of a propagation: the status line and a before/after table of the set
+    and moved variables (every one; values escaped)."""
+    r = prop.result
+    head = (
+        f"<p><b>Propagation</b> of {escape(prop.before.mechanism.name)}: {escape(r.status)} in {r.iterations} "
+        f"iterations, ||Phi|| = {r.residual:.3g}; free: {escape(' '.join(prop.free))}</p>"
+    )
+    cells = "".join(
+        "<tr>"
+        + "".join(
+            f"<td>{escape(str(x))}</td>"
+            for x in (row["role"], row["variable"], row["unit"], _short(row["before"]), _short(row["after"]))
+        )
+        + f"<td>{row['change']:.3g}</td></tr>"
+        for row in variable_rows(prop)
+        if row["role"]
+    )
+    header = "".join(f"<th>{h}</th>" for h in ("role", "variable", "unit", "before", "after", "max |change|"))
+    return f"{head}<table><thead><tr>{header}</tr></thead><tbody>{cells}</tbody></table>"
 
 
 def propagation_of(engine: Engine, model: Model, sol: Solution, free: Sequence[str]) -> Propagation:
-    """The :class:`Propagation` record (before = ``model``) of an engine solution."""
-    res, ratio = result_of(engine, sol)
+    """The :class:`Propagation` view (before = ``model``) of an engine solution, with the
+    singularity measure of its free Jacobian (NaN unless converged; a warning below
+    :data:`SINGULAR_RTOL`)."""
+    ratio = conditioning(engine.row_blocks, sol.jacobian[:, sol.free]) if sol.converged and sol.free.size else \
+        float("nan")  # fmt: skip
     if np.isfinite(ratio):
         warn_if_singular(ratio, stacklevel=4)
     after = model.with_state(sol.design, sol.coordinates)
-    return Propagation(model, after, res, dict(sol.changes), tuple(free), ratio, engine)
+    return Propagation(model, after, sol, tuple(free), ratio)
 
 
 #: a changed coordinate whose first-order motion leaves this relative residual is not independent

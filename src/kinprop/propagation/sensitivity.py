@@ -21,11 +21,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from kinprop.engine import Engine
+from kinprop.engine.units import address_scale, address_unit, check_units
 from kinprop.errors import AddressError
 from kinprop.kinematics.layout import column_labels
 from kinprop.model import Model
 from kinprop.propagation.propagate import engine_for
-from kinprop.propagation.units import address_scale, address_unit, check_units
 from kinprop.spatial import Array
 
 if TYPE_CHECKING:  # pandas (the 'data' extra) is imported only when a frame is built

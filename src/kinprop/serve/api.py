@@ -36,6 +36,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from kinprop.analysis.mobility import mobility
 from kinprop.analysis.sensitivity import RESIDUAL_WARN
 from kinprop.analysis.sweep import sweep
+from kinprop.engine.units import changes_to_internal
 from kinprop.errors import AddressError, ModelError, SingularityWarning
 from kinprop.io.arguments import parse_assignment, parse_weight
 from kinprop.io.commands import (
@@ -48,7 +49,6 @@ from kinprop.io.commands import (
     sweep_inputs,
     sweep_json,
 )
-from kinprop.io.units import changes_to_internal
 from kinprop.io.writer import dump_model_like
 from kinprop.model import Model
 from kinprop.propagation import assemble

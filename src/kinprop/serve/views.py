@@ -14,8 +14,8 @@ from kinprop.analysis.drives import has_travel
 from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import output_names
 from kinprop.analysis.points import joint_hardpoints, named_points
-from kinprop.analysis.targets import LENGTHS
-from kinprop.io.units import angle_indices, from_solver_units, unit_of
+from kinprop.analysis.units import unit_of
+from kinprop.engine.units import METRES_PER, angle_indices, from_solver_units
 from kinprop.model import Model
 from kinprop.plot.scene import Scene, bounds, build_scene, scale
 from kinprop.plot.style import AXIS, FADED_ALPHA, MARKERS, POINT, segment_colour
@@ -122,7 +122,7 @@ def _travel_drive(model: Model) -> list[dict[str, Any]]:
     if not has_travel(model):
         return []
     length = model.units.get("length", "m")
-    half = TRAVEL_CURVE_M / LENGTHS.get(length, 1.0)
+    half = TRAVEL_CURVE_M / METRES_PER.get(length, 1.0)
     return [{"spec": "travel", "address": "travel", "joint": "", "type": "wheel travel", "angle": False,
              "unit": length, "value": 0.0, "curve": [-half, half], "slider": [-half, half], "slider_ok": False,
              "size": 1}]  # fmt: skip

@@ -1,7 +1,6 @@
-"""The generalized-inverse Newton-Raphson solver: plan, compiled loop, result records."""
+"""The generalized-inverse Newton-Raphson solver: plan, compiled loop, status vocabulary."""
 
 from kinprop.solver.newton import RANK_RTOL, STATUSES, Status, min_norm_step
 from kinprop.solver.plan import Plan, build_plan
-from kinprop.solver.result import SolveResult, rank_of
 
-__all__ = ["RANK_RTOL", "STATUSES", "Plan", "SolveResult", "Status", "build_plan", "min_norm_step", "rank_of"]
+__all__ = ["RANK_RTOL", "STATUSES", "Plan", "Status", "build_plan", "min_norm_step"]

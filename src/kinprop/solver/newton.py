@@ -48,7 +48,8 @@ _KIND_D = ord("d")  # LAPACK's double-precision routines
 
 
 class Status(StrEnum):
-    """Outcome of a solve; the compiled loop returns the index of one of these."""
+    """Outcome of a solve or of an analysis at a pose, the one status vocabulary of kinprop
+    (docs/results.md); the compiled loop returns the index of one of the first six."""
 
     CONVERGED = "converged"
     NOT_CONVERGED = "not_converged"
@@ -58,6 +59,12 @@ class Status(StrEnum):
     INFEASIBLE = "infeasible"
     #: a documented cap (sub-steps of one change) was reached before the change was followed
     STEP_LIMIT = "step_limit"
+    #: never returned by the compiled loop: the values could not be applied (outside their
+    #: variable's domain, e.g. a length <= 0), so nothing was solved (a study's variant)
+    INVALID = "invalid"
+    #: never returned by the compiled loop: an analysis of a pose (velocities, loads) was asked
+    #: at a state that is not an assembly (``||Phi||`` too large), so nothing was computed
+    NOT_ASSEMBLED = "not_assembled"
 
 
 STATUSES = tuple(Status)

@@ -1,53 +1,114 @@
-"""Units at the user boundary (docs/units.md): joint coordinates and design variables.
+"""Units: the one module that owns unit factors and conversions (docs/units.md).
 
 **One rule**: every number a user gives or reads is in the model's declared units — lengths in
 ``units.length``, angles in ``units.angle`` (``deg`` or ``rad``). That covers ``--set``,
-``--drive``, ``--vary``, ``--tolerance`` sigmas, sensitivity rows and columns, targets, and
-every printed, CSV, JSON and Parquet value. Inside, the solver works in *solver units*: the
-model's length unit and radians. This module converts between the two; nothing else does.
+``--drive``, ``--vary``, ``--tolerance`` sigmas, sensitivity rows and columns, targets, the
+Python API (``units="model"``, the default) and every printed, CSV, JSON and Parquet value.
+Inside, the solver works in *solver units*: the model's length unit and radians; the engine's
+SI metric (``Engine.si_scale``) reads metres per length unit from :data:`METRES_PER`.
 
 Which numbers are angles: the angle components of a tree joint's coordinates (a revolute's
 ``q``, a cylindrical joint's ``q[0]``, both of a universal joint; ``JOINT.q`` addresses) and, for
 derivatives, the body-frame rotation of a ``C`` column. Euler parameters, slides, positions,
 lengths and rotation matrices have no angle unit. A coupling coefficient ``COUPLING.coef[k]``
-has the unit ``[q_a] / [q_b]^k`` of its two joints (:func:`coef_factors`). Suspension metrics (``metric:W.camber``) are
-computed in degrees; their units are added by :mod:`kinprop.analysis.units` (the layer that
-knows the metrics). The public door is :mod:`kinprop.io.units`, which re-exports both.
+has the unit ``[q_a] / [q_b]^k`` of its two joints (:func:`coef_factors`). Which coordinate
+components are angles is resolved once per compiled engine (:class:`UnitTable`,
+``Engine.unit_table``); the functions here take that engine (or resolve it from the mechanism's
+topology when none is given). Suspension metrics (``metric:W.camber``) are computed in degrees;
+:mod:`kinprop.analysis.units` names their units with the factors of this module.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Container, Mapping
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Protocol
+from weakref import WeakKeyDictionary
 
 import numpy as np
 
 from kinprop.constraints.coupling import N_COEF
-from kinprop.engine import Engine
-from kinprop.engine import compile as compile_engine
 from kinprop.joints import joint_type
-from kinprop.model import Joint, Model, parse_address
+from kinprop.model import Joint, Mechanism, Model, parse_address
 from kinprop.spatial import Array
+from kinprop.topology import Topology, build_topology
+
+#: metres per length unit: the units a model may declare (``m``, ``mm``) and those a value may
+#: carry (a target's ``50mm``, ``2in``)
+METRES_PER = {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254, "inch": 0.0254}
+#: radians per angle unit
+RADIANS_PER = {"rad": 1.0, "deg": math.pi / 180.0}
 
 
-def _tree_joints(model: Model, engine: Engine | None) -> Container[str]:
-    """The tree joints: from ``engine`` (compiled from the model's mechanism) when given, else
-    compiled here (a compile per call: hot paths pass their engine)."""
-    return (engine if engine is not None else compile_engine(model.mechanism)).topology.tree_joints
+class HasUnits(Protocol):
+    """What the conversions read of a compiled engine (:class:`kinprop.engine.Engine`)."""
+
+    @property
+    def unit_table(self) -> UnitTable: ...
 
 
-def angle_indices(model: Model, joint: str, engine: Engine | None = None) -> list[int]:
+@dataclass(frozen=True)
+class UnitTable:
+    """Which coordinate components of each joint are angles and which Euler parameters,
+    resolved once from a mechanism's topology (tree joints only: a cut joint has no
+    coordinates of the tree's kind); ``Engine.unit_table`` holds its engine's."""
+
+    #: joint -> indices of its coordinates that are angles (tree joints)
+    angles: Mapping[str, tuple[int, ...]]
+    #: joint -> indices of its coordinates that are Euler parameters (tree joints)
+    euler: Mapping[str, tuple[int, ...]]
+    #: joint -> number of coordinates (tree or cut form)
+    n_coordinates: Mapping[str, int]
+
+    @classmethod
+    def of(cls, mechanism: Mechanism, topology: Topology | None = None) -> UnitTable:
+        tree = (topology or build_topology(mechanism)).tree_joints
+        angles, euler, n = {}, {}, {}
+        for j in mechanism.joints:
+            jt = j.jtype
+            is_tree = j.name in tree
+            angles[j.name] = tuple(jt.angle_indices) if is_tree else ()
+            euler[j.name] = tuple(range(jt.euler.start, jt.euler.stop)) if is_tree and jt.euler is not None else ()
+            n[j.name] = jt.n_coordinates if is_tree else jt.n_cut_coordinates
+        return cls(angles, euler, n)
+
+
+#: tables resolved without an engine, once per mechanism (kept while the mechanism lives)
+_TABLES: WeakKeyDictionary[Mechanism, UnitTable] = WeakKeyDictionary()
+
+
+def _table(model: Model, engine: HasUnits | None) -> UnitTable:
+    """The engine's table (compiled from the model's mechanism) when given, else the
+    mechanism's, resolved once."""
+    if engine is not None:
+        return engine.unit_table
+    table = _TABLES.get(model.mechanism)
+    if table is None:
+        table = _TABLES[model.mechanism] = UnitTable.of(model.mechanism)
+    return table
+
+
+def angle_indices(model: Model, joint: str, engine: HasUnits | None = None) -> list[int]:
     """Indices of a joint's coordinates that are angles (tree joints only)."""
-    if joint not in _tree_joints(model, engine):
-        return []
-    return list(model.mechanism.joint(joint).jtype.angle_indices)
+    return list(_table(model, engine).angles.get(joint, ()))
+
+
+def tree_coordinates(q: object, angles: tuple[int, ...] | list[int], angle_unit: str, to_solver: bool) -> Array:
+    """A tree joint's coordinates between a file's angle unit and radians: its ``angles``
+    components (``JointType.angle_indices``) scaled by :data:`RADIANS_PER` (a copy)."""
+    out = np.array(q, dtype=float)
+    idx = list(angles)
+    if idx and RADIANS_PER[angle_unit] != 1.0:
+        out[idx] = out[idx] * RADIANS_PER[angle_unit] if to_solver else out[idx] / RADIANS_PER[angle_unit]
+    return out
 
 
 def _degrees(model: Model) -> bool:
     return model.units.get("angle") == "deg"
 
 
-def _angle_mask(model: Model, address: str, size: int, engine: Engine | None = None) -> np.ndarray:
+def _angle_mask(model: Model, address: str, size: int, engine: HasUnits | None = None) -> np.ndarray:
     """Which components of ``address``'s value (``size`` of them) are joint angles."""
     mask = np.zeros(size, dtype=bool)
     try:
@@ -69,7 +130,7 @@ def _angle_factor(joint: Joint | None, deg: bool) -> float:
     if joint is None or not deg:
         return 1.0
     try:
-        return math.pi / 180.0 if joint_type(joint.type).angle_indices else 1.0
+        return RADIANS_PER["deg"] if joint_type(joint.type).angle_indices else 1.0
     except KeyError:
         return 1.0
 
@@ -97,7 +158,7 @@ def _coef_scale(model: Model, address: str, size: int) -> np.ndarray | None:
     return np.full(size, F[addr.index]) if addr.index is not None and addr.index < F.size else np.resize(F, size)
 
 
-def _convert(model: Model, address: str, value: object, engine: Engine | None, to_solver: bool) -> np.ndarray:
+def _convert(model: Model, address: str, value: object, engine: HasUnits | None, to_solver: bool) -> np.ndarray:
     """Angles (and coupling coefficients) of ``address``: model units <-> solver units."""
     v = np.array(value, dtype=float)
     if not _degrees(model):
@@ -111,7 +172,7 @@ def _convert(model: Model, address: str, value: object, engine: Engine | None, t
     return flat.reshape(v.shape)
 
 
-def to_solver_units(model: Model, address: str, value: object, engine: Engine | None = None) -> np.ndarray:
+def to_solver_units(model: Model, address: str, value: object, engine: HasUnits | None = None) -> np.ndarray:
     """A value for ``address`` given in the model's units -> solver units (radians).
 
     ``J01.q = [45]`` on a degree model -> ``[0.785...]``; lengths, positions and rotation
@@ -119,13 +180,13 @@ def to_solver_units(model: Model, address: str, value: object, engine: Engine | 
     return _convert(model, address, value, engine, True)
 
 
-def from_solver_units(model: Model, address: str, value: object, engine: Engine | None = None) -> np.ndarray:
+def from_solver_units(model: Model, address: str, value: object, engine: HasUnits | None = None) -> np.ndarray:
     """The inverse of :func:`to_solver_units`: solver units (radians) -> the model's units."""
     return _convert(model, address, value, engine, False)
 
 
 def changes_to_internal(
-    model: Model, changes: Mapping[str, object], engine: Engine | None = None
+    model: Model, changes: Mapping[str, object], engine: HasUnits | None = None
 ) -> dict[str, np.ndarray]:
     """``{address: value}`` in the model's units -> solver units (see :func:`to_solver_units`;
     ``engine``: one compiled from the model's mechanism, to skip compiling here)."""
@@ -133,13 +194,13 @@ def changes_to_internal(
 
 
 def changes_to_model_units(
-    model: Model, changes: Mapping[str, object], engine: Engine | None = None
+    model: Model, changes: Mapping[str, object], engine: HasUnits | None = None
 ) -> dict[str, np.ndarray]:
     """``{address: value}`` in solver units -> the model's units."""
     return {a: from_solver_units(model, a, v, engine) for a, v in changes.items()}
 
 
-def address_unit(model: Model, name: str, engine: Engine | None = None) -> str:
+def address_unit(model: Model, name: str, engine: HasUnits | None = None) -> str:
     """The unit, in the model's units, of an address or a layout column label: ``J01.q`` ->
     ``deg`` (a revolute in a degree model), ``J03.q`` -> ``m`` (a slide), ``J12.s_j[0]``,
     ``J12.length``, ``point:...``, ``hardpoint:...`` -> the length unit, ``J.C_i`` -> ``""`` (a
@@ -159,20 +220,18 @@ def address_unit(model: Model, name: str, engine: Engine | None = None) -> str:
     if addr.field == "coef":
         return _coef_unit(model, addr.joint, addr.index, engine)
     if addr.field == "q" and addr.joint in model.mechanism.joint_names:
-        jt = model.mechanism.joint(addr.joint).jtype
-        tree = addr.joint in _tree_joints(model, engine)
-        angles = set(angle_indices(model, addr.joint, engine))
-        euler = set(range(jt.euler.start, jt.euler.stop)) if tree and jt.euler is not None else set()
+        table = _table(model, engine)
+        angles, euler = set(table.angles[addr.joint]), set(table.euler[addr.joint])
         k = addr.index
         if k is None:
-            n = jt.n_coordinates if tree else jt.n_cut_coordinates
+            n = table.n_coordinates[addr.joint]
             kinds = [angle if i in angles else ("" if i in euler else length) for i in range(n)]
             return kinds[0] if len(set(kinds)) == 1 else ",".join(kinds)
         return angle if k in angles else ("" if k in euler else length)
     return ""
 
 
-def _coef_unit(model: Model, coupling: str, k: int | None, engine: Engine | None = None) -> str:
+def _coef_unit(model: Model, coupling: str, k: int | None, engine: HasUnits | None = None) -> str:
     """``[q_a] / [q_b]^k`` of a coupling coefficient ``c_k`` (``""`` for ``c1`` between like
     units; ``deg/deg^k`` for the whole ``coef`` without an index)."""
     c = next((c for c in model.mechanism.couplings if c.name == coupling), None)
@@ -188,7 +247,7 @@ def _coef_unit(model: Model, coupling: str, k: int | None, engine: Engine | None
     return f"{ua}/{ub}^{k}"
 
 
-def address_scale(model: Model, name: str, engine: Engine | None = None) -> float:
+def address_scale(model: Model, name: str, engine: HasUnits | None = None) -> float:
     """Factor from solver units to the model's units of an address's value or of a derivative
     by it: ``180/pi`` for a joint angle or a ``C`` column (per radian of body-frame rotation)
     in a degree model, else 1."""
@@ -199,11 +258,11 @@ def address_scale(model: Model, name: str, engine: Engine | None = None) -> floa
     except Exception:
         return 1.0
     if addr.field in ("C_i", "C_j"):
-        return 180.0 / math.pi
+        return 1.0 / RADIANS_PER["deg"]
     if addr.field == "coef":  # model value = solver value / (f_a / f_b^k)
         scale = _coef_scale(model, name, 1)
         return 1.0 if scale is None or addr.index is None else float(1.0 / scale[0])
-    return 180.0 / math.pi if address_unit(model, name, engine) == "deg" else 1.0
+    return 1.0 / RADIANS_PER["deg"] if address_unit(model, name, engine) == "deg" else 1.0
 
 
 #: joint-value names (:mod:`kinprop.propagation.poses`) that are angles (``rotation_vector``: an
@@ -214,7 +273,7 @@ ANGLE_VALUES = ("angle", "angle_1", "angle_2", "rotation_vector")
 def joint_values_to_model_units(model: Model, values: Mapping[str, Mapping[str, object]]) -> dict[str, dict]:
     """``{JOINT: {name: value}}`` joint values (radians) -> the model's angle unit; distances and
     translations are in the length unit either way, Euler parameters have no unit."""
-    k = 180.0 / math.pi if _degrees(model) else 1.0
+    k = 1.0 / RADIANS_PER["deg"] if _degrees(model) else 1.0
     out: dict[str, dict] = {}
     for j, vals in values.items():
         out[j] = {
@@ -234,6 +293,9 @@ def check_units(units: str) -> bool:
 
 __all__ = [
     "ANGLE_VALUES",
+    "METRES_PER",
+    "RADIANS_PER",
+    "UnitTable",
     "address_scale",
     "address_unit",
     "angle_indices",
@@ -244,4 +306,5 @@ __all__ = [
     "from_solver_units",
     "joint_values_to_model_units",
     "to_solver_units",
+    "tree_coordinates",
 ]

@@ -67,7 +67,7 @@ def test_freudenstein_three_positions_equal_the_closed_form():
     assert all(x > 0 for x in (a, b, c))
     specs = [f"O4.q@O2.q={p:.17g}={s:.17g}" for p, s in zip(phi, psi, strict=True)]
     tp = propagate_targets(model, specs, ["A.s_i[0]", "B.s_i[0]", "B.s_j[0]"])
-    assert tp.status == "met", tp.result.message
+    assert tp.targets_status == "met", tp.result.message
     eng, st = tp.engine, tp.result.after[0]
     found = (eng.get(st, "A.s_i[0]"), eng.get(st, "B.s_i[0]"), eng.get(st, "B.s_j[0]"))
     np.testing.assert_allclose(found, (a, b, c), rtol=1e-9)
@@ -88,7 +88,7 @@ def test_stewart_pose_target_gives_inverse_kinematics_leg_lengths():
     p = matrix_to_euler(rot)
     specs = [f"P.q[{k}]={v:.17g}" for k, v in enumerate(pos)] + [f"P.q[{k + 4}]={v:.17g}" for k, v in enumerate(p[1:])]
     tp = propagate_targets(model, specs, ["l"])
-    assert tp.status == "met", tp.result.message
+    assert tp.targets_status == "met", tp.result.message
     eng, st = tp.engine, tp.result.after[0]
     for k in range(1, 7):
         s_i, s_j = model.design[f"L{k}.s_i"], model.design[f"L{k}.s_j"]
@@ -144,7 +144,7 @@ def test_double_wishbone_camber_and_toe_curve_met_and_confirmed_independently():
     specs = [f"metric:{m}@travel={t:g}mm={v:g}deg" for (t, m), v in targets.items()]
     before = {(t, m): closed_wheel(model, t, z_ref)[m == "toe"] for (t, m) in targets}
     tp = propagate_targets(model, specs, ["hardpoint:UBJ", "hardpoint:TR.i"])
-    assert tp.status == "met", tp.result.message
+    assert tp.targets_status == "met", tp.result.message
     for row, key in zip(tp.table(), targets, strict=True):
         assert row["before"] == pytest.approx(before[key], abs=1e-7)  # kinprop's sweep vs construction
         assert row["achieved"] == pytest.approx(targets[key], abs=1e-9)
@@ -163,7 +163,7 @@ def test_conflicting_targets_give_the_least_squares_compromise_and_name_the_conf
     tp = propagate_targets(
         model, ["camber@travel=50=-1.5", "camber@travel=50=-1.0", "toe@travel=50=0"], ["hardpoint:UBJ", "TR.s_i"]
     )
-    assert tp.status == "compromise" and tp.converged  # converged to the compromise
+    assert tp.targets_status == "compromise" and tp.converged  # converged to the compromise
     res = {r["target"]: r["residual"] for r in tp.table()}
     assert res["camber@travel=50=-1.5"] == pytest.approx(0.25, abs=1e-9)
     assert res["camber@travel=50=-1.0"] == pytest.approx(-0.25, abs=1e-9)
@@ -186,7 +186,7 @@ def test_slope_target_bump_steer():
     model = solved("double_wishbone.yaml")
     z_ref = float(named_points(model)["chassis.wheel_centre_ref"][2])
     tp = propagate_targets(model, ["slope:toe@travel=-50..50=0deg/m"], ["hardpoint:TR.i"])
-    assert tp.status == "met", tp.result.message
+    assert tp.targets_status == "met", tp.result.message
     lo, hi = closed_wheel(tp.after, -50, z_ref)[1], closed_wheel(tp.after, 50, z_ref)[1]
     assert hi - lo == pytest.approx(0.0, abs=1e-7)
     # only the tie rod's inner point moved
@@ -240,7 +240,7 @@ def test_design_weights_shift_the_change_between_hardpoints():
     specs = ["camber@travel=50=-2", "camber@travel=0=0"]
     plain = propagate_targets(model, specs, ["hardpoint:UBJ.j", "hardpoint:TR.i"])
     heavy = propagate_targets(model, specs, ["hardpoint:UBJ.j", "hardpoint:TR.i"], weights={"hardpoint:TR.i": 100.0})
-    assert plain.status == heavy.status == "met"
+    assert plain.targets_status == heavy.targets_status == "met"
     n = {k: np.linalg.norm(tp.design_change["TR.s_i"]) for k, tp in (("plain", plain), ("heavy", heavy))}
     assert n["heavy"] > 2 * n["plain"]
 
@@ -248,8 +248,8 @@ def test_design_weights_shift_the_change_between_hardpoints():
 def test_output_jacobian_of_a_hardpoint_is_the_body_rotation():
     """The output map's central difference against the analytic d(r + A s')/ds' = A."""
     from kinprop import compile
+    from kinprop.engine.targets import output_jacobian
     from kinprop.propagation.hardpoints import body_rotation
-    from kinprop.propagation.targets import output_jacobian
 
     model = solved("double_wishbone.yaml")
     eng = compile(model)
@@ -272,7 +272,7 @@ def test_targets_on_frame_style_and_hardpoint_style_models_agree():
     data = yaml.safe_load((EXAMPLES / "double_wishbone_hardpoints.yaml").read_text()) | {"edits": "mechanism"}
     models = [solved("double_wishbone.yaml"), assemble(model_from_data(data), tol=1e-9).after]
     res = [propagate_targets(m, specs, ["hardpoint:UBJ.j", "hardpoint:TR.i"]) for m in models]
-    assert [r.status for r in res] == ["met", "met"]
+    assert [r.targets_status for r in res] == ["met", "met"]
     pa, pb = (r.joint_positions(0) for r in res)
     for key in pa:
         np.testing.assert_allclose(pa[key][1], pb[key][1], atol=1e-6)
@@ -305,7 +305,7 @@ def _tangent(engine, state):
 def test_analytic_output_jacobians_match_central_differences_of_the_output_map():
     from kinprop import compile, propagate
     from kinprop.analysis.targets import _config_jacobian, _config_outputs
-    from kinprop.propagation.targets import output_jacobian
+    from kinprop.engine.targets import output_jacobian
 
     model = solved("double_wishbone.yaml")
     eng = compile(model)
@@ -328,7 +328,7 @@ def test_analytic_and_difference_jacobians_give_the_same_design():
     specs = ["camber@travel=50=-2", "slope:toe@travel=-50..50=0"]
     a = propagate_targets(model, specs, ["hardpoint:UBJ", "hardpoint:TR.i"])
     f = propagate_targets(model, specs, ["hardpoint:UBJ", "hardpoint:TR.i"], analytic=False)
-    assert a.status == f.status == "met"
+    assert a.targets_status == f.targets_status == "met"
     # an underdetermined Newton's end point depends (weakly) on the step directions taken
     for key in a.design_change:
         np.testing.assert_allclose(a.design_change[key], f.design_change[key], atol=1e-5)

@@ -1,0 +1,391 @@
+"""Propagation to targets: the minimum-norm design change that makes outputs reach given values.
+
+The paper's system ``Phi(x) = 0`` is extended with target rows. With ``K`` configurations
+(e.g. a suspension at several wheel travels) the outer unknowns are the free design columns
+``p``, shared by all of them, and the declared inputs ``u_k`` a configuration's conditions drive;
+each configuration's other coordinates ``q_k`` are not unknowns of their own: they are the
+engine's assembly at ``(u_k, p)`` (:meth:`kinprop.engine.Engine.solve`, the one compiled
+branch-following Newton loop, followed from the previous iterate so every configuration stays on
+its branch):
+
+    hard rows    H(z) = conditions(q_k(u_k, p), u_k, p)          = 0
+    target rows  T(z) = [sum_k c_k f_k(q_k, p) - value]_rows      -> 0
+
+``conditions`` are rows that define a configuration (``wheel-centre z = 50``) and must hold
+exactly; targets are met exactly when they can be, else in the least-squares sense. Each outer
+step is the weighted minimum-norm solution of the linearised rows, with the hard rows first
+(hierarchical least squares, ``y = W^-1/2 dz``):
+
+    y_h = -pinv(H_y) H,    N = I - pinv(H_y) H_y,    y = y_h + N pinv(T_y N) (-T - T_y y_h)
+
+the minimum-norm step to the least-squares compromise of the targets. The rows' Jacobians over
+``z`` eliminate the coordinates by the implicit-function theorem at each assembly,
+``dq_k/dz = -Phi_q^+ Phi_z`` (the engine's analytic ``Phi_x``, Table 1), the design step is
+applied on the manifold (:meth:`Engine.retract`: additive for q, s', l; exponential map for C)
+and the configurations re-assembled by the engine; a step is halved only when an assembly fails
+or the residual grows tenfold.
+
+A configuration's output rows use its ``jacobian`` when given — :mod:`kinprop.analysis.targets`
+gives analytic ones for points, hardpoints, distances, coordinates, design variables and the
+camber, toe and wheel-centre metrics (:mod:`kinprop.propagation.point_jacobians`: the kernel's
+own partials, chained through the metric formula) — and otherwise a **central difference of the
+output map only** (forward kinematics, no re-solve) along each state column on the manifold, as
+:mod:`kinprop.analysis.sensitivity` does. Either way every iterate is an exact assembly and the
+rows are evaluated exactly, so the converged design is exact; a difference only perturbs the step
+direction (O(h^2)).
+
+Conflicts: at the solution, the left singular vectors of ``T_y N`` (targets restricted to the
+motions that keep every condition) whose singular value is (numerically) zero span the target
+combinations no free design variable can change; the targets weighted in such a vector that
+carries residual are reported together as conflicting (the same reading as
+:mod:`kinprop.propagation.continuation`'s ``_conflict`` for constraint rows).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from kinprop.engine.engine import Engine, Solution, State, Status
+from kinprop.errors import AddressError
+from kinprop.spatial import Array, log_so3
+
+#: relative step of the output map's central difference
+FD_STEP = 1e-6
+#: relative cut-off of the pseudo-inverses (hard rows, reduced target rows)
+RCOND_HARD, RCOND_TARGET = 1e-10, 1e-9
+#: a Newton step is halved when it makes a residual norm this many times larger
+BLOWUP = 10.0
+#: a left singular vector component at least this large names a target in a conflict
+CONFLICT_WEIGHT = 0.1
+
+OutputMap = Callable[[State], Array]
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """One configuration of the mechanism: ``outputs(state)`` gives every output value its rows
+    use; ``held`` coordinate addresses are set (solver units) and do not move in it."""
+
+    name: str
+    outputs: OutputMap
+    held: Mapping[str, Any] = field(default_factory=dict)
+    #: ``(state, columns) -> d outputs / d x`` (analytic); None: central differences of ``outputs``
+    jacobian: Callable[[State, Array], Array] | None = None
+
+
+@dataclass(frozen=True)
+class Row:
+    """One scalar row ``sum(c * outputs_k[i]) = value`` over ``terms`` ``(k, i, c)``; a hard row
+    (a configuration's condition) must hold exactly. ``scale`` divides the residual (a target
+    stated in a unit where ``scale`` is "one unit of miss")."""
+
+    name: str
+    value: float
+    terms: tuple[tuple[int, int, float], ...]
+    hard: bool = False
+    scale: float = 1.0
+
+
+@dataclass(frozen=True)
+class TargetResult:
+    """Outcome of :func:`solve_targets`.
+
+    ``status`` (:class:`kinprop.Status`): ``converged`` (every configuration assembled, the
+    conditions held and the iteration finished: the targets are ``met``, or at their
+    least-squares compromise, see ``conflicts``) or ``not_converged`` (the message says when a
+    configuration could not be reached with the starting design). ``targets_status`` says
+    ``met``/``compromise`` (or the status when not converged).
+    """
+
+    status: Status
+    message: str
+    iterations: int
+    rows: tuple[Row, ...]
+    configurations: tuple[Configuration, ...]
+    before: tuple[State, ...]
+    after: tuple[State, ...]
+    values_before: Array
+    values_after: Array
+    #: ``||Phi||`` over all configurations and the conditions' residual at the end
+    hard_residual: float
+    #: free design variable key -> change (s', l: difference; C: body-frame rotation vector, rad)
+    design_change: dict[str, Array]
+    #: groups of conflicting targets: ((target name, left-singular-vector weight), ...)
+    conflicts: tuple[tuple[tuple[str, float], ...], ...] = ()
+    history: tuple[float, ...] = ()
+    free_columns: Array = field(default_factory=lambda: np.zeros(0, np.int64))
+    #: every target within ``target_tol`` (converged, not a compromise)
+    met: bool = False
+    #: the engine's solution of each configuration at the end (``after``'s states)
+    solutions: tuple[Solution, ...] = ()
+
+    @property
+    def converged(self) -> bool:
+        return self.status is Status.CONVERGED
+
+    @property
+    def targets_status(self) -> str:
+        """``met``, ``compromise`` (converged to the least-squares compromise) or the status."""
+        return ("met" if self.met else "compromise") if self.converged else self.status.value
+
+    @property
+    def targets(self) -> list[dict[str, Any]]:
+        """Per target row (not conditions): name, wanted, before, achieved, residual."""
+        return [
+            {
+                "target": r.name,
+                "value": r.value,
+                "before": float(b),
+                "achieved": float(a),
+                "residual": float(a - r.value),
+            }
+            for r, b, a in zip(self.rows, self.values_before, self.values_after, strict=True)
+            if not r.hard
+        ]
+
+
+def _row_values(rows: Sequence[Row], outs: Sequence[Array]) -> Array:
+    return np.array([sum(c * outs[k][i] for k, i, c in r.terms) for r in rows])
+
+
+def _step_size(engine: Engine, state: State, col: int) -> float:
+    v = next(v for v in engine.layout.variables if v.start <= col < v.start + v.size)
+    if v.group == "C":
+        return FD_STEP
+    val = float(engine.get(state, v.key).ravel()[col - v.start])
+    return FD_STEP * max(1.0, abs(val))
+
+
+def output_jacobian(engine: Engine, f: OutputMap, state: State, columns: Array) -> Array:
+    """``d f / d x`` over layout ``columns`` by central differences of the output map on the
+    manifold (:meth:`Engine.retract`); no re-assembly."""
+    cols = np.asarray(columns, np.int64)
+    f0 = np.asarray(f(state), float)
+    G = np.zeros((f0.size, cols.size))
+    for k, c in enumerate(cols):
+        h = _step_size(engine, state, int(c))
+        dx = np.zeros(engine.n_columns)
+        dx[c] = h
+        G[:, k] = (np.asarray(f(engine.retract(state, dx))) - np.asarray(f(engine.retract(state, -dx)))) / (2 * h)
+    return G
+
+
+def _pinv(A: Array, rcond: float) -> Array:
+    return np.linalg.pinv(A, rcond=rcond) if A.size else A.T.copy()
+
+
+def _design_change(engine: Engine, a: State, b: State, pcols: Array) -> dict[str, Array]:
+    pset = set(pcols.tolist())
+    keys = dict.fromkeys(v.key for v in engine.layout.variables if pset & set(range(v.start, v.start + v.size)))
+    out: dict[str, Array] = {}
+    for key in keys:
+        va, vb = engine.get(a, key), engine.get(b, key)
+        if engine.layout[key].group == "C":
+            out[key] = np.asarray(log_so3(vb.reshape(3, 3) @ va.reshape(3, 3).T), float)
+        else:
+            out[key] = np.asarray(vb - va, float).ravel()
+    return out
+
+
+def _step(Hy: Array, h: Array, Ty: Array, t: Array) -> Array:
+    """The hierarchical minimum-norm step (module docstring): the hard rows first, the target
+    rows in what they leave free, in the scaled unknowns ``y``."""
+    Hp = _pinv(Hy, RCOND_HARD)
+    yh = -Hp @ h
+    if not t.size:
+        return yh
+    Nm = np.eye(Hy.shape[1]) - Hp @ Hy
+    return yh + Nm @ (_pinv(Ty @ Nm, RCOND_TARGET) @ (-t - Ty @ yh))
+
+
+def solve_targets(
+    engine: Engine,
+    start: State,
+    configurations: Sequence[Configuration],
+    rows: Sequence[Row],
+    free: Sequence[str],
+    *,
+    coordinates: Sequence[str] = ("q",),
+    weights: Mapping[str, float] | None = None,
+    tol: float = 1e-9,
+    target_tol: float = 1e-6,
+    max_iter: int = 60,
+) -> TargetResult:
+    """The minimum-(weighted-)norm change of the ``free`` design columns (groups ``s C l`` or
+    design addresses; shared by every configuration) that meets the target ``rows`` with every
+    configuration assembled (module docstring). ``coordinates`` selects each configuration's
+    free coordinates (minus its ``held`` ones); the declared inputs a condition drives are
+    unknowns of the outer iteration. ``tol`` bounds ``||Phi||`` and the conditions (relative to
+    the engine's round-off floor), ``target_tol`` the target residuals (row units over
+    ``scale``). Every assembly is the engine's solve (:meth:`Engine.solve`)."""
+    pcols = engine.columns(free) if free else np.zeros(0, np.int64)
+    qset = set(engine.columns(["q"]).tolist())
+    if set(pcols.tolist()) & qset:
+        raise AddressError("targets: --free names design variables (hardpoints, s, C, l); coordinates move anyway")
+    goals, inner, driven = [], [], []
+    conditioned = {int(k) for r in rows if r.hard for k, _, _ in r.terms}
+    for n, cfg in enumerate(configurations):
+        st, _, keys = engine.apply(start, cfg.held)
+        goals.append(st)
+        inner.append(engine.columns(coordinates, keys))
+        # the declared inputs are held, unless a condition of this configuration drives them
+        # (e.g. wheel travel sets the lower arm's angle): then they are outer unknowns
+        drives = n in conditioned and "q" in coordinates
+        driven.append(np.setdiff1d(engine.columns([*coordinates, "inputs"], keys), inner[-1]) if drives
+                      else np.zeros(0, np.int64))  # fmt: skip
+    wfull = np.ones(engine.n_columns)
+    for sel, w in (weights or {}).items():
+        if not (float(w) > 0 and np.isfinite(float(w))):
+            raise AddressError(f"weight for {sel!r} must be positive, found {w}")
+        wfull[engine.columns([sel])] = float(w)
+    hard = [r for r in rows if r.hard]
+    soft = [r for r in rows if not r.hard]
+    floor = max(tol, engine.roundoff_floor(start))
+    solve_tol = min(tol, 1e-10)
+    uoffs = np.cumsum([0] + [d.size for d in driven])
+
+    def assemble(froms: Sequence[State], targets: Sequence[State]) -> list[Solution]:
+        """Every configuration re-assembled by the engine at ``targets``' design and driven
+        inputs, followed from ``froms`` on their branch."""
+        return [engine.solve(a, inner[k], target=b, tol=solve_tol) for k, (a, b) in enumerate(zip(froms, targets,
+                strict=True))]  # fmt: skip
+
+    def residuals(sts: Sequence[State], with_design: bool) -> tuple[Array, Array, list[Array]]:
+        outs = [np.asarray(configurations[k].outputs(st), float) for k, st in enumerate(sts)]
+        hv = np.array([(v - r.value) / r.scale for r, v in zip(hard, _row_values(hard, outs), strict=True)])
+        tv = (np.array([(v - r.value) / r.scale for r, v in zip(soft, _row_values(soft, outs), strict=True)])
+              if with_design else np.zeros(0))  # fmt: skip
+        return hv, tv, outs
+
+    def jacobians(sts: Sequence[State], with_design: bool) -> tuple[Array, Array]:
+        """The hard and target rows' Jacobians over the outer unknowns ``z = [u_1 .. u_K, p]``,
+        each configuration's coordinates eliminated by the implicit-function theorem:
+        ``dq/dz = -Phi_q^+ Phi_z`` at its assembly."""
+        npc = pcols.size if with_design else 0
+        n = int(uoffs[-1]) + npc
+        reduced = []
+        for k, st in enumerate(sts):
+            zc = np.concatenate([driven[k], pcols[:npc]])
+            _, J = engine.evaluate(st)
+            dq = -np.linalg.lstsq(J[:, inner[k]], J[:, zc], rcond=None)[0] if zc.size else np.zeros((inner[k].size, 0))
+            cols = np.concatenate([inner[k], zc])
+            cfg = configurations[k]
+            G = cfg.jacobian(st, cols) if cfg.jacobian is not None else output_jacobian(engine, cfg.outputs, st, cols)
+            reduced.append(G[:, : inner[k].size] @ dq + G[:, inner[k].size :])
+
+        def lin(rs: list[Row]) -> Array:
+            jac = np.zeros((len(rs), n))
+            for r_, row in enumerate(rs):
+                for k, i, c in row.terms:
+                    nu = driven[k].size
+                    jac[r_, uoffs[k] : uoffs[k + 1]] += c * reduced[k][i, :nu]
+                    if npc:
+                        jac[r_, uoffs[-1] :] += c * reduced[k][i, nu:]
+                jac[r_] /= row.scale
+            return jac
+
+        return lin(hard), lin(soft) if with_design else np.zeros((0, n))
+
+    def moved(sts: Sequence[State], dz: Array, with_design: bool) -> list[State]:
+        """The goal of each configuration after the outer step ``dz``: its driven inputs and
+        the shared design moved (:meth:`Engine.retract`), its other coordinates as they are."""
+        out = []
+        for k, st in enumerate(sts):
+            dx = np.zeros(engine.n_columns)
+            dx[driven[k]] = dz[uoffs[k] : uoffs[k + 1]]
+            if with_design and pcols.size:
+                dx[pcols] = dz[uoffs[-1] :]
+            out.append(engine.retract(st, dx))
+        return out
+
+    def iterate(sols: list[Solution], with_design: bool) -> tuple[list[Solution], int, bool, list[float]]:
+        """Gauss-Newton on the conditions and targets over ``z``; every configuration stays an
+        engine assembly (a step whose assembly fails or that blows a residual up is halved)."""
+        hist: list[float] = []
+        w = np.concatenate([np.ones(int(uoffs[-1]))] + ([wfull[pcols]] if with_design else []))
+        sw = np.sqrt(w)
+        h, t, _ = residuals([s.state for s in sols], with_design)
+        for it in range(max_iter + 1):
+            hist.append(float(np.sqrt(h @ h + t @ t)))
+            sts = [s.state for s in sols]
+            Hj, Tj = jacobians(sts, with_design)
+            dz = sw * _step(Hj * sw, h, Tj * sw, t)
+            hn = float(np.linalg.norm(h))
+            small = float(np.linalg.norm(dz)) <= 1e-10 * max(1.0, engine.length_scale or 1.0)
+            if hn < floor and (small or t.size == 0 or float(np.max(np.abs(t), initial=0.0)) < target_tol * 1e-3):
+                return sols, it, True, hist
+            if it == max_iter or not np.all(np.isfinite(dz)):
+                break
+            # full steps (the conditions, off at second order after a design step, are re-closed
+            # by the next); halved when an assembly fails or the residual blows up tenfold
+            lam, tn = 1.0, float(np.linalg.norm(t))
+            for _ in range(8):
+                trial = assemble(sts, moved(sts, lam * dz, with_design))
+                if all(s.converged for s in trial):
+                    h2, t2, _ = residuals([s.state for s in trial], with_design)
+                    h2n, t2n = float(np.linalg.norm(h2)), float(np.linalg.norm(t2))
+                    grew = np.hypot(h2n, t2n) > BLOWUP * np.hypot(hn, tn) + np.sqrt(floor)
+                    if np.isfinite(h2n + t2n) and not grew:
+                        break
+                lam *= 0.5
+            else:
+                break
+            sols, h, t = trial, h2, t2
+        return sols, max_iter, False, hist
+
+    # 1. every configuration with the starting design (the "before" curves)
+    first = assemble([start] * len(goals), goals)
+    if all(s.converged for s in first):
+        before_sols, it0, ok0, _ = iterate(first, with_design=False)
+    else:
+        before_sols, it0, ok0 = first, 0, False
+    before = [s.state for s in before_sols]
+    outs0 = [np.asarray(c.outputs(s), float) for c, s in zip(configurations, before, strict=True)]
+    vb = _row_values(rows, outs0)
+    if not ok0:
+        return TargetResult(Status.NOT_CONVERGED, "not assembled: a configuration could not be reached with "
+                            "the starting design (its conditions or Phi did not converge)", it0, tuple(rows),
+                            tuple(configurations), tuple(before), tuple(before), vb, np.full_like(vb, np.nan),
+                            float("nan"), {}, solutions=tuple(before_sols))  # fmt: skip
+    # 2. the design change
+    after_sols, it, ok, hist = iterate(list(before_sols), with_design=True)
+    after = [s.state for s in after_sols]
+    h, t, outs = residuals(after, True)
+    va = _row_values(rows, outs)
+    hard_res = float(np.linalg.norm(np.concatenate([engine.residual(s) for s in after] + [h])))
+    conflicts: list[tuple[tuple[str, float], ...]] = []
+    if t.size:
+        Hj, Tj = jacobians(after, True)
+        sw = np.sqrt(np.concatenate([np.ones(int(uoffs[-1])), wfull[pcols]]))
+        Hy, Ty = Hj * sw, Tj * sw
+        TN = Ty @ (np.eye(sw.size) - _pinv(Hy, RCOND_HARD) @ Hy)
+        U, sv, _ = np.linalg.svd(TN)
+        rank = int(np.sum(sv > RCOND_TARGET * max(sv.max(initial=0.0), 1e-300))) if sv.size else 0
+        for m in range(rank, U.shape[1]):
+            u = U[:, m]
+            if abs(u @ t) > target_tol:
+                grp = tuple((soft[i].name, float(u[i])) for i in np.argsort(-np.abs(u)) if abs(u[i]) >= CONFLICT_WEIGHT)
+                conflicts.append(grp)
+    worst = float(np.max(np.abs(t), initial=0.0))
+    met = ok and worst <= target_tol
+    if not ok:
+        msg = (
+            f"not converged after {it} iterations: ||Phi, conditions|| = {hard_res:.3g}, worst target miss {worst:.3g}"
+        )
+    elif met:
+        msg = f"targets met in {it} iterations (worst miss {worst:.3g}, ||Phi|| = {hard_res:.3g})"
+    else:
+        names = "; ".join(" vs ".join(n for n, _ in g) for g in conflicts) or "none identified"
+        msg = (f"targets cannot all be met: least-squares compromise after {it} iterations, worst miss {worst:.3g}; "
+               f"conflicting: {names}")  # fmt: skip
+    return TargetResult(Status.CONVERGED if ok else Status.NOT_CONVERGED, msg, it0 + it, tuple(rows),
+                        tuple(configurations), tuple(before), tuple(after), vb, va, hard_res,
+                        _design_change(engine, before[0], after[0], pcols), tuple(conflicts), tuple(hist), pcols, met,
+                        tuple(after_sols))  # fmt: skip
+
+
+__all__ = ["Configuration", "OutputMap", "Row", "TargetResult", "output_jacobian", "solve_targets"]
