@@ -51,8 +51,8 @@ def curves(out: Path) -> None:
     for label, f in frames.items():
         lo, hi = f.iloc[0], f.iloc[-1]
         print(
-            f"{label}: travel {lo['wheel_centre_dz']:.1f}..{hi['wheel_centre_dz']:.1f} mm, "
-            f"camber {lo['camber']:.3f}..{hi['camber']:.3f} deg, toe {lo['toe']:.3f}..{hi['toe']:.3f} deg"
+            f"{label}: travel {lo['wheel_centre_dz']:.1f} .. {hi['wheel_centre_dz']:.1f} mm, "
+            f"camber {lo['camber']:.3f} .. {hi['camber']:.3f} deg, toe {lo['toe']:.3f} .. {hi['toe']:.3f} deg"
         )
     print(f"wrote {out}")
 

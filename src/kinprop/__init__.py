@@ -31,6 +31,7 @@ _EXPORTS = {
     "KinpropError": "kinprop.errors",
     "ModelError": "kinprop.errors",
     "SingularityWarning": "kinprop.errors",
+    "UnitsWarning": "kinprop.errors",
     "dump_model": "kinprop.io",
     "load_model": "kinprop.io",
     "Body": "kinprop.model",
@@ -54,7 +55,14 @@ if _TYPE_CHECKING:
     from kinprop.analysis.statics import Statics, statics
     from kinprop.analysis.targets import TargetPropagation, propagate_targets
     from kinprop.engine import BatchSolution, Engine, Solution, State, Status, compile
-    from kinprop.errors import AddressError, ConvergenceError, KinpropError, ModelError, SingularityWarning
+    from kinprop.errors import (
+        AddressError,
+        ConvergenceError,
+        KinpropError,
+        ModelError,
+        SingularityWarning,
+        UnitsWarning,
+    )
     from kinprop.io import dump_model, load_model
     from kinprop.model import Body, Design, Joint, LoadCase, Mechanism, Model, PointLoad
     from kinprop.propagation import Propagation, assemble, propagate, propagate_continuation
@@ -97,6 +105,7 @@ __all__ = [
     "Statics",
     "Status",
     "TargetPropagation",
+    "UnitsWarning",
     "assemble",
     "compile",
     "design_sensitivity",

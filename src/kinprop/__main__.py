@@ -11,9 +11,20 @@ from __future__ import annotations
 
 import os
 import sys
+from importlib.util import find_spec
 
 #: commands whose work is many solves: compiling first pays for itself
 BATCH_COMMANDS = frozenset({"sweep", "study", "tolerance", "serve"})
+#: the optional libraries a batch command cannot start without (its extra): when one is
+#: missing the command says which extra to install, and nothing is announced before that
+NEEDS = {"sweep": ("pandas",), "study": ("pandas", "pyarrow"), "serve": ("fastapi",)}
+
+
+def _has(module: str) -> bool:
+    try:
+        return find_spec(module) is not None
+    except (ImportError, ValueError):
+        return False
 
 
 def main() -> None:
@@ -23,9 +34,10 @@ def main() -> None:
     answers_only = not command or "--help" in sys.argv[1:]
     if "KINPROP_JIT" not in os.environ and not answers_only:
         os.environ["KINPROP_JIT"] = "on" if command in BATCH_COMMANDS else "auto"
-        from kinprop.cli.warmup import announce
+        if all(_has(m) for m in NEEDS.get(command, ())):
+            from kinprop.cli.warmup import announce
 
-        announce()
+            announce()
     from kinprop.cli import main as cli_main
 
     cli_main()

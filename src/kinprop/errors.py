@@ -48,5 +48,10 @@ class ConvergenceError(KinpropError, RuntimeError):
     """Raised only on request (``result.raise_for_status()``) when a solve did not converge."""
 
 
+class UnitsWarning(UserWarning):
+    """A number that is valid but implausible in the declared unit (millimetre numbers under
+    ``length: m``, a tyre radius in the wrong unit): the results would be off by 1000."""
+
+
 class SingularityWarning(UserWarning):
     """The free-variable Jacobian is close to singular at a solved configuration."""

@@ -88,3 +88,17 @@ def test_dask_scheduler_needs_the_dask_extra(examples, tmp_path) -> None:
     argv = ["study", examples / "fourbar.yaml", "--vary", "B.s_i[0]=0.39:0.41", "-o", tmp_path / "s"]
     p = run_kinprop(*argv, "--scheduler", "tcp://127.0.0.1:1", env=_env(tmp_path, ["dask", "distributed"]))
     assert "pip install 'kinprop[dask]'" in one_error_line(p)
+
+
+def test_no_compile_notice_before_a_missing_extra(examples, tmp_path) -> None:
+    """``kinprop sweep`` without pandas, on a first run (empty kernel cache): the one line says
+    which extra to install; nothing announces a minute of compiling first (issue 19 item 11)."""
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k not in ("KINPROP_JIT", "NUMBA_DISABLE_JIT")}
+    env |= _env(tmp_path, ALL_EXTRAS) | {"KINPROP_CACHE_DIR": str(tmp_path / "cache")}
+    cmd = [sys.executable, "-m", "kinprop", "sweep", str(examples / "fourbar.yaml"), "--drive", "O2=0:360:4"]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=120, env=env)  # the entry point: __main__
+    line = one_error_line(p)
+    assert "pip install 'kinprop[data]'" in line and "compil" not in p.stderr

@@ -51,3 +51,27 @@ def test_a_coordinate_tied_to_a_held_input_is_refused_up_front(model, change, he
     r = CliRunner().invoke(app, ["propagate", str(EXAMPLES / model), "--set", change, "--free", "q", "--free",
                                  f"{held}.q"])  # fmt: skip
     assert r.exit_code == 0, r.output
+
+
+def test_sub_step_wording_states_the_per_sub_step_cap(tmp_path):
+    """A change no sub-step can solve (the crank moved with only the coupler angle free): the
+    message counts the iterations of all sub-steps and names the cap each had, the --max-iter
+    given (not "1000 iterations" beside a default of 50). The counts are the solve's own."""
+    import re
+
+    import kinprop as kp
+
+    assembled = kp.propagate(kp.load_model(EXAMPLES / "fourbar.yaml"), {}).after
+    sol = kp.propagate(assembled, {"O2.q": [70.0]}, free=("A.q",), max_iter=7).result
+    assert not sol.converged
+    path = tmp_path / "assembled.yaml"
+    kp.dump_model(assembled, path)
+    r = CliRunner().invoke(app, ["propagate", str(path), "--set", "O2.q=70", "--free", "A.q", "--max-iter", "7",
+                                 "--no-continuation", "-q"])  # fmt: skip
+    assert r.exit_code == 1, r.output
+    m = re.search(r"not converged after (\d+) iterations in all \((\d+) sub-steps of the change, each allowed "
+                  r"--max-iter 7\)", r.stdout)  # fmt: skip
+    assert m, r.stdout
+    iterations, substeps = int(m[1]), int(m[2])
+    assert substeps > 1 and substeps * 7 >= iterations > 7  # more than one sub-step's cap, none above its own
+    assert m[0] in sol.message and sol.iterations == iterations  # the Python API's solve says the same

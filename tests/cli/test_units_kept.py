@@ -59,3 +59,26 @@ def test_mjcf_round_trip_keeps_the_declared_units(tmp_path):
     want = json.loads(run("propagate", src, "--set", "LCA.q=5", "--json").stdout)
     assert got["coordinates"]["LCA"] == pytest.approx([5.0])  # degrees, as declared
     np.testing.assert_allclose(got["points"]["upright.wheel_centre"], want["points"]["upright.wheel_centre"], atol=1e-6)
+
+
+def test_python_api_warns_as_the_cli_does(tmp_path):
+    """``load_model`` and ``import_model`` issue a :class:`kinprop.UnitsWarning` with the CLI's
+    text; a plausible file gives none."""
+    import warnings
+
+    import kinprop as kp
+    from kinprop.imports import import_model
+
+    text = (EXAMPLES / "double_wishbone_hardpoints.yaml").read_text()
+    wrong = tmp_path / "wrong.yaml"
+    wrong.write_text(text.replace("length: mm", "length: m"))
+    with pytest.warns(kp.UnitsWarning, match="look like millimetres, but the file declares length: m") as rec:
+        kp.load_model(wrong)
+    assert rec[0].filename == __file__  # points at the caller, not at kinprop's insides
+    assert str(wrong) in str(rec[0].message)
+    with pytest.warns(kp.UnitsWarning, match="loaded radius 470 m"):
+        import_model(EXAMPLES / "chrono" / "DoubleWishbone.json", tire_radius=470)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", kp.UnitsWarning)
+        kp.load_model(EXAMPLES / "double_wishbone_hardpoints.yaml")
+        import_model(EXAMPLES / "chrono" / "DoubleWishbone.json", tire_radius=0.47)

@@ -15,6 +15,11 @@ process.
 A block that must not run in CI is marked, on the line before its fence, with
 ``<!-- doc-test: skip REASON -->`` (e.g. ``scripts/paper.sh`` builds a virtualenv, a benchmark
 takes minutes, ``--scheduler tcp://HOST`` needs a cluster).
+
+Numbers a doc states outside console blocks — a Markdown table of results, a paragraph — are
+checked too when marked ``<!-- doc-test: numbers -->`` on the line before the table or
+paragraph: every number in it (a table's header row aside) must be among what the code block
+above it printed (all its commands), to the doc's precision, sign included.
 """
 
 from __future__ import annotations
@@ -34,6 +39,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
 SKIP = re.compile(r"<!--\s*doc-test:\s*skip\b(?P<why>[^>]*)-->")
+NUMBERS = re.compile(r"<!--\s*doc-test:\s*numbers\s*-->")
 FENCE = re.compile(r"^```(?P<lang>[a-z]*)\s*$")
 NUMBER = re.compile(r"(?<![\w.])[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?![\w.])", re.IGNORECASE)
 CLI = [sys.executable, "-c", "from kinprop.cli import main; main()"]
@@ -87,6 +93,16 @@ def blocks(doc: Path) -> list[Block]:
     lines = doc.read_text(encoding="utf-8").splitlines()
     k = 0
     while k < len(lines):
+        if NUMBERS.search(lines[k]):  # the table or paragraph below: its numbers are outputs
+            start = k + 1
+            k += 1
+            while k < len(lines) and lines[k].strip():
+                k += 1
+            body = lines[start:k]
+            if body and body[0].startswith("|"):
+                body = body[2:]  # a table's header row and rule
+            out.append(Block(doc, start + 1, "numbers", body, None))
+            continue
         m = FENCE.match(lines[k])
         if not m or not m.group("lang"):
             if m:  # an unlabelled block: skip to its end
@@ -160,13 +176,26 @@ def _numbers(lines: list[str]) -> list[str]:
     return nums
 
 
-def _run_block(block: Block, cwd: Path) -> None:
+def _check_numbers(block: Block, printed: str) -> None:
+    """Every number of a marked table or paragraph is among the numbers ``printed``."""
+    where = f"{block.doc.relative_to(ROOT)}:{block.line}"
+    assert printed, f"{where}: numbers marked for checking, but no code block above printed anything"
+    values = [float(x) for x in _numbers(printed.splitlines())]
+    stated = _numbers([line.replace("|", " ") for line in block.body])
+    assert stated, f"{where}: a doc-test: numbers mark on a table or paragraph without numbers"
+    missing = [x for x in stated if not _printed(x, values)]
+    assert not missing, f"{where}: the commands above did not print {missing} (the doc says so):\n{printed[-3000:]}"
+
+
+def _run_block(block: Block, cwd: Path) -> str:
+    """Run a code block; returns what its commands printed (a snippet: stdout and stderr)."""
     where = f"{block.doc.relative_to(ROOT)}:{block.line}"
     if block.lang == "python":
         p = subprocess.run([sys.executable, "-c", "\n".join(block.body)], capture_output=True, text=True, cwd=cwd,
                            timeout=TIMEOUT)  # fmt: skip
         assert p.returncode == 0, f"{where}: python snippet failed:\n{p.stderr[-3000:]}"
-        return
+        return p.stdout + p.stderr
+    outputs = []
     for cmd in block.commands():
         argv = _argv(cmd.text)
         assert argv is not None, f"{where}: cannot run {cmd.text!r} here; mark the block <!-- doc-test: skip ... -->"
@@ -175,9 +204,22 @@ def _run_block(block: Block, cwd: Path) -> None:
         values = [float(x) for x in _numbers(printed.splitlines())]
         missing = [x for x in _numbers(cmd.expected) if not _printed(x, values)]
         assert not missing, f"{where}: {cmd.text!r} did not print {missing} (the doc says so):\n{printed[-3000:]}"
+        outputs.append(printed)
+    return "\n".join(outputs)
 
 
 ALL = [(doc, b) for doc in DOCS for b in blocks(doc)]
+
+
+def test_marked_numbers_are_checked() -> None:
+    """A marked table is collected without its header, and a number the commands did not print
+    fails the check (else the marks prove nothing)."""
+    marked = [b for _, b in ALL if b.lang == "numbers"]
+    assert len({b.doc for b in marked}) >= 3
+    table = Block(ROOT / "README.md", 1, "numbers", ["| a | 0.6870 | 3 |"], None)
+    _check_numbers(table, "p = [0.6869999 1 2 3]")
+    with pytest.raises(AssertionError, match=r"did not print \['0.695'\]"):
+        _check_numbers(Block(ROOT / "README.md", 1, "numbers", ["| a | 0.695 |"], None), "p = [0.687]")
 
 
 def test_every_doc_block_is_collected() -> None:
@@ -195,6 +237,11 @@ def test_doc_runs(doc: Path, tmp_path: Path) -> None:
     shutil.copytree(ROOT / "examples", tmp_path / "examples")
     shutil.copytree(ROOT / "benchmarks", tmp_path / "benchmarks")
     shutil.copytree(ROOT / "docs", tmp_path / "docs")  # plots go to docs/img/ in some commands
+    printed = ""
     for block in todo:
-        if block.skip is None:
-            _run_block(block, tmp_path)
+        if block.lang == "numbers":
+            _check_numbers(block, printed)
+        elif block.skip is None:
+            printed = _run_block(block, tmp_path)
+        else:
+            printed = ""

@@ -147,14 +147,20 @@ def _drivable(engine: kp.Engine, st: kp.State) -> list[int]:
 RANDOM = assembled_set(40)
 
 
-@pytest.mark.parametrize("rm", RANDOM, ids=lambda rm: f"seed{rm.seed}")
-def test_random_mechanisms_match_central_differences(rm) -> None:
+def _drivable_setup(rm):
+    """``(engine, state, drivable columns, seeded generator)`` of a random mechanism (skips one
+    that has none)."""
     engine = kp.compile(rm.model)
     st = engine.state_of(rm.model)
     cols = _drivable(engine, st)
     if not cols:
         pytest.skip("no drivable coordinates (mobility 0 or only Euler parameters)")
-    rng = np.random.default_rng(rm.seed)
+    return engine, st, cols, np.random.default_rng(rm.seed)
+
+
+@pytest.mark.parametrize("rm", RANDOM, ids=lambda rm: f"seed{rm.seed}")
+def test_random_mechanisms_match_central_differences(rm) -> None:
+    engine, st, cols, rng = _drivable_setup(rm)
     rates, acc = rng.uniform(-1, 1, len(cols)), rng.uniform(-1, 1, len(cols))
     labels = engine.column_labels
     ms = engine.motion(
@@ -248,3 +254,85 @@ def test_an_unassembled_state_says_so() -> None:
     assert mo.status == "not_assembled" and "assemble" in mo.message
     assert all(np.isnan(v).all() for v in mo.rates.values())
     assert np.isnan(mo.body_twist("rocker").angular).all()
+
+
+def _resolved_path(engine: kp.Engine, st: kp.State, col: int, rates: dict[str, float], h: float):
+    """Design column ``col`` moved by ``t`` (retraction: additive, or ``exp`` for C), the
+    coordinates re-solved (free q, closest assembly): the state direction, the rates' and the
+    twists' derivatives along that path by Richardson central differences of re-solved models."""
+
+    def at(t: float):
+        dx = np.zeros(engine.n_columns)
+        dx[col] = t
+        sol = engine.solve(st, ("q",), target=engine.retract(st, dx), tol=1e-15)
+        if not sol.converged:
+            raise _NoTruthError(sol.message)
+        ms = engine.motion(sol.state, rates)
+        return sol.state.Q, ms.qdot, ms.V
+
+    def d(k: float):
+        plus, minus = at(k * h), at(-k * h)
+        return [(p - m) / (2 * k * h) for p, m in zip(plus, minus, strict=True)]
+
+    return [(4 * a - b) / 3 for a, b in zip(d(0.5), d(1.0), strict=True)]
+
+
+@pytest.mark.parametrize("rm", RANDOM, ids=lambda rm: f"seed{rm.seed}")
+def test_design_derivatives_of_rates_match_re_solved_models(rm) -> None:
+    """``motion_derivatives``: the exact derivatives of every coordinate rate and body twist
+    with respect to design variables (s', C, lengths, coupling coefficients: four seeded
+    columns per mechanism) along the re-solved path, against Richardson central differences of
+    velocity analyses of re-solved models."""
+    from kinprop.engine.motion import motion_derivatives
+
+    engine, st, cols, rng = _drivable_setup(rm)
+    labels = engine.column_labels
+    rates = {labels[c]: float(r) for c, r in zip(cols, rng.uniform(-1, 1, len(cols)), strict=True)}
+    nq = engine.n_coordinates
+    design = rng.choice(np.arange(nq, engine.n_columns), size=min(4, engine.n_columns - nq), replace=False)
+    checked = 0
+    for col in design:
+        try:
+            dQ, dqdot, dV = _resolved_path(engine, st, int(col), rates, 1e-4)
+        except _NoTruthError:
+            continue
+        direction = np.zeros(engine.n_columns)
+        direction[col], direction[:nq] = 1.0, dQ
+        md = motion_derivatives(engine, st, rates, direction[:, None])
+        assert md.motion.ok, md.motion.message
+        sq, sv = max(1.0, float(np.max(np.abs(dqdot)))), max(1.0, float(np.max(np.abs(dV))))
+        assert np.max(np.abs(md.qdot[0] - dqdot)) < 1e-7 * sq, labels[col]
+        assert np.max(np.abs(md.V[0] - dV)) < 1e-7 * sv, labels[col]
+        checked += 1
+    if not checked:
+        pytest.skip("the position solves do not follow these design changes; no truth to compare with")
+
+
+def test_compiled_velocity_solve_agrees_with_the_svd_path() -> None:
+    """``velocity_solve`` (compiled, LU on the engine's plan) gives the rates and twists of the
+    SVD path on every random mechanism it takes (square regular blocks) and on the double
+    wishbone; where it cannot decide (a rectangular or singular block) the SVD path answers."""
+    from kinprop.engine.motion import _compiled_motion, _Frames, _motion
+
+    model = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
+    cases = [(kp.compile(model), model, ["LCA.q"])] + [(kp.compile(rm.model), rm.model, None) for rm in RANDOM]
+    taken = 0
+    for engine, m, drive in cases:
+        st = engine.state_of(m)
+        cols = [engine.target(d).start for d in drive] if drive else _drivable(engine, st)
+        if not cols:
+            continue
+        labels = engine.column_labels
+        rates = {labels[c]: 0.3 + 0.1 * k for k, c in enumerate(cols)}
+        fast = _compiled_motion(engine, st, rates)
+        svd, _ = _motion(engine, _Frames(engine, st), rates, None)
+        if fast is None:
+            assert engine.motion(st, rates).qdot.tolist() == svd.qdot.tolist() or not svd.ok
+            continue
+        taken += 1
+        assert svd.ok, svd.message
+        scale = max(1.0, float(np.max(np.abs(svd.qdot))))
+        assert np.max(np.abs(fast.qdot - svd.qdot)) < 1e-10 * scale
+        assert np.max(np.abs(fast.V - svd.V)) < 1e-10 * max(1.0, float(np.max(np.abs(svd.V))))
+        assert fast.residual == pytest.approx(svd.residual, rel=1e-6, abs=1e-14)
+    assert taken >= 20

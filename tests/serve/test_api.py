@@ -133,6 +133,19 @@ def test_wheel_travel_drive_and_driven_outputs_are_the_cli_json(make_client, exa
     assert r.json()["units"]["of"] == ["deg", "deg/mm"]
 
 
+def test_sweep_abscissa_is_the_cli_x(make_client, examples: Path, tmp_path: Path) -> None:
+    """``x`` (the CLI's ``--x``): camber and toe against wheel travel; the response names it as
+    the CLI's JSON does, and without it the first drive."""
+    c = make_client(DW, assemble_first=False)
+    req = {"drive": ["LCA=-6:6:2"], "out": ["wheel_centre_dz", "camber"], "x": "wheel_centre_dz"}
+    args = ["--drive", "LCA=-6:6:2", "--out", "wheel_centre_dz", "--out", "camber", "--x", "wheel_centre_dz"]
+    want = cli_json("sweep", examples / DW, *args, "--plot", tmp_path / "x.png", "--json")
+    got = c.post("/api/sweep", json=req).json()
+    assert got["x"] == want["x"] == "wheel_centre_dz"
+    assert got == want | {"plot_file": None}
+    assert c.post("/api/sweep", json={"drive": ["LCA=-6:6:2"]}).json()["x"] == "LCA.q"
+
+
 def test_sensitivity_is_the_cli_json(make_client, examples: Path) -> None:
     c = make_client("slider_crank.yaml", assemble_first=False)
     req = {"wrt": ["J12.s_j"], "of": ["J01.q", "hardpoint:J12.i"]}
@@ -168,6 +181,11 @@ def test_sensitivity_is_the_cli_json(make_client, examples: Path) -> None:
             "/api/sweep",
             {"drive": ["TD=0.2:0.3:2"], "out": ["point:x"]},
             ["sweep", "--drive", "TD=0.2:0.3:2", "--out", "point:x"],
+        ),
+        (
+            "/api/sweep",
+            {"drive": ["TD=0.2:0.3:2"], "x": "nope"},
+            ["sweep", "--drive", "TD=0.2:0.3:2", "--x", "nope", "--plot", "x.png"],
         ),
         ("/api/sensitivity", {"wrt": ["RS.nope"]}, ["sensitivity", "--wrt", "RS.nope"]),
         (

@@ -16,6 +16,12 @@ from kinprop.spatial import Array
 
 POINT = re.compile(r"^point:(?P<body>[^.\s\[\]]+)\.(?P<name>[^\s\[\]]+?)(\[(?P<c>[xyz012])\])?$")
 HARD = re.compile(r"^hardpoint:(?P<joint>[^\s\[\]]+)\.(?P<side>[^\s.\[\]]+)(\[(?P<c>[xyz012])\])?$")
+#: a body's pose, ``body:NAME`` (every component) or ``body:NAME[x|y|z|roll|pitch|yaw]``
+BODY = re.compile(r"^body:(?P<body>[^\s\[\]]+?)(\[(?P<c>[^\]]*)\])?$")
+#: the components of a body pose: the body frame's origin (global, length unit), then its
+#: orientation as ISO 8855 Tait-Bryan angles, z-y'-x'' (yaw, pitch, roll): ``A = Rz(yaw) Ry(pitch) Rx(roll)``
+POSE = ("x", "y", "z", "roll", "pitch", "yaw")
+POSE_ANGLES = ("roll", "pitch", "yaw")
 
 
 @dataclass(frozen=True)
@@ -71,6 +77,19 @@ class OutputContext:
             return self.hardpoint(*ref)
         return self.kin.r[body] + self.kin.A[body] @ np.asarray(pts[point], dtype=float)
 
+    def body_pose(self, body: str) -> Array:
+        """``[x, y, z, roll, pitch, yaw]`` of ``body``: its frame's global origin and the
+        Tait-Bryan angles (radians) of its rotation matrix ``A = Rz(yaw) Ry(pitch) Rx(roll)``
+        (the ISO 8855 yaw-pitch-roll sequence, intrinsic z-y'-x''; pitch in [-90, 90] deg, the
+        others in [-180, 180])."""
+        from scipy.spatial.transform import Rotation
+
+        mech = self.model.mechanism
+        if body not in mech.body_names:
+            raise AddressError(f"unknown body {body!r}; bodies are {', '.join(mech.body_names)}")
+        yaw, pitch, roll = Rotation.from_matrix(self.kin.A[body]).as_euler("ZYX")
+        return np.concatenate([np.asarray(self.kin.r[body], dtype=float), [roll, pitch, yaw]])
+
     def hardpoint(self, joint: str, side: str) -> Array:
         """Global origin of ``joint``'s frame on its first (``i``) or second (``j``) body."""
         mech = self.model.mechanism
@@ -80,6 +99,26 @@ class OutputContext:
             return self.body_point(*pivot_point(self.model, joint, side))
         f = self.kin.frames[joint]
         return f.P_i if side == "i" else f.P_j
+
+    def point_source(self, body: str, point: str) -> tuple[str, str] | None:
+        """The joint frame ``(joint, side)`` a named point is (it moves with that joint's
+        ``s'``), or None for a plain body-fixed point."""
+        return self.model.mechanism.body(body).joint_point(point)
+
+    def hardpoint_source(self, joint: str, side: str) -> tuple[str, str] | None:
+        """The joint frame ``hardpoint:JOINT.SIDE`` is (a pivot: its named point's, see
+        :meth:`point_source`)."""
+        return (joint, side) if side in ("i", "j") else self.point_source(*pivot_point(self.model, joint, side))
+
+    def spec_source(self, spec: str) -> tuple[str, str] | None:
+        """:meth:`point_source` of a ``point:BODY.NAME`` or ``hardpoint:JOINT.i|j`` spec."""
+        m = POINT.match(spec)
+        if m and m.group("c") is None:
+            return self.point_source(m.group("body"), m.group("name"))
+        m = HARD.match(spec)
+        if m and m.group("c") is None:
+            return self.hardpoint_source(m.group("joint"), m.group("side"))
+        return None
 
     def point(self, spec: str) -> Array:
         """A global point from a ``point:BODY.NAME`` or ``hardpoint:JOINT.i|j`` spec."""

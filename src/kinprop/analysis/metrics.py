@@ -40,7 +40,9 @@ steering axis can also be given per call as two point specs (``hardpoint:JOINT.i
 
 from __future__ import annotations
 
+import functools
 import math
+from typing import Any
 
 import numpy as np
 
@@ -49,11 +51,14 @@ from kinprop.analysis.firstorder import (
     FIRST_ORDER,
     GAIN_METRICS,
     MOTION_RATIO,
+    PointRef,
+    first_order_derivatives,
     first_order_metrics,
     first_order_names,
     first_order_unit,
 )
 from kinprop.analysis.motion import point_of
+from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
 from kinprop.errors import AddressError
 from kinprop.model import Model
@@ -219,9 +224,12 @@ def steering_points(ctx: OutputContext, wheel: str) -> tuple[Array | None, Array
     return (a, b) if a[2] >= b[2] else (b, a)
 
 
-def steering_bodies(ctx: OutputContext, wheel: str) -> tuple[tuple[str, Array], tuple[str, Array]] | None:
-    """``((body, point), (body, point))`` of the steering axis' upper and lower points (as
-    :func:`steering_points`), each with the body it moves with (a joint's point: that side's)."""
+def steering_bodies(
+    ctx: OutputContext, wheel: str
+) -> tuple[tuple[str, Array, tuple[str, str] | None], tuple[str, Array, tuple[str, str] | None]] | None:
+    """``((body, point, source), (body, point, source))`` of the steering axis' upper and lower
+    points (as :func:`steering_points`), each with the body it moves with (a joint's point: that
+    side's) and the joint frame it is (``OutputContext.point_source``)."""
     model = ctx.model
     mech = model.mechanism
     found = [_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
@@ -231,9 +239,9 @@ def steering_bodies(ctx: OutputContext, wheel: str) -> tuple[tuple[str, Array], 
             ref = mech.body(body).joint_point(name)
             if ref is not None:
                 j = mech.joint(ref[0])
-                out.append((j.body_i if ref[1] == "i" else j.body_j, ctx.hardpoint(*ref)))
+                out.append((j.body_i if ref[1] == "i" else j.body_j, ctx.hardpoint(*ref), ref))
             else:
-                out.append((body, ctx.body_point(body, name)))
+                out.append((body, ctx.body_point(body, name), None))
         return out[0], out[1]
     pair = steering_joints(mech, wheel)
     if pair is None:
@@ -241,7 +249,7 @@ def steering_bodies(ctx: OutputContext, wheel: str) -> tuple[tuple[str, Array], 
     ends = []
     for joint, side in pair:
         j = mech.joint(joint)
-        ends.append((j.body_i if side == "i" else j.body_j, ctx.hardpoint(joint, side)))
+        ends.append((j.body_i if side == "i" else j.body_j, ctx.hardpoint(joint, side), (joint, side)))
     a, b = ends
     return (a, b) if a[1][2] >= b[1][2] else (b, a)
 
@@ -285,7 +293,13 @@ def is_first_order(metric: str) -> bool:
 
 def _radius(model: Model, wheel: str) -> float | None:
     """The loaded radius: the ``contact_patch`` point's distance from the spin axis."""
-    pts = dict(model.mechanism.body(wheel).points)
+    return _body_radius(model.mechanism.body(wheel).points)
+
+
+@functools.lru_cache(maxsize=64)
+def _body_radius(points: tuple[tuple[str, Any], ...]) -> float | None:
+    """:func:`_radius` of a wheel body's named points (cached: the same at every state)."""
+    pts = dict(points)
     if "contact_patch" not in pts:
         return None
     v = np.asarray(pts["contact_patch"], dtype=float) - np.asarray(pts["wheel_centre"], dtype=float)
@@ -299,35 +313,55 @@ def _contact_of(ctx: OutputContext, wheel: str, radius: float) -> Array:
     return contact_point(centre, ctx.body_point(wheel, "spin_axis") - centre, radius)
 
 
-def wheel_first_order(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:
-    """Every first-order metric the wheel supports at the context's state
-    (:mod:`kinprop.analysis.firstorder`; gains in degrees per length unit)."""
+def _first_order_inputs(
+    ctx: OutputContext, wheel: str, spec: WheelSpec | None
+) -> tuple[Engine, dict[str, PointRef], float | None, Any, str | None]:
+    """``(engine, points, radius, reference contact, travel input)`` of the wheel's first-order
+    analysis (:func:`kinprop.analysis.firstorder.first_order_metrics`)."""
     model = ctx.model
     spec = spec if spec is not None else ctx.wheels.get(wheel) if ctx.wheels else None
     engine = ctx.engine or compile_engine(model.mechanism)
     b = engine.body_index[wheel]
-    points: dict[str, tuple[int, Array]] = {
-        "centre": (b, ctx.body_point(wheel, "wheel_centre")),
-        "spin": (b, ctx.body_point(wheel, "spin_axis")),
+    points: dict[str, PointRef] = {
+        "centre": (b, ctx.body_point(wheel, "wheel_centre"), ctx.point_source(wheel, "wheel_centre")),
+        "spin": (b, ctx.body_point(wheel, "spin_axis"), ctx.point_source(wheel, "spin_axis")),
     }
     if spec is not None and spec.steering_axis is not None:
-        points["upper"], points["lower"] = (point_of(ctx, engine, s) for s in spec.steering_axis)
+        for key, s in zip(("upper", "lower"), spec.steering_axis, strict=True):
+            points[key] = (*point_of(ctx, engine, s), ctx.spec_source(s))
     else:
         found = steering_bodies(ctx, wheel)
         if found is not None:
-            for key, (body, p) in zip(("upper", "lower"), found, strict=True):
-                points[key] = (engine.body_index[body], p)
+            for key, (body, p, source) in zip(("upper", "lower"), found, strict=True):
+                points[key] = (engine.body_index[body], p, source)
     radius = _radius(model, wheel)
-    ref = None
+    ref: Any = None
     if radius is not None:
         if ctx.reference is not None:
             ref = _contact_of(OutputContext.of(ctx.reference, engine=engine), wheel, radius)
         else:
             found_ref = _find_point(model, wheel, "contact_patch_ref", on_wheel=False)
             if found_ref is not None:
-                ref = ctx.body_point(*found_ref)
+                body, name = found_ref
+                ref = (engine.body_index[body], ctx.body_point(body, name), ctx.point_source(body, name))
     travel = spec.travel_input if spec is not None else None
+    return engine, points, radius, ref, travel
+
+
+def wheel_first_order(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:
+    """Every first-order metric the wheel supports at the context's state
+    (:mod:`kinprop.analysis.firstorder`; gains in degrees per length unit)."""
+    engine, points, radius, ref, travel = _first_order_inputs(ctx, wheel, spec)
     return first_order_metrics(ctx, engine, wheel, points, radius, ref, travel)
+
+
+def wheel_first_order_derivatives(
+    ctx: OutputContext, wheel: str, directions: Array, spec: WheelSpec | None = None
+) -> dict[str, Array]:
+    """Exact derivatives of :func:`wheel_first_order` along each column of ``directions``
+    (state directions, solver units; :func:`kinprop.analysis.firstorder.first_order_derivatives`)."""
+    engine, points, radius, ref, travel = _first_order_inputs(ctx, wheel, spec)
+    return first_order_derivatives(ctx, engine, wheel, points, radius, ref, directions, travel)
 
 
 def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:
@@ -415,5 +449,6 @@ __all__ = [
     "suspension_metrics",
     "wheel_bodies",
     "wheel_first_order",
+    "wheel_first_order_derivatives",
     "wheel_metrics",
 ]

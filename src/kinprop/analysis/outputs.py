@@ -9,6 +9,9 @@ its components, e.g. ``point:wheel.wheel_centre`` into ``...[x]``, ``...[y]``, `
   ``point:BODY.NAME[x|y|z]``;
 * joint hardpoints, the global origin of the joint frame on the joint's first (``i``) or
   second (``j``) body: ``hardpoint:JOINT.i[x]``, ``hardpoint:JOINT.j[z]``;
+* a body's pose, the global origin of its frame and its orientation as yaw, pitch and roll
+  (ISO 8855 order, intrinsic z-y'-x''; angles in the model's angle unit): ``body:BODY`` (six
+  components) or ``body:BODY[x|y|z|roll|pitch|yaw]``;
 * the distance between two points (e.g. a spring's length), each ``BODY.NAME`` (a named
   point) or ``hardpoint:JOINT.i|j``: ``distance:chassis.spring_chassis,lca.spring_lca``;
 * suspension metrics of a wheel body (:mod:`kinprop.analysis.metrics`):
@@ -25,7 +28,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from kinprop.analysis.context import HARD, POINT, OutputContext, pivot_point
+from kinprop.analysis.context import BODY, HARD, POINT, POSE, OutputContext, pivot_point
 from kinprop.analysis.metrics import (
     METRIC_NEEDS,
     WheelSpec,
@@ -33,6 +36,7 @@ from kinprop.analysis.metrics import (
     metric_names,
     resolve_metric,
     wheel_first_order,
+    wheel_first_order_derivatives,
     wheel_metrics,
 )
 from kinprop.analysis.statics import is_load_output, load_value
@@ -74,6 +78,15 @@ def expand_outputs(model: Model, names: Sequence[str], engine: Engine | None = N
         if is_load_output(name):
             load_value(model, name, {}, engine)  # the joint, element, input and load case exist
             out.append(name)
+        elif name.startswith("body:"):
+            m = BODY.match(name)
+            if not m or (m["c"] is not None and m["c"] not in POSE):
+                raise AddressError(f"bad output {name!r}: expected body:BODY or body:BODY[{'|'.join(POSE)}]")
+            if m["body"] not in model.mechanism.body_names:
+                raise AddressError(
+                    f"output {name!r}: unknown body {m['body']!r}; bodies are {', '.join(model.mechanism.body_names)}"
+                )
+            out += [name] if m["c"] is not None else [f"{name}[{c}]" for c in POSE]
         elif name.startswith("distance:"):
             ctx = OutputContext.of(model, engine=engine)
             for end in _distance_ends(name):
@@ -126,7 +139,8 @@ def _parse_variable(engine: Engine, name: str) -> Address:
     except AddressError:
         raise AddressError(
             f"bad output {name!r}: expected a coordinate (J.q[k]), a design variable (J.s_i[k], J.length), "
-            "point:BODY.NAME[x], hardpoint:JOINT.i[x] or a metric (metric:WHEEL.camber)"
+            "point:BODY.NAME[x], hardpoint:JOINT.i[x], body:BODY[x|roll], distance:A,B or a metric "
+            "(metric:WHEEL.camber)"
         ) from None
     if addr.field in ("C_i", "C_j"):
         raise AddressError(f"output {name!r}: orientations are not scalar outputs; use points or metrics")
@@ -139,12 +153,22 @@ def _parse_variable(engine: Engine, name: str) -> Address:
     return addr
 
 
-def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, float]]) -> float:
+def _scalar(
+    ctx: OutputContext,
+    name: str,
+    metric_cache: dict[str, dict[str, float]],
+    resolved: dict[str, tuple[str, str]] | None = None,
+) -> float:
+    """One output's value (``resolved``: metric names already resolved to ``(wheel, metric)``,
+    kept across states by :func:`output_function`)."""
     if is_load_output(name):
         return load_value(ctx.model, name, metric_cache, ctx.engine, ctx.reference)
     if name.startswith("distance:"):
         a, b = _distance_ends(name)
         return float(np.linalg.norm(ctx.point(a) - ctx.point(b)))
+    if name.startswith("body:"):
+        m = BODY.match(name)
+        return float(ctx.body_pose(m["body"])[POSE.index(m["c"])])  # type: ignore[index]
     m = _POINT.match(name)
     if name.startswith("point:") and m:
         return float(ctx.body_point(m.group("body"), m.group("name"))[AXES[m.group("c")]])
@@ -152,7 +176,10 @@ def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, flo
     if name.startswith("hardpoint:") and m:
         return float(ctx.hardpoint(m.group("joint"), m.group("side"))[AXES[m.group("c")]])
     if name.startswith("metric:") or "." not in name:
-        wheel, metric = resolve_metric(ctx.model, name)
+        found = resolved.get(name) if resolved is not None else None
+        wheel, metric = found if found is not None else resolve_metric(ctx.model, name)
+        if resolved is not None:
+            resolved[name] = (wheel, metric)
         first = is_first_order(metric)
         key = f"{wheel}\x00first" if first else wheel
         if key not in metric_cache:
@@ -172,6 +199,45 @@ def _scalar(ctx: OutputContext, name: str, metric_cache: dict[str, dict[str, flo
     else:
         v = np.atleast_1d(np.asarray(model.design[addr.key], dtype=float)).ravel()
     return float(v[addr.index or 0])
+
+
+def first_order_of(model: Model, name: str) -> tuple[str, str] | None:
+    """``(wheel, metric)`` of an expanded output name that is a first-order metric (a gain, a
+    centre, anti, a motion ratio, the wheel rate; :mod:`kinprop.analysis.firstorder`), else None."""
+    if is_load_output(name) or name.startswith(("distance:", "point:", "hardpoint:")):
+        return None
+    if name.startswith("metric:") or "." not in name:
+        wheel, metric = resolve_metric(model, name)
+        return (wheel, metric) if is_first_order(metric) else None
+    return None
+
+
+def first_order_derivatives(
+    model: Model,
+    names: Sequence[str],
+    directions: Array,
+    *,
+    reference: Model | None = None,
+    wheels: Mapping[str, WheelSpec] | None = None,
+    engine: Engine | None = None,
+) -> dict[int, Array]:
+    """Exact derivatives of the first-order metrics among the expanded outputs ``names`` along
+    each column of ``directions`` (state directions, solver units), keyed by their index in
+    ``names`` (values as :func:`evaluate_outputs` with ``units="solver"`` gives them):
+    :func:`kinprop.analysis.metrics.wheel_first_order_derivatives`, once per wheel."""
+    eng = engine if engine is not None else compile_engine(model.mechanism)
+    ctx = OutputContext.of(model, reference, wheels, eng)
+    per_wheel: dict[str, dict[str, Array]] = {}
+    out: dict[int, Array] = {}
+    for i, name in enumerate(names):
+        found = first_order_of(model, name)
+        if found is None:
+            continue
+        wheel, metric = found
+        if wheel not in per_wheel:
+            per_wheel[wheel] = wheel_first_order_derivatives(ctx, wheel, directions)
+        out[i] = per_wheel[wheel][metric]
+    return out
 
 
 def evaluate_outputs(
@@ -221,10 +287,12 @@ def output_function(
     eng = engine if engine is not None else compile_engine(model.mechanism)
     expanded = expand_outputs(model, names, eng)
 
+    resolved: dict[str, tuple[str, str]] = {}  # metric names: the same wheel at every state
+
     def f(m: Model) -> Array:
         ctx = OutputContext.of(m, reference, wheels, eng)
         cache: dict[str, dict[str, float]] = {}
-        return np.array([_scalar(ctx, n, cache) for n in expanded])
+        return np.array([_scalar(ctx, n, cache, resolved) for n in expanded])
 
     ctx0 = OutputContext.of(model, reference, wheels, eng)
     cache0: dict[str, dict[str, float]] = {}

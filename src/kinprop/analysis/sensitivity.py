@@ -7,11 +7,14 @@ propagation uses: ``dx_free = -W^1/2 pinv(Phi_free W^1/2) Phi_p dp``. The matrix
 
 Output sensitivities (:func:`output_sensitivity`) follow by the chain rule: for each design
 column ``k`` the state moves along the direction ``e_k + S[:, k]`` (the design variable
-itself plus the analytic free-variable response), and the output function of the state
-(:mod:`kinprop.analysis.outputs`) is differenced centrally along that direction on the
-manifold (``retract``: additive for q, s', l; exponential map for C). Only the output map is
-differenced; coordinates and design variables are linear in the state, so for them the
-difference is exact up to rounding.
+itself plus the analytic free-variable response). The first-order metrics (gains, instant
+centres, roll-centre height, anti-dive/squat, motion ratios, wheel rate) are differentiated
+exactly along it (:func:`kinprop.analysis.outputs.first_order_derivatives`: the velocity
+state's analytic derivatives, :func:`kinprop.engine.motion.motion_derivatives`). Every other
+output function of the state (:mod:`kinprop.analysis.outputs`) is differenced centrally
+along that direction on the manifold (``retract``: additive for q, s', l; exponential map for
+C); coordinates and design variables are linear in the state, so for them the difference is
+exact up to rounding. :func:`derivative_method` names the method of each output.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from kinprop.analysis.metrics import WheelSpec
-from kinprop.analysis.outputs import output_function
+from kinprop.analysis.outputs import first_order_derivatives, first_order_of, output_function
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
 from kinprop.engine.units import check_units
@@ -40,6 +43,14 @@ if TYPE_CHECKING:  # pandas (the 'data' extra) is imported only when a frame is 
 RESIDUAL_WARN = 1e-6
 #: relative step of the central difference of the output map
 FD_STEP = 1e-6
+#: :func:`derivative_method` values
+EXACT, CENTRAL = "exact (analytic velocity derivatives)", "central difference of the output map along the exact tangent"
+
+
+def derivative_method(model: Model, name: str) -> str:
+    """How :func:`output_sensitivity` differentiates the expanded output ``name``: exactly for
+    the first-order metrics, by a central difference of the output map for the rest."""
+    return EXACT if first_order_of(model, name) is not None else CENTRAL
 
 
 def _step(engine: Engine, model: Model, column: int) -> float:
@@ -81,16 +92,22 @@ def output_sensitivity_matrix(
     design, combos = global_columns(engine, state, wrt)
     free, weights = free_addresses(engine, free), free_weights(engine, weights)
     sens = design_sensitivity(model, design, free, weights, engine=engine, units="solver")
-    f, names = output_function(model, of, reference=reference, wheels=wheels, engine=engine)
+    _, names = output_function(model, of, reference=reference, wheels=wheels, engine=engine)
+    directions = np.zeros((engine.n_columns, sens.wrt_columns.size))
+    directions[sens.wrt_columns, np.arange(sens.wrt_columns.size)] = 1.0
+    directions[sens.free_columns] = sens.matrix
+    exact = first_order_derivatives(model, names, directions, reference=reference, wheels=wheels, engine=engine)
     D = np.zeros((len(names), sens.wrt_columns.size))
-    for k, col in enumerate(sens.wrt_columns):
-        direction = np.zeros(engine.n_columns)
-        direction[col] = 1.0
-        direction[sens.free_columns] = sens.matrix[:, k]
-        h = _step(engine, model, int(col))
-        plus = engine.model_of(engine.retract(state, h * direction), model)
-        minus = engine.model_of(engine.retract(state, -h * direction), model)
-        D[:, k] = (f(plus) - f(minus)) / (2.0 * h)
+    for i, row in exact.items():
+        D[i] = row
+    rest = [i for i in range(len(names)) if i not in exact]
+    if rest:
+        f, _ = output_function(model, [names[i] for i in rest], reference=reference, wheels=wheels, engine=engine)
+        for k, col in enumerate(sens.wrt_columns):
+            h = _step(engine, model, int(col))
+            plus = engine.model_of(engine.retract(state, h * directions[:, k]), model)
+            minus = engine.model_of(engine.retract(state, -h * directions[:, k]), model)
+            D[rest, k] = (f(plus) - f(minus)) / (2.0 * h)
     columns = list(sens.columns)
     if combos:
         index = {c: k for k, c in enumerate(columns)}
@@ -102,11 +119,28 @@ def output_sensitivity_matrix(
             sum(coef * D[:, index[c]] for c, coef in combos[label].items()) for label in combos
         ]
         D, columns = (np.column_stack(cols) if cols else np.zeros((len(names), 0))), keep + list(combos)
+    D, columns = _as_asked(engine, wrt, D, columns)
     if model_units and D.size:
         so = np.array([derivative_scale(model, n, engine) for n in names])
         si = np.array([derivative_scale(model, c, engine) for c in columns])
         D = D * so[:, None] / si[None, :]
     return D, list(names), columns, residual
+
+
+def _as_asked(engine: Engine, wrt: Sequence[str], D: Array, columns: list[str]) -> tuple[Array, list[str]]:
+    """``D``'s columns in the order ``wrt`` asks for them (the solve gives layout order); the
+    components of one address stay in their own order."""
+    rank: dict[str, int] = {}
+    for k, w in enumerate(wrt):
+        base = w.split("[")[0]
+        if is_global(base):  # hardpoint:J.i, hardpoint:J.i[z]: its own component labels
+            mine = [c for c in columns if c == w or (c.startswith(f"{w}[") and "[" not in w)]
+        else:
+            mine = [engine.column_labels[int(i)] for i in engine.columns([w])]
+        for c in mine:
+            rank.setdefault(c, k)
+    order = sorted(range(len(columns)), key=lambda i: (rank.get(columns[i], len(wrt)), i))
+    return D[:, order], [columns[i] for i in order]
 
 
 def output_sensitivity(
@@ -124,11 +158,12 @@ def output_sensitivity(
     """``d(output)/d(p)``: rows the (expanded) outputs ``of``, columns the design columns ``wrt``.
 
     The model must be assembled (``Phi = 0``); a warning is issued when ``||Phi||`` exceeds
-    :data:`RESIDUAL_WARN`. ``attrs`` of the frame carry ``residual``, ``free`` and
-    ``weights`` and ``units``. Units: output unit per design-variable unit, in the model's
-    declared units (``units="model"``: deg per mm, mm per deg, metric angles in the angle unit, C
-    columns per angle unit of body-frame rotation; docs/units.md); ``units="solver"``: as
-    computed (coordinates per radian, metric angles in degrees, C columns per radian).
+    :data:`RESIDUAL_WARN`. ``attrs`` of the frame carry ``residual``, ``free`` and ``weights``,
+    ``units`` and ``method`` (per output, :func:`derivative_method`). Units: output unit per
+    design-variable unit, in the model's declared units (``units="model"``: deg per mm, mm per
+    deg, metric angles in the angle unit, C columns per angle unit of body-frame rotation;
+    docs/units.md); ``units="solver"``: as computed (coordinates per radian, metric angles in
+    degrees, C columns per radian).
     """
     D, names, columns, residual = output_sensitivity_matrix(
         model, of, wrt, free, weights, reference=reference, wheels=wheels, engine=engine, units=units
@@ -137,7 +172,17 @@ def output_sensitivity(
 
     frame = pd.DataFrame(D, index=names, columns=columns)
     frame.attrs.update(residual=residual, free=list(free), weights=dict(weights or {}), units=units)
+    frame.attrs["method"] = {n: derivative_method(model, n) for n in names}
     return frame
 
 
-__all__ = ["Sensitivity", "design_sensitivity", "output_sensitivity", "output_sensitivity_matrix", "weight_vector"]
+__all__ = [
+    "CENTRAL",
+    "EXACT",
+    "Sensitivity",
+    "derivative_method",
+    "design_sensitivity",
+    "output_sensitivity",
+    "output_sensitivity_matrix",
+    "weight_vector",
+]

@@ -40,7 +40,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from html import escape
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -58,6 +58,9 @@ from kinprop.propagation.continuation import continuation_of
 from kinprop.propagation.hardpoints import free_addresses
 from kinprop.propagation.propagate import solve_changes
 from kinprop.spatial import Array
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 _DRIVE = re.compile(r"^(?P<joint>[^\s=\[\].]+)(\.q)?(\[(?P<index>\d+)\])?=(?P<range>.+)$")
 
@@ -590,17 +593,16 @@ def _diagnosis(model: Model, sol: Solution, free: Sequence[str]) -> str:
 
 
 def plot_sweep(
-    result: SweepResult, path: str | Path, columns: Sequence[str] | None = None, title: str | None = None
-) -> Path:
-    """Plot the swept coordinates and outputs against the first drive (matplotlib, lazy).
+    result: SweepResult, path: str | Path | None = None, columns: Sequence[str] | None = None, title: str | None = None
+) -> Figure:
+    """Plot the swept coordinates and outputs against the first drive (matplotlib, lazy); returns
+    the :class:`matplotlib.figure.Figure` (a notebook shows it), saved to ``path`` when given.
 
-    One panel for the coordinates that move, one per output group (points, metrics, other);
-    failed steps are marked with red crosses on the x axis.
+    One panel for the coordinates that move, one per output group (points, metrics, other),
+    stacked; failed steps are marked with red crosses on the x axis. Built without pyplot:
+    no backend is switched and no figure is left open.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     df = result.frame
     x = result.drives[0].label
@@ -623,7 +625,8 @@ def plot_sweep(
     if not groups:
         groups = {"coordinates": []}
     unit = result.frame.attrs.get("units", {})
-    fig, axes = plt.subplots(len(groups), 1, figsize=(7.5, 2.8 * len(groups) + 0.6), sharex=True, squeeze=False)
+    fig = Figure(figsize=(7.5, 2.8 * len(groups) + 0.6))
+    axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)
     failed = df["status"] != "converged"
     for ax, (g, cols) in zip(axes[:, 0], groups.items(), strict=True):
         for c in cols:
@@ -645,11 +648,10 @@ def plot_sweep(
     if title:
         fig.suptitle(title)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    if path is not None:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=110)
+    return fig
 
 
 __all__ = ["CsvSink", "Drive", "ParquetSink", "SweepResult", "open_sink", "parse_drive", "plot_sweep", "sweep"]

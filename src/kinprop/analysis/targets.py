@@ -26,8 +26,10 @@ A target spec (CLI ``--target``, Python ``propagate_targets(model, [...])``)::
 minimum-(weighted-)norm change of the ``free`` design variables: ``hardpoint:J[.i|.j]``,
 ``axis:J``, ``J.s_i``, ``J.length``, groups ``s C l``). Output Jacobians are analytic for
 points, hardpoints, distances, coordinates, design variables and the camber, toe and
-wheel-centre metrics (:func:`_config_jacobian`); caster, KPI, scrub radius, trail and joint
-values use central differences of the output map.
+wheel-centre metrics (:func:`_config_jacobian`); the first-order metrics (gains, centres,
+roll-centre height, anti, motion ratios, wheel rate) are exact
+(:func:`kinprop.analysis.outputs.first_order_derivatives`); caster, KPI, scrub radius, trail,
+slopes and joint values use central differences of the output map.
 """
 
 from __future__ import annotations
@@ -52,7 +54,13 @@ from kinprop.analysis.metrics import (
     resolve_metric,
     wheel_bodies,
 )
-from kinprop.analysis.outputs import _distance_ends, expand_outputs, output_function
+from kinprop.analysis.outputs import (
+    _distance_ends,
+    expand_outputs,
+    first_order_derivatives,
+    first_order_of,
+    output_function,
+)
 from kinprop.engine import Engine, State, Status
 from kinprop.engine.targets import Configuration, Row, TargetResult, output_jacobian, solve_targets
 from kinprop.engine.units import METRES_PER, RADIANS_PER, changes_to_internal, check_units
@@ -339,19 +347,32 @@ def _analytic_rows(model: Model, engine: Engine, names: list[str]) -> tuple[list
 
 def _config_jacobian(model: Model, engine: Engine, names: list[str]) -> Callable[[State, Array], Array]:
     """``(state, cols) -> d outputs / d x``: analytic rows (:func:`_analytic_rows`, the kernel's
-    partials via :class:`PointJacobians`), central differences of the output map for the rest."""
+    partials via :class:`PointJacobians`), exact rows of the first-order metrics
+    (:func:`kinprop.analysis.outputs.first_order_derivatives` along each column), central
+    differences of the output map for the rest."""
     specs, rows = _analytic_rows(model, engine, names)
     pj = PointJacobians(engine, specs) if specs else None
-    fd_names = [n for n in names if n not in rows]
+    first = [n for n in names if n not in rows and not n.startswith("joint:") and first_order_of(model, n) is not None]
+    fd_names = [n for n in names if n not in rows and n not in first]
     f_fd = _config_outputs(model, engine, fd_names) if fd_names else None
 
     def jacobian(st: State, cols: Array) -> Array:
         cols = np.asarray(cols, np.int64)
         P, G = pj.evaluate(st, cols) if pj is not None else (np.zeros((0, 3)), np.zeros((0, 3, cols.size)))
         fd = output_jacobian(engine, f_fd, st, cols) if f_fd is not None else None
+        exact: dict[int, Array] = {}
+        if first:
+            directions = np.zeros((engine.n_columns, cols.size))
+            directions[cols, np.arange(cols.size)] = 1.0
+            exact = first_order_derivatives(engine.model_of(st, model), first, directions, engine=engine)
         out = np.zeros((len(names), cols.size))
         for r, n in enumerate(names):
-            out[r] = rows[n](P, G, cols) if n in rows else fd[fd_names.index(n)]  # type: ignore[index]
+            if n in rows:
+                out[r] = rows[n](P, G, cols)
+            elif n in first:
+                out[r] = exact[first.index(n)]
+            else:
+                out[r] = fd[fd_names.index(n)]  # type: ignore[index]
         return out
 
     return jacobian

@@ -17,7 +17,9 @@ from kinprop.model import Model
 
 def is_metric(name: str) -> bool:
     """A metric name (``metric:W.camber``, ``camber``) rather than an address or a point."""
-    return name.startswith("metric:") or ("." not in name and not name.startswith(("point:", "hardpoint:")))
+    return name.startswith("metric:") or (
+        "." not in name and not name.startswith(("point:", "hardpoint:", "distance:", "body:"))
+    )
 
 
 def _driven(name: str) -> tuple[str, str, bool] | None:

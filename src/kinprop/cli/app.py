@@ -52,26 +52,17 @@ EXTRAS = {
 }
 
 
-#: every command, in the order ``kinprop --help`` lists them: the module that defines it (on
+#: every command, in the order ``kinprop --help`` lists them, a session's order (look at a
+#: model, solve it, analyse it, share it, other tools' files, the paper): the module that defines it (on
 #: ``app``) and its one-line help, the first paragraph of its docstring (tests/cli/test_startup.py
 #: checks both against the commands themselves)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "check": ("kinprop.cli.check", "Mechanism report: structure, loops, counts, mobility and redundant constraints."),
-    "convert": (
-        "kinprop.cli.convert",
-        "Convert a model between frame style (s', C, q) and hardpoint style (global points and axes), or write "
-        "it as a kinematic MuJoCo MJCF file (--to mjcf; at the model's coordinates).",
-    ),
     "examples": (
         "kinprop.cli.examples",
         "List the example models (the paper's mechanisms and more), or copy them to a directory.",
     ),
-    "paper": ("kinprop.cli.paper", "Reproduce the paper's Table 4 (slider-crank) and Table 1 (McPherson strut)."),
+    "check": ("kinprop.cli.check", "Mechanism report: structure, loops, counts, mobility and redundant constraints."),
     "plot": ("kinprop.cli.plot", "Draw a 3D stick figure of a model (PNG or interactive HTML)."),
-    "sensitivity": (
-        "kinprop.cli.sensitivity",
-        "Derivatives of outputs (default: the free variables) with respect to design variables.",
-    ),
     "assemble": (
         "kinprop.cli.solve",
         "Solve for the joint coordinates from the model's estimates (with freedom left: the assembly closest to them).",
@@ -82,24 +73,34 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "smallest change of the --free design variables meeting the targets.",
     ),
     "sweep": ("kinprop.cli.sweep", "Drive joint coordinates over a range; each step is solved from the previous one."),
-    "loads": (
-        "kinprop.cli.loads",
-        "Joint reactions, member forces (tension positive), spring and damper forces (positive pushing apart) "
-        "and the efforts that hold the inputs, at the model's assembled pose.",
-    ),
-    "import": ("kinprop.cli.importer", "Read another tool's mechanism file and write it as a kinprop model file."),
-    "serve": (
-        "kinprop.cli.serve",
-        "Start the design-propagation workbench in the browser (edit, propagate, sweep, undo).",
-    ),
-    "study": (
-        "kinprop.cli.study",
-        "Run a design study: every variant re-assembled, inputs and results streamed to Parquet.",
+    "sensitivity": (
+        "kinprop.cli.sensitivity",
+        "Derivatives of outputs (default: the free variables) with respect to design variables.",
     ),
     "tolerance": (
         "kinprop.cli.study",
         "Linearised output standard deviations from design-variable tolerances (sensitivity matrix).",
     ),
+    "study": (
+        "kinprop.cli.study",
+        "Run a design study: every variant re-assembled, inputs and results streamed to Parquet.",
+    ),
+    "loads": (
+        "kinprop.cli.loads",
+        "Joint reactions, member forces (tension positive), spring and damper forces (positive pushing apart) "
+        "and the efforts that hold the inputs, at the model's assembled pose.",
+    ),
+    "serve": (
+        "kinprop.cli.serve",
+        "Start the design-propagation workbench in the browser (edit, propagate, sweep, undo).",
+    ),
+    "import": ("kinprop.cli.importer", "Read another tool's mechanism file and write it as a kinprop model file."),
+    "convert": (
+        "kinprop.cli.convert",
+        "Convert a model between frame style (s', C, q) and hardpoint style (global points and axes), or write "
+        "it as a kinematic MuJoCo MJCF file (--to mjcf; at the model's coordinates).",
+    ),
+    "paper": ("kinprop.cli.paper", "Reproduce the paper's Table 4 (slider-crank) and Table 1 (McPherson strut)."),
 }
 
 
@@ -220,6 +221,14 @@ def _sigterm_as_interrupt() -> Any:
 FreeOption = Annotated[
     list[str] | None,
     typer.Option("--free", metavar="GROUP|ADDRESS", help="groups (q s C l coef inputs) or addresses; default q"),
+]
+HoldOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--hold",
+        metavar="JOINT",
+        help="hold JOINT's coordinates as a declared input is held (repeat; --free JOINT.q frees it again)",
+    ),
 ]
 WeightOption = Annotated[
     list[str] | None, typer.Option("--weight", metavar="ADDRESS=W", help="ADDRESS_OR_GROUP=W: larger moves more")
@@ -360,13 +369,15 @@ def load_model_cli(path: Path) -> Model:
     user sees what is happening (a pipe or CI log gets nothing extra)."""
     import warnings
 
+    from kinprop.errors import UnitsWarning
     from kinprop.io.points import JointPointWarning
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", JointPointWarning)
+        warnings.simplefilter("always", UnitsWarning)
         model = _load_model_cli(path)
-    for w in caught:  # a declared point off its joint: one warning line each (issue 20)
-        if issubclass(w.category, JointPointWarning):
+    for w in caught:  # a declared point off its joint (issue 20), a size implausible in its unit: one line each
+        if issubclass(w.category, (JointPointWarning, UnitsWarning)):
             err.print(f"warning: {w.message}", soft_wrap=True, markup=False, highlight=False)
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
@@ -387,7 +398,6 @@ def _load_model_cli(path: Path) -> Model:
             model = load_model(path)
         mech = model.mechanism
         err.print(f"loaded {path}: {len(mech.bodies)} bodies, {len(mech.joints)} joints", soft_wrap=True)
-    warn_scales(model, path)
     return model
 
 

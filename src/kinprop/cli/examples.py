@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import ast
+import json
+import re
 import shutil
 from pathlib import Path
 from typing import Annotated
@@ -13,17 +16,58 @@ from kinprop.cli.app import app, handles_user_errors, out
 from kinprop.errors import AddressError
 from kinprop.resources import examples_dir
 
+#: the end of a sentence: a full stop (not inside a number or a file name) before a space
+_SENTENCE_END = re.compile(r"(?<=[.!?])\s+(?=[A-Z(`\"'])")
+
+
+#: a first sentence longer than this is shown up to its first colon (a whole clause)
+SUMMARY_CHARS = 120
+
+
+def first_sentence(text: str) -> str:
+    """The first sentence of ``text`` (its lines joined), whole: never cut inside a word; a long
+    one up to its first colon (``Front axle with a steering rack: ...``)."""
+    flat = " ".join(text.split())
+    sentence = _SENTENCE_END.split(flat, maxsplit=1)[0]
+    if len(sentence) <= SUMMARY_CHARS:
+        return sentence
+    depth = 0
+    for k, ch in enumerate(sentence):  # the first colon outside parentheses
+        depth += {"(": 1, ")": -1}.get(ch, 0)
+        if depth == 0 and sentence.startswith(": ", k):
+            return sentence[:k]
+    return sentence
+
 
 def _summary(path: Path) -> str:
-    """The first comment line of an example file (another tool's file: which tool)."""
-    if path.suffix in (".json", ".xml"):
-        return f"{'Project Chrono suspension' if path.suffix == '.json' else 'MuJoCo MJCF'} (kinprop import)"
-    for line in path.read_text(encoding="utf-8").splitlines():
+    """What an example is: the first sentence of a model's leading comment, of a script's
+    docstring, a Markdown file's title; another tool's file says which tool and template."""
+    text = path.read_text(encoding="utf-8")
+    if path.suffix == ".json":
+        try:
+            data = json.loads(text)
+        except ValueError:
+            data = {}
+        data = data if isinstance(data, dict) else {}
+        name = f" {data['Name']!r}" if "Name" in data else ""
+        return f"Project Chrono {data.get('Template', '')} suspension{name} (kinprop import)".replace("  ", " ")
+    if path.suffix == ".xml":
+        return "MuJoCo MJCF (kinprop import)"
+    if path.suffix == ".py":
+        try:
+            doc = ast.get_docstring(ast.parse(text)) or ""
+        except SyntaxError:
+            doc = ""
+        return first_sentence(doc.split("\n\n")[0])
+    lines = []
+    for line in text.splitlines():
         if line.startswith("#"):
-            return line.lstrip("# ").strip()
-        if line.strip():
+            lines.append(line.lstrip("#").strip())
+            if path.suffix == ".md":  # a Markdown file's title
+                break
+        elif line.strip() or lines:
             break
-    return ""
+    return first_sentence(" ".join(lines))
 
 
 #: the files ``kinprop examples`` lists and copies (setup.py ships the same)

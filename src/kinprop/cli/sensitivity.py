@@ -107,4 +107,10 @@ def sensitivity_cmd(
         f"units: [row unit] per [column unit], the model's units ({assembled.units.get('length')}, {angle}); "
         f"C columns per {angle} of body-frame rotation"
     )
+    if sens.methods:
+        groups: dict[str, list[str]] = {}
+        for name, how in zip(sens.rows, sens.methods, strict=True):
+            groups.setdefault(how, []).append(str(name))
+        for how, names in groups.items():
+            out.print(f"method: {how}: {' '.join(names)}", soft_wrap=True)
     out.print(f"assembled: {r.message}")

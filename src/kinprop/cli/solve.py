@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
@@ -11,6 +12,7 @@ from rich.table import Table
 from kinprop.cli.app import (
     EXIT_NOT_CONVERGED,
     FreeOption,
+    HoldOption,
     WeightOption,
     app,
     err,
@@ -37,8 +39,11 @@ from kinprop.io.arguments import parse_assignments, parse_weights
 from kinprop.io.commands import comparison_csv
 from kinprop.io.results import propagation_json, variable_rows
 from kinprop.io.writer import atomic_write, dump_model_like
+from kinprop.model import Model
 from kinprop.propagation import Propagation, propagate
 from kinprop.propagation.hardpoints import free_addresses, free_weights, is_global, resolve_changes
+from kinprop.propagation.propagate import hold as hold_joints
+from kinprop.propagation.propagate import shown, unit_text
 
 Tol = Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL (the paper used 1e-3)")]
 MaxIter = Annotated[int, typer.Option("--max-iter", help="maximum Newton iterations")]
@@ -60,8 +65,11 @@ Csv = Annotated[
 Plot = Annotated[Path | None, typer.Option("--plot", help="draw before (faded) and after: FILE.png or FILE.html")]
 
 
-def _fmt(values: list[float]) -> str:
-    text = " ".join(f"{x:.7g}" for x in values)
+def _fmt(values: list[float], scale: float | None = None) -> str:
+    """Values at 7 digits, round-off as 0 against ``scale`` (default: their largest)."""
+    if scale is None:
+        scale = max((abs(x) for x in values if x == x), default=0.0)
+    text = " ".join(shown(x, scale, 7) for x in values)
     return text if len(values) == 1 else f"[{text}]"
 
 
@@ -75,9 +83,9 @@ def comparison_table(prop: Propagation, title: str) -> Table:
     t.add_column("max |change|", justify="right")
     for row in variable_rows(prop):
         style = {"set": "bold yellow", "moved": "cyan"}.get(row["role"])
-        t.add_row(
-            row["variable"], row["unit"], _fmt(row["before"]), _fmt(row["after"]), f"{row['change']:.3g}", style=style
-        )
+        scale = max((abs(x) for x in [*row["before"], *row["after"]] if x == x), default=0.0)
+        t.add_row(row["variable"], unit_text(row["unit"]), _fmt(row["before"], scale), _fmt(row["after"], scale),
+                  f"{row['change']:.3g}", style=style)  # fmt: skip
     return t
 
 
@@ -117,11 +125,13 @@ def report(
     plot: Path | None = None,
     source: Path | None = None,
     quiet: bool = False,
+    written_model: Model | None = None,
 ) -> None:
+    """Print and write a propagation; ``written_model``: the model ``-o`` writes (default ``prop.after``)."""
     r = prop.result
     written = []
     for path, write in (
-        (output, lambda p: dump_model_like(prop.after, p, source)),
+        (output, lambda p: dump_model_like(prop.after if written_model is None else written_model, p, source)),
         (csv, lambda p: write_csv(prop, p)),
         (plot, lambda p: write_plot(prop, p)),
     ):
@@ -187,6 +197,7 @@ def propagate_cmd(
         ),
     ] = None,
     free: FreeOption = None,
+    hold: HoldOption = None,
     weight: WeightOption = None,
     tol: Tol = 1e-10,
     max_iter: MaxIter = 50,
@@ -212,7 +223,10 @@ def propagate_cmd(
     given = parse_assignments("--set", set_)
     check_set_not_free(given, free)
     weights = parse_weights(weight)
-    m = load_model_cli(model)
+    if hold and target:
+        raise ValueError("--hold with --target: hold joints by declaring them in the model's inputs: instead")
+    m = held = load_model_cli(model)
+    m = hold_joints(m, hold or [])  # held like declared inputs, for this run only
     changes = changes_to_internal(m, {k: v for k, v in given.items() if not is_global(k)})
     changes |= {k: v for k, v in given.items() if is_global(k)}
     if target:
@@ -238,4 +252,7 @@ def propagate_cmd(
         as_json=as_json,
         method=method,
     )
-    report(prop, f"propagate {model}", output, as_json, csv, plot, source=model, quiet=quiet)
+    # the written model declares the file's own inputs, not this run's --hold
+    written_model = replace(prop.after, mechanism=held.mechanism) if hold else None
+    report(prop, f"propagate {model}", output, as_json, csv, plot, source=model, quiet=quiet,
+           written_model=written_model)  # fmt: skip

@@ -17,6 +17,7 @@ from kinprop.analysis.sweep import parse_drive, plot_sweep, sweep
 from kinprop.cli.app import (
     EXIT_NOT_CONVERGED,
     FreeOption,
+    HoldOption,
     app,
     err,
     handles_user_errors,
@@ -37,16 +38,16 @@ from kinprop.cli.checks import (
 )
 from kinprop.engine.units import changes_to_internal
 from kinprop.io.arguments import parse_assignments
-from kinprop.io.commands import label_units, sweep_json
+from kinprop.io.commands import check_x, label_units, sweep_json
+from kinprop.propagation.propagate import hold, shown
 
 #: show a progress bar from this many steps on
 PROGRESS_FROM = 50
 
 
-def _fmt(v: object) -> str:
-    if isinstance(v, float):
-        return "" if v != v else f"{v:.6g}"
-    return str(v)
+def _fmt(v: object, scale: float = 0.0) -> str:
+    """A cell: 6 digits, round-off against the column's largest ``scale`` as 0 (never -0)."""
+    return shown(v, scale) if isinstance(v, float) else str(v)
 
 
 def _table(frame, columns: list[str], limit: int | None = 24) -> Table:
@@ -56,6 +57,7 @@ def _table(frame, columns: list[str], limit: int | None = 24) -> Table:
     for c in columns:
         t.add_column(f"{c} [{units[c]}]" if units.get(c) else c, justify="left" if c in ("status",) else "right")
     n = len(frame)
+    scale = {c: float(frame[c].abs().max()) if frame[c].dtype.kind == "f" else 0.0 for c in columns}
     if limit is None or n <= limit:
         idx = list(range(n))
     else:
@@ -66,7 +68,7 @@ def _table(frame, columns: list[str], limit: int | None = 24) -> Table:
             continue
         row = frame.iloc[i]
         style = None if row["status"] == "converged" else "red"
-        t.add_row(*[_fmt(row[c]) for c in columns], style=style)
+        t.add_row(*[_fmt(row[c], scale[c]) for c in columns], style=style)
     return t
 
 
@@ -113,17 +115,6 @@ def _plot_before_after(base, res, path: Path, x: str | None, title: str) -> None
     plot_curves(ok, x, ys, units=units, title=title, path=path)
 
 
-def _check_x(model, drives, outputs: list[str] | None, x: str) -> None:
-    """``--x`` names a column the sweep will have: a drive, a coordinate or an output."""
-    from kinprop.analysis.outputs import expand_outputs
-    from kinprop.analysis.sweep import coordinate_columns, default_outputs
-
-    names = list(default_outputs(model) if outputs is None else outputs)
-    columns = [d.label for d in drives] + [c for c, *_ in coordinate_columns(model)] + expand_outputs(model, names)
-    if x not in columns:
-        raise ValueError(f"--x {x!r}: not a column of this sweep; columns: {', '.join(dict.fromkeys(columns))}")
-
-
 @app.command(name="sweep")
 @handles_user_errors
 def sweep_cmd(
@@ -144,12 +135,14 @@ def sweep_cmd(
         typer.Option("--set", metavar="ADDRESS=VALUE", help="ADDRESS=VALUE design change applied at step 0"),
     ] = None,
     free: FreeOption = None,
+    hold_: HoldOption = None,
     outputs: Annotated[
         list[str] | None,
         typer.Option(
             "--out",
             metavar="NAME",
-            help="output names (point:BODY.NAME, metric:WHEEL.camber, J.q ...); default: named points and metrics",
+            help="output names (point:BODY.NAME, body:BODY (its pose), distance:A,B, metric:WHEEL.camber, J.q ...); "
+            "default: named points and metrics",
         ),
     ] = None,
     output: Annotated[
@@ -192,11 +185,11 @@ def sweep_cmd(
         require("pyarrow")
     if plot is not None:
         require("matplotlib")
-    m = load_model_cli(model)
+    m = hold(load_model_cli(model), hold_ or [])  # held like declared inputs
     drives = [parse_drive(m, d) for d in drive]
     changes = changes_to_internal(m, given)
     if x is not None:
-        _check_x(m, drives, outputs, x)
+        check_x(m, drives, outputs, x)
     quiet = quiet or as_json
     n = max(d.values.size for d in drives)
     show = not quiet and n >= PROGRESS_FROM
@@ -249,7 +242,9 @@ def sweep_cmd(
     df = res.frame
     label_units(res, base)
     if as_json:
-        print_json(sweep_json(res, base, output, plot) | ({"baseline_file": str(base_output)} if base_output else {}))
+        print_json(
+            sweep_json(res, base, output, plot, x) | ({"baseline_file": str(base_output)} if base_output else {})
+        )
     if not quiet:
         terminal = out.is_terminal  # a pipe gets every row and every varying column
         shown = _shown_columns(res, outputs, 10 if terminal else None)

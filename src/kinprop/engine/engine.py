@@ -176,6 +176,8 @@ class Solution:
     optimality: float = 0.0
     #: ``least-change`` or ``paper`` (:data:`METHODS`)
     method: str = "least-change"
+    #: the iteration cap of one sub-step (0: not known)
+    max_iter: int = 0
 
     @property
     def subdivided(self) -> bool:
@@ -194,7 +196,7 @@ class Solution:
     @property
     def message(self) -> str:
         return message(self.status, self.iterations, self.residual, self.tol, self.requested_tol, self.fraction,
-                       self.substeps, self.flags, self.optimality)  # fmt: skip
+                       self.substeps, self.flags, self.optimality, self.max_iter)  # fmt: skip
 
     @cached_property
     def design(self) -> Design:
@@ -253,6 +255,8 @@ class BatchSolution:
     requested_tol: float = 0.0
     #: per-variant optimality residual (:attr:`Solution.optimality`)
     optimality: Array | None = None
+    #: the iteration cap of one sub-step (0: not known)
+    max_iter: int = 0
 
     @property
     def converged(self) -> Array:
@@ -267,7 +271,7 @@ class BatchSolution:
                        1.0 if self.fraction is None else float(self.fraction[k]),
                        1 if self.substeps is None else int(self.substeps[k]),
                        0 if self.flags is None else int(self.flags[k]),
-                       0.0 if self.optimality is None else float(self.optimality[k]))  # fmt: skip
+                       0.0 if self.optimality is None else float(self.optimality[k]), self.max_iter)  # fmt: skip
 
     def notes(self, k: int) -> list[str]:
         return notes(self.status(k), 0 if self.flags is None else int(self.flags[k]),
@@ -742,7 +746,7 @@ class Engine:
             self._reference_signs[ref_key] = int(sign_start)
         return Solution(self, start, st, STATUSES[code], int(it), float(norm), hist[: min(hlen, hist.size)], cols,
                         cfg.tol, dict(changes or {}), tol, float(frac), int(subs), int(flags), float(opt),
-                        method)  # fmt: skip
+                        method, int(cfg.max_iter))  # fmt: skip
 
     def apply(self, start: State, changes: Mapping[str, Any]) -> tuple[State, dict[str, Array], set[str]]:
         """A copy of ``start`` with ``changes`` (address -> value) written; returns it, the
@@ -865,7 +869,7 @@ class Engine:
             newton.follow_batch(*args)
         return BatchSolution(st, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4], out[:, 2],
                              out[:, 5].astype(np.int64), out[:, 3].astype(np.int64), cfg.tol, tol,
-                             out[:, 6])  # fmt: skip
+                             out[:, 6], int(cfg.max_iter))  # fmt: skip
 
     def solve_sequence(
         self,
@@ -900,7 +904,7 @@ class Engine:
                                self.col_scale, cfg, steps.Q, steps.S, steps.C, steps.L, out)  # fmt: skip
         return steps.Q, BatchSolution(steps, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4],
                                       out[:, 2], out[:, 5].astype(np.int64), out[:, 3].astype(np.int64), cfg.tol,
-                                      tol, out[:, 6])  # fmt: skip
+                                      tol, out[:, 6], int(cfg.max_iter))  # fmt: skip
 
     # --- motion: velocities and accelerations (kinprop.engine.motion) ------------------------
     def motion(

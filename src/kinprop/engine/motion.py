@@ -32,6 +32,9 @@ violate the constraints (a locked input), the status is ``singular`` and every r
 
 from __future__ import annotations
 
+import math
+import threading
+import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -39,12 +42,14 @@ from typing import Any
 import numpy as np
 
 from kinprop.constraints.basic import DISTANCE, DOT1, DOT2, SPHERICAL
+from kinprop.jit import njit
 from kinprop.joints import composite, placement, universal
 from kinprop.joints import motion as joint_motion
 from kinprop.kinematics import kernels
 from kinprop.kinematics.tables import (
     B_KIND,
     B_ON_J,
+    CP_COL,
     CP_L0,
     CP_QB,
     CP_ROW,
@@ -53,6 +58,8 @@ from kinprop.kinematics.tables import (
     J_BODY_I,
     J_BODY_J,
     J_CODE,
+    J_COL_L,
+    J_COL_S_I,
     J_NQ,
     J_QCOL,
     K_BASIC0,
@@ -64,6 +71,7 @@ from kinprop.kinematics.tables import (
     T_PARENT,
     T_REVERSED,
 )
+from kinprop.solver import newton
 from kinprop.spatial import Array
 
 #: ``kinprop.engine.Engine`` and its ``State``: engine.py calls into this module (``Engine.motion``),
@@ -91,7 +99,8 @@ class MotionState:
     R: Array  # joint frame axes (nj, 2, 3, 3)
     qddot: Array | None = None
     dV: Array | None = None  # (nb, 6) spatial accelerations [dv_O, alpha]
-    #: smallest / largest singular value of the scaled velocity system
+    #: smallest / largest singular value of the scaled velocity system (NaN: solved compiled by
+    #: LU on the plan, :func:`velocity_solve`, which does not compute it)
     conditioning: float = 1.0
     #: ``||Phi||`` of the state (scaled as the solver's test): the rates are those of the
     #: tangent there; :func:`kinprop.analysis.motion.motion` refuses a state that is not an assembly
@@ -143,14 +152,14 @@ def _local_bias(code: int, q: Array, qd: Array, d: Array, dd_qd: Array, w: Array
 class _Frames:
     """The kernel's workspace after an evaluation: poses and tree twists."""
 
-    def __init__(self, engine: Engine, state: State) -> None:
+    def __init__(self, engine: Engine, state: State, design: bool = False) -> None:
         st = state.writable()
         tb = engine.tables
         ws = kernels.workspace(tb)
         nq = engine.n_coordinates
         Phi, vals = np.zeros(engine.n_rows), np.zeros(engine.nnz)
         need = np.zeros(engine.n_columns, np.int8)
-        need[:nq] = 1  # the coordinate columns only (layout: q first)
+        need[: engine.n_columns if design else nq] = 1  # layout: q first; ``design``: the s', C twists too
         dummy = np.zeros(0, np.int64)
         kernels.evaluate(tb, st.Q, st.S, st.C, st.L, ws, Phi, vals, need, dummy, dummy)
         rows, cols = engine.pattern
@@ -158,8 +167,15 @@ class _Frames:
         self.residual = float(np.linalg.norm(Phi * engine.row_scale))
         self.Phi_q = np.zeros((engine.n_rows, nq))
         np.add.at(self.Phi_q, (rows[q], cols[q]), vals[q])
-        slots = (kernels.W_BODY_R, kernels.W_BODY_A, kernels.W_FRAME_P, kernels.W_FRAME_R, kernels.W_TWIST_Q)
-        self.r, self.A, self.P, self.R, self.Tq = (np.array(ws[k]) for k in slots)
+        slots = (
+            kernels.W_BODY_R,
+            kernels.W_BODY_A,
+            kernels.W_FRAME_P,
+            kernels.W_FRAME_R,
+            kernels.W_TWIST_Q,
+            kernels.W_TWIST_D,
+        )
+        self.r, self.A, self.P, self.R, self.Tq, self.Td = (np.array(ws[k]) for k in slots)
         self.state = st
 
 
@@ -180,68 +196,111 @@ def _driven_rows(engine: Engine, driven: Mapping[str, Any]) -> tuple[list[int], 
     return cols, vals
 
 
-def _solve(
-    engine: Engine, Phi_q: Array, cols: list[int], rhs_rows: Array, rhs_driven: list[float]
-) -> tuple[Array, float, str]:
-    """Least-squares solve of the stacked system with a rank and consistency check."""
-    n = Phi_q.shape[1]
-    E = np.zeros((len(cols), n))
-    E[np.arange(len(cols)), cols] = 1.0
-    cs = engine.col_scale[:n]  # solver column -> scaled: x = cs^-1 * xs
-    rs = engine.row_scale
-    M = np.vstack([Phi_q * rs[:, None], E]) / cs[None, :]
-    b = np.concatenate([rhs_rows * rs, np.asarray(rhs_driven, dtype=float)])
-    if len(cols):
-        M[Phi_q.shape[0] :] *= cs[None, cols].T  # driven rows: unit entries in scaled columns
-        b[Phi_q.shape[0] :] *= cs[cols]
-    U, s, Vt = np.linalg.svd(M, full_matrices=False)
-    smax = float(s[0]) if s.size else 0.0
-    rank = int(np.sum(s > SINGULAR_RTOL * smax)) if smax > 0 else 0
-    cond = float(s[-1] / smax) if smax > 0 and s.size == n else 0.0
-    if rank < n:
-        return (
-            np.full(n, np.nan),
-            cond,
-            (
+class _Factor:
+    """The stacked velocity matrix ``[Phi_q ; E_D]`` (rows and columns scaled), factored once by
+    SVD with a rank check; :meth:`solve` answers one right-hand side."""
+
+    def __init__(self, engine: Engine, Phi_q: Array, cols: list[int]) -> None:
+        n = Phi_q.shape[1]
+        self.m, self.cols = Phi_q.shape[0], cols
+        self.cs, self.rs = engine.col_scale[:n], engine.row_scale  # solver column -> scaled: x = cs^-1 xs
+        E = np.zeros((len(cols), n))
+        E[np.arange(len(cols)), cols] = 1.0
+        self.M = np.vstack([Phi_q * self.rs[:, None], E]) / self.cs[None, :]
+        if len(cols):
+            self.M[self.m :] *= self.cs[None, cols].T  # driven rows: unit entries in scaled columns
+        self.U, s, self.Vt = np.linalg.svd(self.M, full_matrices=False)
+        self.s = s
+        smax = float(s[0]) if s.size else 0.0
+        rank = int(np.sum(s > SINGULAR_RTOL * smax)) if smax > 0 else 0
+        self.conditioning = float(s[-1] / smax) if smax > 0 and s.size == n else 0.0
+        self.message = (
+            ""
+            if rank == n
+            else (
                 f"singular: the driven rates leave {n - rank} direction(s) of motion "
                 "undetermined (a singular configuration, or too few driven coordinates)"
-            ),
+            )
         )
-    xs = Vt.T @ ((U.T @ b) / s)
-    resid = float(np.linalg.norm(M @ xs - b))
-    if resid > 1e-8 * max(1.0, float(np.linalg.norm(b))):
-        return (
-            np.full(n, np.nan),
-            cond,
-            (
+
+    def solve(self, rhs_rows: Array, rhs_driven: Array | list[float]) -> tuple[Array, str]:
+        """``x`` of ``[Phi_q ; E_D] x = [rhs_rows ; rhs_driven]`` (NaN and a message when singular
+        or inconsistent)."""
+        n = self.M.shape[1]
+        if self.message:
+            return np.full(n, np.nan), self.message
+        b = np.concatenate([rhs_rows * self.rs, np.asarray(rhs_driven, dtype=float)])
+        if len(self.cols):
+            b[self.m :] *= self.cs[self.cols]
+        xs = self.Vt.T @ ((self.U.T @ b) / self.s)
+        resid = float(np.linalg.norm(self.M @ xs - b))
+        if resid > 1e-8 * max(1.0, float(np.linalg.norm(b))):
+            return np.full(n, np.nan), (
                 "singular: the driven rates violate the constraints (residual "
                 f"{resid:.3g}): a locked input or a singular configuration"
-            ),
-        )
-    return xs / cs, cond, ""
+            )
+        return xs / self.cs, ""
 
 
-def _tree_velocities(engine: Engine, fr: _Frames, qdot: Array) -> Array:
+def _field_rate(tb: Any, j: int, f: int, xdot: Array) -> Array | None:
+    """Rate of joint ``j``'s design field ``f`` (0 ``s'_i``, 1 ``s'_j``, 2 ``xi'_i``, 3 ``xi'_j``;
+    body-frame, the retraction's) in the state rate ``xdot`` (None: no such column, or zero)."""
+    col = int(tb.joint[j, J_COL_S_I + f])
+    if col < 0 or col >= xdot.shape[0]:
+        return None
+    r = xdot[col : col + 3]
+    return r if (r[0] != 0.0 or r[1] != 0.0 or r[2] != 0.0) else None
+
+
+def _chain(tb: Any, fr: _Frames, t: int, xdot: Array) -> list[tuple[Array, bool]]:
+    """Twists ``T_k xdot_k`` a tree joint's variables give its child, in chain order from the
+    parent (module docstring: ``s'_a``, ``xi'_a``, q, ``xi'_b``, ``s'_b``), each flagged whether
+    it is the q one."""
+    j = int(tb.tree[t, T_JOINT])
+    q0, nq = int(tb.joint[j, J_QCOL]), int(tb.joint[j, J_NQ])
+    a, b = (0, 1) if tb.tree[t, T_REVERSED] == 0 else (1, 0)
+    out: list[tuple[Array, bool]] = []
+    for f in (a, 2 + a, -1, 2 + b, b):
+        if f < 0:
+            if nq > 0:
+                out.append((fr.Tq[t, :, :nq] @ xdot[q0 : q0 + nq], True))
+            continue
+        r = _field_rate(tb, j, f, xdot)
+        if r is not None:
+            out.append((fr.Td[t, f] @ r, False))
+    return out
+
+
+def _tree_velocities(engine: Engine, fr: _Frames, xdot: Array) -> Array:
+    """Every body's twist for the state rate ``xdot`` (coordinates first; design columns, when
+    ``xdot`` has them, through the kernel's M, N twists)."""
     tb = engine.tables
     V = np.zeros((tb.fixed.shape[0], 6))
     for t in range(tb.tree.shape[0]):
-        j, par, chi = tb.tree[t, T_JOINT], tb.tree[t, T_PARENT], tb.tree[t, T_CHILD]
-        q0, nq = tb.joint[j, J_QCOL], tb.joint[j, J_NQ]
-        V[chi] = V[par] + (fr.Tq[t, :, :nq] @ qdot[q0 : q0 + nq] if nq > 0 else 0.0)
+        par, chi = tb.tree[t, T_PARENT], tb.tree[t, T_CHILD]
+        V[chi] = V[par]
+        for U, _ in _chain(tb, fr, t, xdot):
+            V[chi] = V[chi] + U
     return V
 
 
-def _tree_bias(engine: Engine, fr: _Frames, qdot: Array, V: Array) -> Array:
-    """Spatial accelerations of the bodies with ``qddot = 0``."""
+def _tree_bias(engine: Engine, fr: _Frames, xdot: Array, V: Array) -> Array:
+    """Spatial accelerations of the bodies along the straight line ``retract(x, t xdot)`` with
+    no second rates: each variable's twist turns with everything before it in the chain
+    (``V_before x T_k xdot_k``) plus the joint's own second-order term."""
     tb, Q = engine.tables, fr.state.Q
     dV = np.zeros_like(V)
     for t in range(tb.tree.shape[0]):
         j, par, chi = tb.tree[t, T_JOINT], tb.tree[t, T_PARENT], tb.tree[t, T_CHILD]
         q0, nq = tb.joint[j, J_QCOL], tb.joint[j, J_NQ]
-        dV[chi] = dV[par]
+        acc, W = dV[par].copy(), V[par].copy()
+        for U, _ in _chain(tb, fr, t, xdot):
+            acc += spatial_cross(W, U)
+            W = W + U
+        dV[chi] = acc
         if nq <= 0:
             continue
-        q, qd = Q[q0 : q0 + nq], qdot[q0 : q0 + nq]
+        q, qd = Q[q0 : q0 + nq], xdot[q0 : q0 + nq]
         code = int(tb.joint[j, J_CODE])
         App, dpp = np.zeros((3, 3)), np.zeros(3)
         dd, H = np.zeros((3, kernels.MAX_Q)), np.zeros((3, kernels.MAX_Q))
@@ -252,85 +311,233 @@ def _tree_bias(engine: Engine, fr: _Frames, qdot: Array, V: Array) -> Array:
         dt_loc_v = dD + cross3(dd_qd, w) + cross3(dpp, dH)
         sign = -1.0 if tb.tree[t, T_REVERSED] else 1.0
         R0, P0 = fr.R[j, 0], fr.P[j, 0]
-        X = np.concatenate([R0 @ dt_loc_v + cross3(P0, R0 @ dH), R0 @ dH])
-        dV[chi] += spatial_cross(V[par], fr.Tq[t, :, :nq] @ qd) + sign * X
+        dV[chi] += sign * np.concatenate([R0 @ dt_loc_v + cross3(P0, R0 @ dH), R0 @ dH])
     return dV
 
 
-def _gamma(engine: Engine, fr: _Frames, qdot: Array, V: Array, dV: Array) -> Array:
-    """Haug's ``gamma`` of every row (module docstring)."""
+def _gamma(engine: Engine, fr: _Frames, xdot: Array, V: Array, dV: Array) -> Array:
+    """Haug's ``gamma`` of every row (module docstring) for the state rate ``xdot``: minus the
+    second derivative of ``Phi`` along ``retract(x, t xdot)``. With design rates a joint frame's
+    point moves in its body by ``A s'dot`` and its axes turn by ``A xi'dot``, a length by
+    ``ldot``, a coupling coefficient by ``cdot``."""
     tb, Q, L = engine.tables, fr.state.Q, fr.state.L
+    nx = xdot.shape[0]
     g = np.zeros(engine.n_rows)
 
-    def kin(b: int, x: Array) -> tuple[Array, Array]:  # velocity and bias acceleration of a point
+    def kin(b: int, x: Array, sd: Array | None) -> tuple[Array, Array]:  # velocity and bias acceleration
         v = V[b, :3] + cross3(V[b, 3:], x)
-        return v, dV[b, :3] + cross3(dV[b, 3:], x) + cross3(V[b, 3:], v)
+        a = dV[b, :3] + cross3(dV[b, 3:], x) + cross3(V[b, 3:], v)
+        if sd is None:
+            return v, a
+        u = fr.A[b] @ sd
+        return v + u, a + 2.0 * cross3(V[b, 3:], u)
 
-    def axis(b: int, a: Array) -> tuple[Array, Array]:  # rate and bias acceleration of a body axis
-        da = cross3(V[b, 3:], a)
-        return da, cross3(dV[b, 3:], a) + cross3(V[b, 3:], da)
+    def axis(b: int, a: Array, xi: Array | None) -> tuple[Array, Array]:  # rate and bias of a frame axis
+        om, dom = V[b, 3:], dV[b, 3:]
+        if xi is not None:
+            u = fr.A[b] @ xi
+            om, dom = om + u, dom + cross3(V[b, 3:], u)
+        da = cross3(om, a)
+        return da, cross3(dom, a) + cross3(om, da)
 
     for c in range(tb.cut.shape[0]):
         j, row = tb.cut[c, K_JOINT], tb.cut[c, K_ROW0]
         bi, bj = tb.joint[j, J_BODY_I], tb.joint[j, J_BODY_J]
+        xi_i, xi_j = _field_rate(tb, j, 2, xdot), _field_rate(tb, j, 3, xdot)
         Ri, Rj = fr.R[j, 0], fr.R[j, 1]
-        vi, ai = kin(bi, fr.P[j, 0])
-        vj, aj = kin(bj, fr.P[j, 1])
+        vi, ai = kin(bi, fr.P[j, 0], _field_rate(tb, j, 0, xdot))
+        vj, aj = kin(bj, fr.P[j, 1], _field_rate(tb, j, 1, xdot))
         d, dd, ddd = fr.P[j, 1] - fr.P[j, 0], vj - vi, aj - ai
         if tb.joint[j, J_NQ] > 0:  # T-D: the point on body i slides along z''_i by its own coordinate
             qc = tb.joint[j, J_QCOL]
             e = Ri[:, 2]
-            de, dde = axis(bi, e)
+            de, dde = axis(bi, e, xi_i)
             d = d - Q[qc] * e
-            dd = dd - qdot[qc] * e - Q[qc] * de
-            ddd = ddd - 2.0 * qdot[qc] * de - Q[qc] * dde
+            dd = dd - xdot[qc] * e - Q[qc] * de
+            ddd = ddd - 2.0 * xdot[qc] * de - Q[qc] * dde
         r = row
         for bc in range(tb.cut[c, K_BASIC0], tb.cut[c, K_BASIC1]):
             kind, on_j, ax = tb.basic[bc, B_KIND], tb.basic[bc, B_ON_J], tb.basic_axes[bc]
             if kind == DOT1:
                 a_i, a_j = Ri @ ax[:3], Rj @ ax[3:]
-                da_i, dda_i = axis(bi, a_i)
-                da_j, dda_j = axis(bj, a_j)
+                da_i, dda_i = axis(bi, a_i, xi_i)
+                da_j, dda_j = axis(bj, a_j, xi_j)
                 g[r] = -(dda_i @ a_j + 2.0 * da_i @ da_j + a_i @ dda_j)
                 r += 1
             elif kind == DOT2:
                 b = bj if on_j else bi
                 a = (Rj if on_j else Ri) @ ax[:3]
-                da, dda = axis(b, a)
+                da, dda = axis(b, a, xi_j if on_j else xi_i)
                 g[r] = -(dda @ d + 2.0 * da @ dd + a @ ddd)
                 r += 1
             elif kind == SPHERICAL:
                 g[r : r + 3] = -ddd
                 r += 3
             elif kind == DISTANCE:
-                g[r] = -(2.0 * dd @ dd + 2.0 * d @ ddd)
+                lc = tb.joint[j, J_COL_L]
+                ldot = float(xdot[lc]) if 0 <= lc < nx else 0.0
+                g[r] = -(2.0 * dd @ dd + 2.0 * d @ ddd) + 2.0 * ldot * ldot
                 r += 1
     for e in range(tb.euler.shape[0]):
         col = tb.euler[e, E_COL]
-        pd = qdot[col : col + 4]
+        pd = xdot[col : col + 4]
         g[tb.euler[e, E_ROW]] = -2.0 * float(pd @ pd)
     for k in range(tb.coupling.shape[0]):
-        qb, slot = tb.coupling[k, CP_QB], tb.coupling[k, CP_L0]
+        qb, slot, cc = tb.coupling[k, CP_QB], tb.coupling[k, CP_L0], tb.coupling[k, CP_COL]
         x = Q[qb] - tb.coupling_q0[k, 1]
         c = L[slot : slot + 5]
         p2 = 2.0 * c[2] + 6.0 * c[3] * x + 12.0 * c[4] * x * x
-        g[tb.coupling[k, CP_ROW]] = p2 * qdot[qb] ** 2
+        g[tb.coupling[k, CP_ROW]] = p2 * xdot[qb] ** 2
+        if 0 <= cc < nx:  # p(x) = sum c_m x^m: the mixed term 2 x' sum m c'_m x^(m-1)
+            cd = xdot[cc : cc + 5]
+            dp = cd[1] + 2.0 * cd[2] * x + 3.0 * cd[3] * x * x + 4.0 * cd[4] * x**3
+            g[tb.coupling[k, CP_ROW]] += 2.0 * xdot[qb] * dp
     return g
+
+
+#: :func:`velocity_solve` outcomes
+SOLVED, NEEDS_SVD, INCONSISTENT = 0, 1, 2
+#: relative consistency residual of the driven rates above which the compiled solve gives up
+CONSISTENCY_RTOL = 1e-8
+
+
+@njit
+def velocity_solve(tb, plan, Q, S, C, L, rates, need, rows, cols, row_scale, buf, qdot, V, out):
+    """Rates of every coordinate and twists of every body at the state ``Q, S, C, L``, compiled,
+    on the engine's plan of the free set (every coordinate column not driven;
+    :mod:`kinprop.solver.plan`): ``Phi_F qdot_F = -Phi_D qdot_D`` is one Newton linear step
+    (:func:`kinprop.solver.newton.newton_step`) with ``Phi_D qdot_D`` in place of ``Phi``.
+
+    ``rates`` (n_q): the driven columns' rates, zero elsewhere (``plan.free`` must be the other
+    coordinate columns); ``need`` (n_columns, int8): 1 on every coordinate column; ``rows``,
+    ``cols``: the Jacobian's pattern (``Engine.pattern``); ``buf``: :func:`kinprop.solver.newton.buffers`
+    of the plan (afterwards ``buf[B_WS]`` holds the poses and frames). Writes ``qdot`` (n_q),
+    ``V`` (nb, 6: ``[v_O ; omega]``) and ``out[0] = ||row_scale Phi||``. Returns ``SOLVED``,
+    ``NEEDS_SVD`` (a block is rectangular or singular: the caller takes the SVD path with its rank
+    check) or ``INCONSISTENT`` (the driven rates violate rows the free columns do not reach)."""
+    Phi, vals, ws, none = buf[newton.B_PHI], buf[newton.B_VALS], buf[newton.B_WS], buf[newton.B_NONE]
+    nq = qdot.shape[0]
+    kernels.evaluate(tb, Q, S, C, L, ws, Phi, vals, need, none, none)
+    r2 = 0.0
+    for i in range(Phi.shape[0]):
+        r2 += (Phi[i] * row_scale[i]) ** 2
+        Phi[i] = 0.0
+    out[0] = np.sqrt(r2)
+    for k in range(rows.shape[0]):  # Phi_D qdot_D
+        c = cols[k]
+        if c < nq and rates[c] != 0.0:
+            Phi[rows[k]] += vals[k] * rates[c]
+    if newton.newton_step(plan, Phi, vals, buf, False) == 0:
+        return NEEDS_SVD
+    dx = buf[newton.B_DX]
+    for c in range(nq):
+        qdot[c] = rates[c]
+    for f in range(plan.free.shape[0]):
+        if not np.isfinite(dx[f]):
+            return NEEDS_SVD
+        qdot[plan.free[f]] = dx[f]
+    for i in range(Phi.shape[0]):  # rows no free column reaches: the driven rates must satisfy them
+        Phi[i] = 0.0
+    scale = 0.0
+    for k in range(rows.shape[0]):
+        c = cols[k]
+        if c < nq:
+            Phi[rows[k]] += vals[k] * qdot[c]
+            scale = max(scale, abs(vals[k] * qdot[c]) * row_scale[rows[k]])
+    for i in range(Phi.shape[0]):
+        if abs(Phi[i]) * row_scale[i] > CONSISTENCY_RTOL * max(1.0, scale):
+            return INCONSISTENT
+    Tq = ws[kernels.W_TWIST_Q]
+    for b in range(V.shape[0]):
+        for x in range(6):
+            V[b, x] = 0.0
+    for t in range(tb.tree.shape[0]):
+        j, par, chi = tb.tree[t, T_JOINT], tb.tree[t, T_PARENT], tb.tree[t, T_CHILD]
+        q0, n = tb.joint[j, J_QCOL], tb.joint[j, J_NQ]
+        for x in range(6):
+            v = V[par, x]
+            for y in range(max(n, 0)):
+                v += Tq[t, x, y] * qdot[q0 + y]
+            V[chi, x] = v
+    return SOLVED
+
+
+#: per engine, per driven addresses and thread: their columns, the plan of the other
+#: coordinate columns, the ``need`` of every coordinate column and the solve's buffers (built
+#: once; the engine caches its plans too)
+_PLANS: weakref.WeakKeyDictionary[Any, dict[tuple[Any, ...], tuple[list[int], Any, Array, Any]]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _velocity_plan(engine: Engine, rates: Mapping[str, Any]) -> tuple[list[int], list[float], Any, Array, Any]:
+    """``(driven columns, their rates, plan, need, buffers)`` of :func:`velocity_solve`."""
+    per = _PLANS.get(engine)
+    if per is None:
+        per = _PLANS[engine] = {}
+    key = (*rates, threading.get_ident())
+    found = per.get(key)
+    if found is None or not all(isinstance(v, (int, float)) for v in rates.values()):
+        cols, vals = _driven_rows(engine, rates)
+        nq = engine.n_coordinates
+        need = np.zeros(engine.n_columns, np.int8)
+        need[:nq] = 1
+        keep = np.ones(nq, bool)
+        keep[cols] = False
+        plan = engine.plan(np.flatnonzero(keep))
+        unique = len(set(cols)) == len(cols)  # a coordinate driven twice: the SVD path checks it
+        found = per[key] = (cols, plan, need, newton.buffers(engine.tables, plan, engine.nnz) if unique else None)
+        return cols, vals, plan, need, found[3]
+    return found[0], [float(v) for v in rates.values()], found[1], found[2], found[3]
+
+
+def _compiled_motion(engine: Engine, state: State, rates: Mapping[str, Any]) -> MotionState | None:
+    """:func:`velocity_solve` on the engine's plan (None: the SVD path must decide)."""
+    cols, vals, plan, need, buf = _velocity_plan(engine, rates)
+    if buf is None:
+        return None
+    nq, tb = engine.n_coordinates, engine.tables
+    rate = np.zeros(nq)
+    for c, v in zip(cols, vals, strict=True):
+        rate[c] = v
+    rows, pcols = engine.pattern
+    st = state.writable()
+    qdot, V, out = np.zeros(nq), np.zeros((tb.fixed.shape[0], 6)), np.zeros(1)
+    code = velocity_solve(
+        tb, plan, st.Q, st.S, st.C, st.L, rate, need, rows, pcols, engine.row_scale, buf, qdot, V, out
+    )
+    if code != SOLVED:
+        return None
+    ws = buf[newton.B_WS]  # the buffers are reused: copy the poses out
+    r, A, P, R = (ws[k].copy() for k in (kernels.W_BODY_R, kernels.W_BODY_A, kernels.W_FRAME_P, kernels.W_FRAME_R))
+    return MotionState(OK, "ok", qdot, V, r, A, P, R, conditioning=math.nan, residual=float(out[0]))
 
 
 def motion_state(
     engine: Engine, state: State, rates: Mapping[str, Any], accelerations: Mapping[str, Any] | None = None
 ) -> MotionState:
     """Velocities and, when ``accelerations`` (of the same driven coordinates; missing ones 0)
-    is given, accelerations of every coordinate and body (module docstring)."""
-    fr = _Frames(engine, state)
+    is given, accelerations of every coordinate and body (module docstring). Velocities alone
+    are solved compiled on the engine's plan (:func:`velocity_solve`) when every block is square
+    and regular; otherwise (and for accelerations) by the SVD with its rank check."""
+    if accelerations is None:
+        ms = _compiled_motion(engine, state, rates)
+        if ms is not None:
+            return ms
+    return _motion(engine, _Frames(engine, state), rates, accelerations)[0]
+
+
+def _motion(
+    engine: Engine, fr: _Frames, rates: Mapping[str, Any], accelerations: Mapping[str, Any] | None
+) -> tuple[MotionState, _Factor]:
     cols, vals = _driven_rows(engine, rates)
-    qdot, cond, msg = _solve(engine, fr.Phi_q, cols, np.zeros(engine.n_rows), vals)
-    status = SINGULAR if msg else OK
+    fac = _Factor(engine, fr.Phi_q, cols)
+    qdot, msg = fac.solve(np.zeros(engine.n_rows), vals)
+    status, cond = (SINGULAR if msg else OK), fac.conditioning
     V = _tree_velocities(engine, fr, qdot)
     if msg or accelerations is None:
         nan = None if accelerations is None else np.full_like(qdot, np.nan)
-        return MotionState(
+        ms = MotionState(
             status,
             msg or "ok",
             qdot,
@@ -344,17 +551,83 @@ def motion_state(
             cond,
             fr.residual,
         )
+        return ms, fac
     acc = {a: 0.0 for a in rates} | dict(accelerations)
     acols, avals = _driven_rows(engine, acc)
     if sorted(acols) != sorted(cols):
         raise ValueError("accelerations are given for the driven coordinates only (the ones with rates)")
+    avals = [dict(zip(acols, avals, strict=True))[c] for c in cols]  # in the rates' row order
     dV0 = _tree_bias(engine, fr, qdot, V)
     gamma = _gamma(engine, fr, qdot, V, dV0)
-    qddot, _, msg = _solve(engine, fr.Phi_q, acols, gamma, avals)
+    qddot, msg = fac.solve(gamma, avals)
     dV = dV0 + _tree_velocities(engine, fr, qddot)  # the q-ddot part is linear, like the twists
-    return MotionState(
+    ms = MotionState(
         SINGULAR if msg else OK, msg or "ok", qdot, V, fr.r, fr.A, fr.P, fr.R, qddot, dV, cond, fr.residual
     )
+    return ms, fac
 
 
-__all__ = ["MotionState", "cross3", "motion_state", "spatial_cross"]
+@dataclass(frozen=True)
+class MotionDerivatives:
+    """First derivatives of a velocity state along ``k`` state directions ``dx`` (columns of
+    ``directions``, solver units; :func:`motion_derivatives`)."""
+
+    motion: MotionState
+    #: (k, nb, 6) first-order change of every body's pose along each direction, as a twist
+    #: ``[dv_O ; dpi]`` (a body point at P moves by ``dv_O + dpi x P``)
+    pose: Array
+    #: (k, n_q) derivative of the coordinate rates
+    qdot: Array
+    #: (k, nb, 6) derivative of every body's twist ``V = [v_O ; omega]``
+    V: Array
+
+
+def motion_derivatives(engine: Engine, state: State, rates: Mapping[str, Any], directions: Array) -> MotionDerivatives:
+    """Exact derivatives of the velocity state (rates ``rates`` of the driven coordinates,
+    held fixed) along each column ``dx`` of ``directions`` (``(n_columns, k)``, solver units;
+    the state moves along ``retract(x, eps dx)``).
+
+    With ``a = [qdot ; 0]`` and ``b = dx``: ``[Phi_q ; E_D] dqdot = [-Phi_xx[a, b] ; 0]``, the
+    mixed second derivative by polarisation of the exact quadratic ``gamma``:
+    ``-Phi_xx[a, b] = (gamma(a + b) - gamma(a - b)) / 4`` (``b`` rescaled to ``a``'s size first);
+    the twists' derivative ``d(T a)/db = T dqdot + (dV0(a + b) - dV0(a - b)) / 4 + (T b) x (T a) / 2``
+    (the polarised bias is the symmetric part; the spatial cross product of the two twists the
+    antisymmetric one, the structure equation ``d_b T_a - d_a T_b = [T_b, T_a]``). Nothing is
+    differenced."""
+    fr = _Frames(engine, state, design=True)
+    ms, fac = _motion(engine, fr, rates, None)
+    X = np.asarray(directions, dtype=float).reshape(engine.n_columns, -1)
+    k, nq, nb = X.shape[1], engine.n_coordinates, ms.V.shape[0]
+    pose = np.stack([_tree_velocities(engine, fr, X[:, i]) for i in range(k)]) if k else np.zeros((0, nb, 6))
+    if not ms.ok:
+        return MotionDerivatives(ms, pose, np.full((k, nq), np.nan), np.full((k, nb, 6), np.nan))
+    a = np.zeros(engine.n_columns)
+    a[:nq] = ms.qdot
+    Va, cs = ms.V, engine.col_scale
+    na = float(np.linalg.norm(a * cs))
+    dq, dV = np.zeros((k, nq)), np.zeros((k, nb, 6))
+    zero = np.zeros(len(fac.cols))
+    for i in range(k):
+        nb_ = float(np.linalg.norm(X[:, i] * cs))
+        s = na / nb_ if nb_ > 0 and na > 0 else 1.0  # polarise at comparable sizes (round-off)
+        b, Vb = s * X[:, i], s * pose[i]
+        dV_p, dV_m = _tree_bias(engine, fr, a + b, Va + Vb), _tree_bias(engine, fr, a - b, Va - Vb)
+        rhs = 0.25 * (_gamma(engine, fr, a + b, Va + Vb, dV_p) - _gamma(engine, fr, a - b, Va - Vb, dV_m))
+        dq[i], _ = fac.solve(rhs, zero)
+        sym = 0.25 * (dV_p - dV_m)
+        skew = np.stack([0.5 * spatial_cross(Vb[n], Va[n]) for n in range(nb)])
+        dV[i] = _tree_velocities(engine, fr, dq[i]) + sym + skew
+        dq[i] /= s
+        dV[i] /= s
+    return MotionDerivatives(ms, pose, dq, dV)
+
+
+__all__ = [
+    "MotionDerivatives",
+    "MotionState",
+    "cross3",
+    "motion_derivatives",
+    "motion_state",
+    "spatial_cross",
+    "velocity_solve",
+]

@@ -29,10 +29,12 @@ def notes(status: Status, flags: int, substeps: int) -> list[str]:
 
 
 def message(status: Status, iterations: int = 0, residual: float = 0.0, tol: float = 0.0, requested_tol: float = 0.0,
-            fraction: float = 1.0, substeps: int = 1, flags: int = 0, optimality: float = 0.0) -> str:  # fmt: skip
+            fraction: float = 1.0, substeps: int = 1, flags: int = 0, optimality: float = 0.0,
+            max_iter: int = 0) -> str:  # fmt: skip
     """The one message table of :class:`Status` (every solve, batch row and sweep step says its
     outcome with it). ``residual`` is the scaled ``||Phi||`` (:attr:`Engine.row_scale`: metres);
-    ``optimality`` the optimality residual (SI; docs/analysis/weights.md), shown when not 0."""
+    ``optimality`` the optimality residual (SI; docs/analysis/weights.md), shown when not 0;
+    ``max_iter`` the iteration cap of one sub-step (0: not known)."""
     bound = (
         f"{tol:.3g} (round-off floor at this model's length scale; tol {requested_tol:g})"
         if tol > requested_tol
@@ -62,5 +64,6 @@ def message(status: Status, iterations: int = 0, residual: float = 0.0, tol: flo
     if status is Status.STEP_LIMIT:
         return (f"sub-step cap reached ({substeps} sub-steps, at {fraction:.6g} of the change): "
                 "the change is too large or too close to a singular configuration to follow")  # fmt: skip
-    steps = f" in all, over {substeps} sub-steps of at most max_iter each" if substeps > 1 else ""
+    cap = f"each allowed --max-iter {max_iter}" if max_iter else "each allowed --max-iter iterations"
+    steps = f" in all ({substeps} sub-steps of the change, {cap})" if substeps > 1 else ""
     return f"not converged after {iterations} iterations{steps}: ||Phi|| = {residual:.3g} >= {bound}"

@@ -40,6 +40,9 @@ METRES_PER = {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254, "inch": 0.0254}
 #: radians per angle unit
 RADIANS_PER = {"rad": 1.0, "deg": math.pi / 180.0}
 
+#: the angle components of a body pose output (``body:B[roll]``, kinprop.analysis.outputs)
+BODY_ANGLES = ("[roll]", "[pitch]", "[yaw]")
+
 
 class HasUnits(Protocol):
     """What the conversions read of a compiled engine (:class:`kinprop.engine.Engine`)."""
@@ -203,12 +206,15 @@ def changes_to_model_units(
 def address_unit(model: Model, name: str, engine: HasUnits | None = None) -> str:
     """The unit, in the model's units, of an address or a layout column label: ``J01.q`` ->
     ``deg`` (a revolute in a degree model), ``J03.q`` -> ``m`` (a slide), ``J12.s_j[0]``,
-    ``J12.length``, ``point:...``, ``hardpoint:...`` -> the length unit, ``J.C_i`` -> ``""`` (a
-    rotation matrix), Euler parameters -> ``""``; anything else ``""`` (metric names:
+    ``J12.length``, ``point:...``, ``hardpoint:...``, ``distance:...``, ``body:B[x]`` -> the
+    length unit, ``body:B[roll]`` -> the angle unit, ``J.C_i`` -> ``""`` (a rotation matrix),
+    Euler parameters -> ``""``; anything else ``""`` (metric names:
     :func:`kinprop.analysis.units.unit_of`)."""
     length, angle = model.units.get("length", "m"), model.units.get("angle", "rad")
-    if name.startswith(("point:", "hardpoint:")):
+    if name.startswith(("point:", "hardpoint:", "distance:")):
         return length
+    if name.startswith("body:"):  # a pose component (kinprop.analysis.outputs)
+        return angle if name.endswith(BODY_ANGLES) else length if name.endswith("]") else ""
     try:
         addr = parse_address(name)
     except Exception:
@@ -251,8 +257,10 @@ def address_scale(model: Model, name: str, engine: HasUnits | None = None) -> fl
     """Factor from solver units to the model's units of an address's value or of a derivative
     by it: ``180/pi`` for a joint angle or a ``C`` column (per radian of body-frame rotation)
     in a degree model, else 1."""
-    if not _degrees(model) or name.startswith(("point:", "hardpoint:")):
+    if not _degrees(model) or name.startswith(("point:", "hardpoint:", "distance:")):
         return 1.0
+    if name.startswith("body:"):
+        return 180.0 / math.pi if name.endswith(BODY_ANGLES) else 1.0
     try:
         addr = parse_address(name)
     except Exception:

@@ -14,9 +14,10 @@ import numpy as np
 
 from kinprop.analysis.drives import driven_sensitivity, expand_driven, is_driven
 from kinprop.analysis.mobility import MobilityReport, row_names
+from kinprop.analysis.outputs import expand_outputs
 from kinprop.analysis.points import hardpoint_table
-from kinprop.analysis.sensitivity import design_sensitivity, output_sensitivity_matrix
-from kinprop.analysis.sweep import Drive, parse_drive
+from kinprop.analysis.sensitivity import derivative_method, design_sensitivity, output_sensitivity_matrix
+from kinprop.analysis.sweep import Drive, coordinate_columns, default_outputs, parse_drive
 from kinprop.analysis.units import derivative_scale, unit_of
 from kinprop.engine import Engine, Solution
 from kinprop.engine import compile as compile_engine
@@ -196,6 +197,9 @@ class Sensitivities(NamedTuple):
     columns: list[str]
     units_of: list[str]
     units_wrt: list[str]
+    #: how each row was differentiated (``kinprop.analysis.sensitivity.derivative_method``;
+    #: None: the free variables' implicit-function response, analytic)
+    methods: list[str] | None = None
 
 
 def _solver_matrix(
@@ -246,7 +250,8 @@ def sensitivities(
     matrix = matrix * so[:, None] / si[None, :]
     units_of = [unit_of(assembled, str(name), engine) for name in rows]
     units_wrt = [_per(assembled, str(name), engine) for name in columns]
-    return Sensitivities(matrix, rows, columns, units_of, units_wrt)
+    methods = [derivative_method(assembled, str(name)) for name in rows] if of else None
+    return Sensitivities(matrix, rows, columns, units_of, units_wrt, methods)
 
 
 def sensitivity_json(
@@ -260,6 +265,7 @@ def sensitivity_json(
         "wrt": [str(c) for c in sens.columns],
         "matrix": np.asarray(sens.matrix).tolist(),
         "units": {"of": sens.units_of, "wrt": sens.units_wrt, "matrix": "unit of the row per unit of the column"},
+        "method": dict(zip(map(str, sens.rows), sens.methods, strict=True)) if sens.methods else None,
         "free": list(free),
         "weights": dict(weights) if weights else {},
         "assembly": {
@@ -292,9 +298,10 @@ def label_units(res, base=None) -> None:
             r.frame.attrs["column_units"] = units
 
 
-def sweep_json(res, base, output: Path | None = None, plot: Path | None = None) -> dict:
+def sweep_json(res, base, output: Path | None = None, plot: Path | None = None, x: str | None = None) -> dict:
     """What ``kinprop sweep --json`` prints: counts, failed steps and every row (and the
-    baseline's rows when ``base`` is given), with the unit of every column."""
+    baseline's rows when ``base`` is given), with the unit of every column; ``x`` the abscissa
+    of the curves (``--x``; default the first drive)."""
     if "column_units" not in res.frame.attrs:
         label_units(res, base)
     df = res.frame
@@ -304,6 +311,7 @@ def sweep_json(res, base, output: Path | None = None, plot: Path | None = None) 
         "converged": int(ok.sum()),
         "failed": [int(k) for k in df.loc[~ok, "step"]],
         "drives": [d.label for d in res.drives],
+        "x": x or res.drives[0].label,
         "outputs": list(res.outputs),
         "output_file": None if output is None else str(output),
         "plot_file": None if plot is None else str(plot),
@@ -313,6 +321,15 @@ def sweep_json(res, base, output: Path | None = None, plot: Path | None = None) 
     if base is not None:
         obj["baseline_rows"] = _records(base.frame)
     return obj
+
+
+def check_x(model: Model, drives: Sequence[Drive], outputs: Sequence[str] | None, x: str) -> None:
+    """``--x`` (the abscissa of a sweep's curves) names a column the sweep will have: a drive,
+    a coordinate or an output; raises ValueError listing the columns."""
+    names = list(default_outputs(model) if outputs is None else outputs)
+    columns = [d.label for d in drives] + [c for c, *_ in coordinate_columns(model)] + expand_outputs(model, names)
+    if x not in columns:
+        raise ValueError(f"--x {x!r}: not a column of this sweep; columns: {', '.join(dict.fromkeys(columns))}")
 
 
 def sweep_inputs(
@@ -329,6 +346,7 @@ __all__ = [
     "ASSEMBLED_TOL",
     "Sensitivities",
     "check_json",
+    "check_x",
     "comparison_csv",
     "continuation_json",
     "joint_rows",

@@ -19,6 +19,7 @@ from kinprop.io.loader import (
     parse_document,
     read_text,
 )
+from kinprop.io.scales import warn_scales
 from kinprop.model import Model
 
 
@@ -31,9 +32,13 @@ def load_model(path: str | Path) -> Model:
         return import_model(path)[0]
     data, dups = parse_document(read_text(path), file)
     if file.endswith(".json") and isinstance(data, dict) and "Template" in data and "kinprop" not in data:
-        return model_from_hardpoints(chrono_hardpoints(data, file)[0], file)
+        model = model_from_hardpoints(chrono_hardpoints(data, file)[0], file)
+        warn_scales(model, file, stacklevel=2)  # implausible sizes for the declared unit (io/scales.py)
+        return model
     if not dups:
-        return model_from_data(data, file)
+        model = model_from_data(data, file)
+        warn_scales(model, file, stacklevel=2)
+        return model
     try:
         model_from_data(data, file)
     except ModelError as exc:  # the last of each duplicate was kept: report the rest too

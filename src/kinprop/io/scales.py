@@ -10,13 +10,20 @@ positions, points and lengths (:func:`length_sizes`), and warn (they never refus
   :data:`MM_MIN` (under a millimetre) probably has the other unit's numbers;
 * a wheel's loaded radius (its ``contact_patch`` point's distance from the spin axis) and
   every link ``length`` more than :data:`RATIO` times larger or smaller than ``L``.
+
+:func:`warn_scales` issues each as a :class:`~kinprop.errors.UnitsWarning`: ``load_model`` and
+``import_model`` call it, so the Python API warns as the CLI does (the CLI prints each as one
+``warning:`` line).
 """
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from kinprop.analysis.metrics import wheel_bodies
+from kinprop.errors import UnitsWarning
 from kinprop.model import Model
 
 #: a metre model whose median length is above this (m) probably holds millimetres
@@ -79,4 +86,11 @@ def scale_warnings(model: Model) -> list[str]:
     return out
 
 
-__all__ = ["length_sizes", "scale_warnings"]
+def warn_scales(model: Model, source: object, stacklevel: int = 2) -> None:
+    """One :class:`~kinprop.errors.UnitsWarning` ``"SOURCE: ..."`` per line of
+    :func:`scale_warnings`; ``stacklevel`` counts from the caller of this function."""
+    for line in scale_warnings(model):
+        warnings.warn(f"{source}: {line}", UnitsWarning, stacklevel=stacklevel + 1)
+
+
+__all__ = ["length_sizes", "scale_warnings", "warn_scales"]

@@ -155,9 +155,90 @@ def file_style(path: str | Path) -> tuple[str, str]:
 
 def dump_model_like(model: Model, path: str | Path, like: str | Path | None) -> None:
     """Write ``model`` in the style of the file ``like`` (the input): a hardpoint-style input
-    gives a hardpoint-style output (same ``body_frames`` rule), a frame-style one frames."""
+    gives a hardpoint-style output (same ``body_frames`` rule), a frame-style one frames; a
+    YAML output of a YAML input keeps the input's comments, key order and inline lists
+    (:func:`commented_text`)."""
     style, body_frames = file_style(like) if like is not None else ("frames", "")
-    if style != "hardpoints":
-        dump_model(model, path)
-        return
-    atomic_write(path, model_text(model_to_hardpoints(model, body_frames), path))
+    data = model_to_hardpoints(model, body_frames) if style == "hardpoints" else model_to_data(model)
+    text = None
+    if like is not None and not str(path).endswith(".json") and not str(like).endswith(".json"):
+        text = commented_text(Path(like).read_text(encoding="utf-8"), data)
+    atomic_write(path, text if text is not None else model_text(data, path))
+
+
+def _pyyaml_float(representer: Any, value: float) -> Any:
+    """A float as PyYAML writes it (``1.0e-05``, ``.inf``, ``.nan``; shortest round trip), so
+    the loader (PyYAML, YAML 1.1, where ``1e-05`` is a string) reads it back as the number."""
+    if value != value:
+        text = ".nan"
+    elif value in (float("inf"), float("-inf")):
+        text = ".inf" if value > 0 else "-.inf"
+    else:
+        text = repr(float(value))
+        if "e" in text and "." not in text.split("e")[0]:
+            mant, exp = text.split("e")
+            text = f"{mant}.0e{exp}"
+    return representer.represent_scalar("tag:yaml.org,2002:float", text)
+
+
+def _leaf_list(v: Any) -> bool:
+    return isinstance(v, list) and all(not isinstance(x, (list, dict)) for x in v)
+
+
+def _fresh(v: Any) -> Any:
+    """New file data as ruamel nodes: mappings in block style, lists of numbers inline."""
+    from ruamel.yaml.comments import CommentedMap, CommentedSeq
+
+    if isinstance(v, dict):
+        out = CommentedMap()
+        for k, x in v.items():
+            out[k] = _fresh(x)
+        return out
+    if isinstance(v, list):
+        seq = CommentedSeq(_fresh(x) for x in v)
+        if _leaf_list(v) or all(_leaf_list(x) for x in v):
+            seq.fa.set_flow_style()
+        return seq
+    return v
+
+
+def _merge(old: Any, new: Any) -> Any:
+    """``new`` written into ``old`` (a ruamel node): same keys keep their comments and place,
+    gone keys are removed, new keys are appended; lists of the same length are updated in
+    place (their style and comments kept)."""
+    from ruamel.yaml.comments import CommentedMap, CommentedSeq
+
+    if isinstance(old, CommentedMap) and isinstance(new, dict):
+        for k in [k for k in old if k not in new]:
+            del old[k]
+        for k, v in new.items():
+            old[k] = _merge(old[k], v) if k in old else _fresh(v)
+        return old
+    if isinstance(old, CommentedSeq) and isinstance(new, list) and len(old) == len(new):
+        for i, v in enumerate(new):
+            old[i] = _merge(old[i], v)
+        return old
+    if not isinstance(old, (dict, list, bool)) and not isinstance(new, (dict, list, bool)) and old == new:
+        return old  # the same number or text: written as the file had it (3300, not 3300.0)
+    return _fresh(new)
+
+
+def commented_text(original: str, data: dict[str, Any], width: int = 100) -> str | None:
+    """YAML of ``data`` laid over the ``original`` file's text with ruamel.yaml's round trip:
+    its comments, key order and list styles are kept for every key that is still there, the
+    values are ``data``'s (full precision). None when the original is not a YAML mapping."""
+    from ruamel.yaml import YAML
+    from ruamel.yaml.error import YAMLError
+
+    y = YAML()  # round trip
+    y.width = width
+    y.representer.add_representer(float, _pyyaml_float)
+    try:
+        doc = y.load(original)
+    except YAMLError:
+        return None
+    if not isinstance(doc, dict):
+        return None
+    buf = io.StringIO()
+    y.dump(_merge(doc, data), buf)
+    return buf.getvalue()

@@ -37,3 +37,17 @@ class Model:
 
     def with_state(self, design: Design, coordinates: Mapping[str, Array]) -> Model:
         return replace(self, design=design, coordinates=as_coordinates(coordinates))
+
+    def __repr__(self) -> str:
+        """One line: the name, the counts, the units and the inputs (the design is ``design``,
+        the coordinates ``coordinates``; ``kp.dump_model(model, path)`` writes the whole file)."""
+        mech = self.mechanism
+        units = ", ".join(f"{k}: {v}" for k, v in self.units.items())
+        parts = [f"{len(mech.bodies)} bodies", f"{len(mech.joints)} joints"]
+        if mech.couplings:
+            parts.append(f"{len(mech.couplings)} couplings")
+        if self.elements:
+            parts.append(f"{len(self.elements)} elements")
+        inputs = f"; inputs: {', '.join(mech.inputs)}" if mech.inputs else ""
+        source = f"; from {self.source}" if self.source else ""
+        return f"<Model {mech.name!r}: {', '.join(parts)}; units {{{units}}}{inputs}{source}>"

@@ -10,8 +10,8 @@ import numpy as np
 from kinprop.plot.scene import Scene, bounds, scale
 from kinprop.plot.style import AXIS, AXIS_LABEL, FADED_ALPHA, MARKERS, POINT, SEGMENTS, Layer, segment_colour
 
-DASH = {"body": "solid", "ground": "solid", "link": "solid", "slide": "dash", "gap": "dot"}
-WIDTH = {"body": 6, "ground": 3, "link": 7, "slide": 4, "gap": 3}
+DASH = {"body": "solid", "link": "solid", "slide": "dash", "gap": "dot"}
+WIDTH = {"body": 6, "link": 7, "slide": 4, "gap": 3}
 
 
 def _polyline(pairs: list[tuple[np.ndarray, np.ndarray]]) -> tuple[list[float | None], ...]:

@@ -3,10 +3,11 @@
 A :class:`Scene` is computed from a model at its coordinates as given (one forward-kinematics
 pass, :func:`kinprop.analysis.points.snapshot`) and holds:
 
-* body segments — from each body's frame origin ``r_b`` to the joint points it carries
+* body segments — from each moving body's frame origin ``r_b`` to the joint points it carries
   (``P_i`` of the joints whose first body it is, ``P_j`` of the others) and to its named points;
-  fixed bodies (``ground``) are drawn from the centroid of those points instead, since their
-  frame origin is often far from the mechanism (a vehicle's origin);
+  a fixed body (``ground``, a chassis) has none: its joints' markers and named points show where
+  it is (lines to a point that is not on the mechanism, such as the mean of the chassis points,
+  would draw a body that is not there);
 * joint segments — ``link`` for a joint with a length (S-S, R-S, the T-D rod), ``slide`` for a
   joint's travel (prismatic, cylindrical, S-T strut, free, the T-D rack's q3), and ``gap`` for
   a cut joint whose two points should coincide but do not (an unassembled model);
@@ -30,7 +31,7 @@ from kinprop.spatial import Array
 
 @dataclass(frozen=True)
 class Segment:
-    kind: str  # body, ground, link, slide, gap
+    kind: str  # body, link, slide, gap
     owner: str  # body name (body, ground) or joint name
     start: Array
     end: Array
@@ -156,9 +157,8 @@ def build_scene(model: Model) -> Scene:
         for name, p in b.points:
             points[f"{b.name}.{name}"] = r + A @ np.asarray(p, dtype=float)
             carried[b.name].append(points[f"{b.name}.{name}"])
-        hub = np.mean(carried[b.name], axis=0) if b.fixed and carried[b.name] else r
-        for P in carried[b.name]:
-            segments.append(Segment("ground" if b.fixed else "body", b.name, hub, P))
+        if not b.fixed:
+            segments += [Segment("body", b.name, r, P) for P in carried[b.name]]
 
     size = max(
         (float(np.linalg.norm(s.end - s.start)) for s in segments),

@@ -19,8 +19,8 @@ from kinprop.plot.style import (
     segment_colour,
 )
 
-LINESTYLE = {"body": "-", "ground": "-", "link": "-", "slide": "--", "gap": ":"}
-LINEWIDTH = {"body": 2.2, "ground": 1.2, "link": 2.6, "slide": 1.6, "gap": 1.4}
+LINESTYLE = {"body": "-", "link": "-", "slide": "--", "gap": ":"}
+LINEWIDTH = {"body": 2.2, "link": 2.6, "slide": 1.6, "gap": 1.4}
 
 
 def render_png(

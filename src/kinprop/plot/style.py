@@ -18,7 +18,6 @@ BODY_COLOURS = (
     "#bcbd22",
     "#17becf",
 )
-GROUND = "#7f7f7f"
 LINK = "#222222"
 SLIDE = "#555555"
 GAP = "#e41a1c"
@@ -39,7 +38,6 @@ MARKERS = {
 
 #: segment kind -> legend text
 SEGMENTS = {
-    "ground": "fixed body",
     "link": "link (S-S, R-S, T-D rod)",
     "slide": "slide / strut travel",
     "gap": "unclosed cut joint",
@@ -66,4 +64,4 @@ def body_colour(scene: Scene, body: str) -> str:
 def segment_colour(scene: Scene, kind: str, owner: str) -> str:
     if kind == "body":
         return body_colour(scene, owner)
-    return {"ground": GROUND, "link": LINK, "slide": SLIDE, "gap": GAP}[kind]
+    return {"link": LINK, "slide": SLIDE, "gap": GAP}[kind]

@@ -1,7 +1,7 @@
 """Design propagation: changes, free-variable sets, re-assembly, continuation."""
 
 from kinprop.propagation.continuation import ContinuationResult, propagate_continuation
-from kinprop.propagation.propagate import Propagation, apply_changes, assemble, engine_for, propagate
+from kinprop.propagation.propagate import Propagation, apply_changes, assemble, engine_for, hold, propagate
 
 __all__ = [
     "ContinuationResult",
@@ -9,6 +9,7 @@ __all__ = [
     "apply_changes",
     "assemble",
     "engine_for",
+    "hold",
     "propagate",
     "propagate_continuation",
 ]

@@ -188,9 +188,36 @@ def variable_rows(prop: Propagation) -> list[dict[str, Any]]:
 SUMMARY_ROWS = 8
 
 
-def _short(values: list[float]) -> str:
-    text = ", ".join(f"{x:.6g}" for x in values)
+#: a shown number this small against the largest of its row or column is round-off, shown as 0
+ROUND_OFF = 1e-10
+#: ... and so is one below this, in the model's units (1e-12 m, mm, rad or deg)
+ROUND_OFF_ABS = 1e-12
+
+
+def shown(value: float, scale: float = 0.0, digits: int = 6) -> str:
+    """``value`` for a table or a summary: ``digits`` significant digits, round-off (below
+    :data:`ROUND_OFF` times ``scale``, the largest magnitude beside it, or :data:`ROUND_OFF_ABS`)
+    as ``0`` and never ``-0``; NaN as an empty string. Files keep the full values."""
+    if value != value:
+        return ""
+    if abs(value) <= max(ROUND_OFF_ABS, ROUND_OFF * abs(scale)):
+        value = 0.0
+    text = f"{value:.{digits}g}"
+    return "0" if text == "-0" else text
+
+
+def _short(values: list[float], unit: str = "") -> str:
+    """``[a, b, c]`` (one value: ``a``); a vector with mixed units (``m,m,m,,,,`` of a free
+    joint) carries each component's unit, ``[0.01 m, 0, 0.4 m, 1, 0, 0, 0]``."""
+    scale = max((abs(x) for x in values if x == x), default=0.0)
+    units = unit.split(",") if "," in unit else [""] * len(values)
+    text = ", ".join(f"{shown(x, scale)} {u}".rstrip() for x, u in zip(values, units, strict=True))
     return text if len(values) == 1 else f"[{text}]"
+
+
+def unit_text(unit: str) -> str:
+    """A unit for a ``unit`` column: mixed units of a vector per component (``[m, m, m, -, -, -, -]``)."""
+    return f"[{', '.join(u or '-' for u in unit.split(','))}]" if "," in unit else unit
 
 
 def summary_text(prop: Propagation) -> str:
@@ -205,8 +232,10 @@ def summary_text(prop: Propagation) -> str:
         f" free: {' '.join(prop.free)}>"
     ]
     for row in rows[:SUMMARY_ROWS]:
-        unit = f" {row['unit']}" if row["unit"] else ""
-        lines.append(f"  {row['role']:>5} {row['variable']}: {_short(row['before'])} -> {_short(row['after'])}{unit}")
+        u = row["unit"]
+        before, after = (_short(row[k], u) for k in ("before", "after"))
+        unit = f" {u}" if u and "," not in u else ""  # mixed units: on each component
+        lines.append(f"  {row['role']:>5} {row['variable']}: {before} -> {after}{unit}")
     if len(rows) > SUMMARY_ROWS:
         lines.append(f"  ... and {len(rows) - SUMMARY_ROWS} more moved variables (prop.changed_variables())")
     return "\n".join(lines)
@@ -224,7 +253,7 @@ def summary_html(prop: Propagation) -> str:
         "<tr>"
         + "".join(
             f"<td>{escape(str(x))}</td>"
-            for x in (row["role"], row["variable"], row["unit"], _short(row["before"]), _short(row["after"]))
+            for x in (row["role"], row["variable"], unit_text(row["unit"]), _short(row["before"]), _short(row["after"]))
         )
         + f"<td>{row['change']:.3g}</td></tr>"
         for row in variable_rows(prop)
@@ -287,6 +316,29 @@ def check_coordinates_movable(engine: Engine, start: State, changes: Mapping[str
                     f"free it (--free q --free {names[0]}.q; Python: free=['q', '{names[0]}.q']) or set "
                     f"{names[0]}.q instead"
                 )
+
+
+def hold(model: Model, joints: Sequence[str], where: str = "--hold") -> Model:
+    """``model`` with ``joints`` (``J`` or ``J.q[k]``) held like its declared inputs: added to
+    ``mechanism.inputs``, so the group ``q`` leaves them where they are and ``--free J.q``
+    frees them again. For a model without ``inputs:`` (an imported MJCF), this holds two
+    joints without listing every other one as free. Raises :class:`AddressError` naming
+    ``where`` for an unknown joint or one that has no coordinates of its own (a cut joint)."""
+    if not joints:
+        return model
+    mech = model.mechanism
+    tree = compile(mech).topology.tree_joints
+    for name in joints:
+        joint = name.split(".q")[0].split("[")[0]
+        if joint not in mech.joint_names:
+            raise AddressError(f"{where} {name!r}: unknown joint; joints are {', '.join(mech.joint_names)}")
+        if joint not in tree or mech.joint(joint).jtype.n_coordinates == 0:
+            raise AddressError(
+                f"{where} {name!r}: {joint} has no coordinates of its own to hold (a cut or fixed joint); "
+                "hold a joint of the spanning tree"
+            )
+    inputs = tuple(dict.fromkeys([*mech.inputs, *joints]))
+    return replace(model, mechanism=replace(mech, inputs=inputs))
 
 
 def apply_changes(

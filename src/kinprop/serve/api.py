@@ -41,6 +41,7 @@ from kinprop.errors import AddressError, ModelError, SingularityWarning
 from kinprop.io.arguments import parse_assignment, parse_weight
 from kinprop.io.commands import (
     check_json,
+    check_x,
     comparison_csv,
     propagate_json,
     sensitivities,
@@ -89,6 +90,8 @@ class SweepRequest(BaseModel):
     max_iter: int = 50
     continuation: bool = False
     baseline: bool = False
+    #: the abscissa of the curves (``kinprop sweep --x``): a drive, a coordinate or an output
+    x: str | None = None
 
 
 class SensitivityRequest(BaseModel):
@@ -265,6 +268,8 @@ def create_app(model: Model, label: str | None = None, *, assemble_first: bool =
         """``kinprop sweep --json`` from the current model (which stays as it is)."""
         m = session(sid, q).model
         drives, changes = sweep_inputs(m, req.drive, _assignments(req.set), req.baseline)
+        if req.x is not None:
+            check_x(m, drives, req.out, req.x)
         kw = {"free": tuple(req.free), "outputs": req.out, "tol": req.tol, "max_iter": req.max_iter}
         (res, base), _ = _caught(
             lambda: (
@@ -272,7 +277,7 @@ def create_app(model: Model, label: str | None = None, *, assemble_first: bool =
                 sweep(m, drives, continuation=req.continuation, **kw) if req.baseline else None,
             )
         )
-        return json_response(sweep_json(res, base))
+        return json_response(sweep_json(res, base, x=req.x))
 
     @app.post("/api/sensitivity")
     def sensitivity_route(req: SensitivityRequest, sid: Sid = None, q: QSid = None) -> Response:

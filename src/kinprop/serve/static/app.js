@@ -210,8 +210,8 @@ function sceneTraces(sc, faded, alpha) {
   const legend = (t) => { if (faded) { t.showlegend = traces.length === 0; t.name = "before"; } return t; };
   const opacity = faded ? alpha : 1.0;
   const tag = faded ? " (before)" : "";
-  const width = { body: 6, ground: 3, link: 7, slide: 4, gap: 3 };
-  const dash = { body: "solid", ground: "solid", link: "solid", slide: "dash", gap: "dot" };
+  const width = { body: 6, link: 7, slide: 4, gap: 3 };
+  const dash = { body: "solid", link: "solid", slide: "dash", gap: "dot" };
   for (const g of sc.segments) {
     const x = [], y = [], z = [];
     for (const [a, b] of g.lines) { x.push(a[0], b[0], null); y.push(a[1], b[1], null); z.push(a[2], b[2], null); }
