@@ -250,7 +250,9 @@ def sensitivities(
     matrix = matrix * so[:, None] / si[None, :]
     units_of = [unit_of(assembled, str(name), engine) for name in rows]
     units_wrt = [_per(assembled, str(name), engine) for name in columns]
-    methods = [derivative_method(assembled, str(name)) for name in rows] if of else None
+    # an output at a drive position is differentiated as its output is (analysis/drives.py)
+    methods = [derivative_method(assembled, str(n).partition("@")[0].removeprefix("slope:")) for n in rows] if of \
+        else None  # fmt: skip
     return Sensitivities(matrix, rows, columns, units_of, units_wrt, methods)
 
 
