@@ -5,7 +5,9 @@ trial; "time / hand baseline" is the median over trials of (method time / the ha
 Newton's time) on the same trial (for P4, time per variant). Answers are checked independently (leg lengths by
 closed-form inverse kinematics, the RSSR input-output equation): "max error" in metres.
 Everything kinprop runs goes through the compiled engine (``kinprop.compile``) and its
-by-address API, or the model-level ``kinprop.propagate``. ``benchmarks/cold_start.py`` (the
+by-address API, or the model-level ``kinprop.propagate``. ``benchmarks/study_speed.py`` (a
+design study, a Dask run, a sweep and ``kp.propagate`` against the engine's own calls) runs
+after the table; ``benchmarks/cold_start.py`` (the
 command line's first run with an empty kernel cache, then warm) runs last; ``--quick`` skips it
 unless named in ``--only``.
 """
@@ -32,9 +34,9 @@ def main() -> int:
     ap.add_argument("--quick", action="store_true", help="few trials, K up to 128, no cold start")
     ap.add_argument("--max-k", type=int, default=None, help="largest stack size for P2 (default 512; 128 with --quick)")
     ap.add_argument("-o", "--output", help="also write the table (Markdown) to this file")
-    ap.add_argument("--only", nargs="*", default=None, help="subset of P1 P2 P3 P4 slider_crank cold_start")
+    ap.add_argument("--only", nargs="*", default=None, help="subset of P1 P2 P3 P4 slider_crank study cold_start")
     args = ap.parse_args()
-    default = ["P1", "P2", "P3", "P4", "slider_crank"] + ([] if args.quick else ["cold_start"])
+    default = ["P1", "P2", "P3", "P4", "slider_crank", "study"] + ([] if args.quick else ["cold_start"])
     only = set(args.only or default)
     t0 = time.perf_counter()
     import numba
@@ -90,6 +92,10 @@ def main() -> int:
     if "slider_crank" in only and os.path.exists(sc):
         print("\n# benchmarks/slider_crank.py", flush=True)
         subprocess.run([sys.executable, sc, *(["--repeats", "20"] if args.quick else [])], check=False)
+    if "study" in only:  # issue 22: study vs raw batch, Dask vs local, sweep, kp.propagate vs engine
+        print("\n# benchmarks/study_speed.py", flush=True)
+        quick = ["--variants", "10000", "--repeats", "2"] if args.quick else ["--dask"]
+        subprocess.run([sys.executable, os.path.join(HERE, "study_speed.py"), *quick], check=False)
     if "cold_start" in only:
         import cold_start
 

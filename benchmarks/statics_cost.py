@@ -1,7 +1,8 @@
 """Cost of the loads at one pose of the shipped double wishbone (issue 21, "Speed"): the
-kinetostatics (reactions, member and element forces, input effort) and the exact reduced
-stiffness against one compiled position re-solve; the median of several repeats after a
-warm-up.
+kinetostatics (reactions, member and element forces, input effort), the same with their exact
+design derivatives with respect to 20 hardpoint coordinates (the state response included) and
+the exact reduced stiffness, against one compiled position re-solve; CPU time of the calling
+process (the machine is shared), the median of several repeats after a warm-up.
 
     python benchmarks/statics_cost.py [--repeats 7]
 """
@@ -16,18 +17,20 @@ from pathlib import Path
 import numpy as np
 
 import kinprop as kp
-from kinprop.analysis.statics import applied_points, input_columns
-from kinprop.engine.statics import element_laws, reduced_stiffness, statics_state
+from kinprop.analysis.statics import applied_points, input_columns, model_laws
+from kinprop.engine.statics import reduced_stiffness, statics_state
+from kinprop.engine.statics_rates import statics_rates
+from kinprop.propagation.sensitivity import design_sensitivity
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def _time(f, n: int = 50) -> float:
     f()
-    t = time.perf_counter()
+    t = time.process_time()
     for _ in range(n):
         f()
-    return (time.perf_counter() - t) / n
+    return (time.process_time() - t) / n
 
 
 def main() -> None:
@@ -40,18 +43,29 @@ def main() -> None:
     r, A, _, _ = eng.poses(st)
     pf = applied_points(model, eng, np.array(r), np.array(A), model.loads.case("braking_1g"))
     cols, _ = input_columns(eng, ["LCA"])
-    laws = element_laws(eng, model.elements, st)
+    laws, held = model_laws(model, eng, st)
     W = pf.wrenches(len(r))
+    # 20 hardpoint coordinates: the s' of the ball joints, the tie rod's ends and the arms' pivots
+    wrt = ["LBJ.s_i", "UBJ.s_i", "UBJ.s_j", "TR.s_i", "TR.s_j", "UCA.s_i", "LCA.s_i"]
+
+    def with_derivatives() -> None:
+        sens = design_sensitivity(model, wrt, ["q"], engine=eng, units="solver")
+        X = np.zeros((20, eng.n_columns))
+        X[np.arange(20), sens.wrt_columns[:20]] = 1.0
+        X[:, sens.free_columns] = sens.matrix[:, :20].T
+        statics_rates(eng, st, pf, X, cols, laws, held)
+
     cases = {
         "position re-solve (compiled)": lambda: eng.propagate({"LCA.q": 0.01}, free=["q"], start=st),
         "statics_state (engine)": lambda: statics_state(eng, st, W, cols, laws),
         "kp.statics (by name)": lambda: kp.statics(model, "braking_1g", engine=eng),
+        "statics + d/d(20 hardpoints)": with_derivatives,
         "reduced_stiffness (engine)": lambda: reduced_stiffness(eng, st, pf, cols, laws),
     }
     times = {name: statistics.median(_time(f) for _ in range(args.repeats)) for name, f in cases.items()}
     base = times["position re-solve (compiled)"]
     for name, t in times.items():
-        print(f"{name:32s} {t * 1e3:8.3f} ms  {t / base:6.1f} x re-solve")
+        print(f"{name:32s} {t * 1e3:8.3f} ms CPU {t / base:6.1f} x re-solve")
 
 
 if __name__ == "__main__":

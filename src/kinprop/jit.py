@@ -21,7 +21,7 @@ from pathlib import Path
 import platformdirs
 
 #: packages whose sources are compiled into the kernels
-_KERNEL_SOURCES = ("spatial.py", "jit.py", "joints", "constraints", "kinematics", "solver")
+_KERNEL_SOURCES = ("spatial.py", "jit.py", "joints", "constraints", "kinematics", "solver", "engine/outputs.py")
 
 
 def kernel_version() -> str:

@@ -31,6 +31,42 @@ def _assembled(source: str | Path | dict, tmp_path: Path | None = None) -> kp.Mo
     return kp.assemble(kp.load_model(source), tol=1e-13).after
 
 
+def _bodies_balance(s, loads=None) -> None:
+    """Every moving body of a statics record balances: the reported joint forces and moments on
+    it (moments about the reported points), the applied loads (rebuilt from the case), the
+    elements' forces along their ends and the torsion springs' torques about their joints' axes
+    sum to zero, forces and moments about the origin."""
+    from kinprop.analysis.statics import _case, applied_points
+
+    model = s.model
+    kin = kp.compile(model).kinematics(model.design, model.coordinates)
+    body = {b: np.zeros(6) for b in model.mechanism.body_names}
+    for j in model.mechanism.joints:
+        r = s.reactions[j.name]
+        for side, b in enumerate((j.body_i, j.body_j)):
+            body[b] += np.concatenate([r.force[side], r.moment[side] + np.cross(r.points[side], r.force[side])])
+    W = applied_points(model, s.engine, s.state.r, s.state.A, _case(model, loads)).wrenches(len(body))
+    for b, k in s.engine.body_index.items():
+        body[b] += W[k]
+    for e in model.elements:
+        Pi = kin.r[e.body_i] + kin.A[e.body_i] @ np.array(e.s_i)
+        Pj = kin.r[e.body_j] + kin.A[e.body_j] @ np.array(e.s_j)
+        F = s.element_forces[e.name] * (Pj - Pi) / np.linalg.norm(Pj - Pi)
+        body[e.body_j] += np.concatenate([F, np.cross(Pj, F)])
+        body[e.body_i] -= np.concatenate([F, np.cross(Pi, F)])
+    for t in model.torsion_springs:
+        j = model.mechanism.joint(t.joint)
+        M = s.element_forces[t.name] * kin.frames[t.joint].R_i[:, 2]
+        body[j.body_j][3:] += M
+        body[j.body_i][3:] -= M
+    scale = max([1.0] + [float(np.linalg.norm(r.force[1])) for r in s.reactions.values()])
+    size = max(1.0, float(np.max(np.abs(s.state.P))))
+    for b in model.mechanism.bodies:
+        if not b.fixed:
+            assert np.linalg.norm(body[b.name][:3]) < 1e-9 * scale, b.name
+            assert np.linalg.norm(body[b.name][3:]) < 1e-9 * scale * size, b.name
+
+
 def _angle(A: np.ndarray) -> float:
     return math.atan2(A[1, 0], A[0, 0])
 
@@ -56,10 +92,12 @@ def test_fourbar_input_torque_closed_form(crank_deg: float) -> None:
     T4 = 12.5  # N m on the rocker, counter-clockwise
     s = kp.statics(model, PointLoad("rocker", (0.0, 0.0, 0.0), moment=(0.0, 0.0, T4)))
     assert s.ok
+    _bodies_balance(s, PointLoad("rocker", (0.0, 0.0, 0.0), moment=(0.0, 0.0, T4)))
     assert s.efforts["O2.q"] == pytest.approx(-T4 * w4, rel=1e-10)
     # a force at the coupler point P (0.2, 0.1 in the coupler frame): v_P = v_A + w3 x (P - A)
     F = np.array([30.0, -45.0, 0.0])
     s = kp.statics(model, PointLoad("coupler", "P", force=tuple(F)))
+    _bodies_balance(s, PointLoad("coupler", "P", force=tuple(F)))
     t2, t3 = ang["t2"], ang["t3"]
     vA = 0.15 * np.array([-math.sin(t2), math.cos(t2), 0.0])
     rel = np.array([0.2 * math.cos(t3) - 0.1 * math.sin(t3), 0.2 * math.sin(t3) + 0.1 * math.cos(t3), 0.0])
@@ -82,6 +120,7 @@ def test_offset_slider_crank_input_torque_closed_form(crank_deg: float) -> None:
     dx = -a * math.sin(t) + (e - a * math.sin(t)) * a * math.cos(t) / root
     Fx = -800.0  # gas force on the piston, towards the crank
     s = kp.statics(model, PointLoad("slider", (0.0, 0.0, 0.0), force=(Fx, 0.0, 0.0)), inputs=["O2"])
+    _bodies_balance(s, PointLoad("slider", (0.0, 0.0, 0.0), force=(Fx, 0.0, 0.0)))
     assert s.efforts["O2.q"] == pytest.approx(-Fx * dx, rel=1e-10)
     # the connecting rod is a two-force member: the pin force at A on the rod is along A-B
     A_, B_ = s.reactions["A"].points[1], s.reactions["B"].points[0]
@@ -276,6 +315,7 @@ def test_equilibrium_of_a_spring_loaded_lever(tmp_path: Path) -> None:
     truth = scipy.optimize.brentq(lambda t: _lever_tau(t, Fy), theta - 0.3, theta + 0.3, xtol=1e-15)
     assert theta == pytest.approx(truth, abs=1e-10)
     assert abs(e.statics.efforts["O.q"]) < 1e-8
+    _bodies_balance(e.statics, PointLoad("lever", "tip", force=(0.0, Fy, 0.0)))
     # the stiffness is the derivative of the hand-written effort
     h = 1e-6
     assert e.stiffness[0, 0] == pytest.approx(
@@ -328,6 +368,7 @@ def test_mcpherson_rods_carry_axial_forces() -> None:
     F = np.array([-2000.0, 3000.0, 8000.0])
     s = kp.statics(model, PointLoad("wheel", (0.0, 0.0, 0.0), force=tuple(F)), inputs=["TD", "ST.q[4]"])
     assert s.ok and not s.undetermined
+    _bodies_balance(s, PointLoad("wheel", (0.0, 0.0, 0.0), force=tuple(F)))
     kin = kp.compile(model).kinematics(model.design, model.coordinates)
     fr = kin.frames
     for name in ("RS", "TD"):
@@ -364,6 +405,21 @@ def test_wheel_forces_in_an_sae_model(tmp_path: Path) -> None:
     for j in a.reactions:
         assert np.allclose(b.reactions[j].force[1], flip * a.reactions[j].force[1], rtol=1e-9, atol=1e-6)
         assert np.allclose(b.reactions[j].moment[1], flip * a.reactions[j].moment[1], rtol=1e-9, atol=1e-3)
+    # the design derivatives (the contact point's motion in the z-mirrored axes) match too
+    from kinprop.analysis.statics import load_derivatives
+    from kinprop.propagation.sensitivity import design_sensitivity
+
+    names, wrt = ["effort:LCA", "force:TR", "reaction:UBJ.fy"], ["UBJ.s_j[0]", "TR.length", "LBJ.s_i[2]"]
+    D = []
+    for m in (iso, sae):
+        eng = kp.compile(m)
+        sens = design_sensitivity(m, wrt, ["q"], engine=eng, units="solver")
+        X = np.zeros((len(wrt), eng.n_columns))
+        X[np.arange(len(wrt)), sens.wrt_columns] = 1.0
+        X[:, sens.free_columns] = sens.matrix.T
+        D.append(load_derivatives(m, names, X, engine=eng, loads=case))
+    assert np.allclose(D[1], D[0] * np.array([1.0, 1.0, -1.0])[:, None], rtol=1e-8, atol=1e-6)
+    assert np.all(np.abs(D[0][:2]) > 1.0)
 
 
 def test_an_unassembled_model_has_no_loads() -> None:
@@ -371,3 +427,245 @@ def test_an_unassembled_model_has_no_loads() -> None:
     s = kp.statics(raw, PointLoad("slider", (0.0, 0.0, 0.0), force=(100.0, 0.0, 0.0)))
     assert s.status == "not_assembled" and "assemble" in s.message
     assert all(np.isnan(r.force[1]).all() for r in s.reactions.values())
+
+
+def _richardson_of_resolved(base: kp.Model, names: list[str], column: str, h: float, **propagate) -> np.ndarray:
+    """d(outputs)/d(column) by Richardson central differences (steps h, h/2) of models
+    re-solved with the design column changed (``kp.propagate``, model units)."""
+    from kinprop.analysis.outputs import evaluate_outputs
+
+    key, _, index = column.partition("[")
+    x0 = float(np.atleast_1d(np.asarray(base.design[key], dtype=float)).ravel()[int(index[:-1]) if index else 0])
+
+    def at(t: float) -> np.ndarray:
+        m = kp.propagate(base, {column: x0 + t}, tol=1e-14, **propagate).after
+        v = evaluate_outputs(m, names)
+        return np.array([v[n] for n in names])
+
+    def d(step: float) -> np.ndarray:
+        return (at(step) - at(-step)) / (2 * step)
+
+    return (4 * d(h / 2) - d(h)) / 3
+
+
+def test_double_wishbone_design_derivatives_of_loads() -> None:
+    """``output_sensitivity`` of reactions (global, joint-frame, magnitude), the tie rod's
+    tension, the spring force and the input effort under the example's wheel load cases
+    (contact-point forces, weights) with respect to hardpoints and a length: exact (the
+    differentiated equilibrium, method 'direct') against central differences of re-solved
+    models, in the model's units (N per mm, N mm per mm)."""
+    from kinprop.analysis.sensitivity import DIRECT, output_sensitivity
+
+    base = kp.propagate(_assembled(EXAMPLES / "double_wishbone.yaml"), {"LCA.q": 4.0}, tol=1e-14).after
+    names = ["reaction:UBJ.fz@bump_3g", "reaction:LCA.local.mz@bump_3g", "reaction:LBJ.fx@cornering_1g",
+             "reaction:UCA.my@braking_1g", "reaction:UCA.local.fx@braking_1g", "reaction:UBJ.f@bump_3g",
+             "force:TR@braking_1g", "force:spring", "effort:LCA@cornering_1g"]  # fmt: skip
+    wrt = ["UBJ.s_j[0]", "LBJ.s_i[2]", "TR.length", "UCA.s_i[1]"]
+    D = output_sensitivity(base, names, wrt)
+    assert set(D.attrs["method"].values()) == {DIRECT}
+    for c in wrt:
+        fd = _richardson_of_resolved(base, names, c, 0.1)
+        scale = np.maximum(np.abs(fd), 1.0)
+        assert np.all(np.abs(D[c].to_numpy() - fd) < 1e-7 * scale), (c, D[c].to_numpy(), fd)
+    assert abs(D.loc["force:TR@braking_1g", "TR.length"]) > 10.0  # a real dependence, N per mm
+
+
+def test_mcpherson_design_derivatives_of_loads() -> None:
+    """The McPherson strut (S-T tree joint with Euler parameters, R-S and T-D cut rods) held at
+    the rack and the strut slide under a force on the wheel: exact design derivatives
+    (``load_derivatives`` along the propagation's state response) of the rods' tensions, the
+    strut's reaction and the efforts against central differences of re-solved models."""
+    from kinprop.analysis.statics import load_derivatives
+    from kinprop.propagation.sensitivity import design_sensitivity
+
+    base = _assembled(EXAMPLES / "mcpherson.yaml")
+    inputs = ["TD", "ST.q[4]"]
+    case = LoadCase("corner", (PointLoad("wheel", (0.02, 0.1, -0.3), force=(-2000.0, 3000.0, 8000.0)),))
+    names = ["force:RS", "force:TD", "reaction:ST.fz", "reaction:ST.local.my", "reaction:RS.local.fy", "effort:TD",
+             "effort:ST.q[4]"]  # fmt: skip
+    wrt = ["RS.s_j[1]", "TD.length", "ST.s_i[2]", "RS.length", "TD.s_i[0]"]
+    engine = kp.compile(base)
+    sens = design_sensitivity(base, wrt, ["q"], engine=engine, units="solver")
+    X = np.zeros((len(wrt), engine.n_columns))
+    X[np.arange(len(wrt)), sens.wrt_columns] = 1.0
+    X[:, sens.free_columns] = sens.matrix.T
+    wrt = list(sens.columns)  # the design columns in the order of X
+    s0 = kp.statics(base, case, inputs=inputs)
+    assert s0.ok and not s0.undetermined
+    D = load_derivatives(base, names, X, engine=engine, inputs=inputs, loads=case)
+    for k, c in enumerate(wrt):
+        key, _, index = c.partition("[")
+        x0 = float(np.atleast_1d(np.asarray(base.design[key], dtype=float)).ravel()[int(index[:-1]) if index else 0])
+
+        def at(t: float, c: str = c, x0: float = x0) -> np.ndarray:
+            s = kp.statics(kp.propagate(base, {c: x0 + t}, tol=1e-14).after, case, inputs=inputs)
+            return np.array([s.value(n) for n in names])
+
+        h = 1e-4
+        fd = (4 * (at(h / 2) - at(-h / 2)) / h - (at(h) - at(-h)) / (2 * h)) / 3
+        scale = np.maximum(np.abs(fd), 1.0)
+        assert np.all(np.abs(D[:, k] - fd) < 1e-6 * scale), (c, D[:, k], fd)
+
+
+def _fourbar_with(tmp_path: Path, elements: dict, inputs: list[str] | None = None) -> kp.Model:
+    source = yaml.safe_load((EXAMPLES / "fourbar.yaml").read_text())
+    source["units"]["force"] = "N"
+    source["elements"] = elements
+    if inputs is not None:
+        source["inputs"] = inputs
+    return _assembled(source, tmp_path)
+
+
+@pytest.mark.parametrize("crank_deg", [60.0, 150.0, 250.0])
+def test_torsion_spring_by_virtual_work(tmp_path: Path, crank_deg: float) -> None:
+    """A torsion spring on the rocker's pivot (``type: torsion``, 2 N m/deg, free at 70 deg):
+    its torque from the joint angle, the crank's holding torque by virtual work ``-T w4/w2``
+    (the loop's velocity ratio by hand), the pivot carrying no torque about its axis, the
+    torque's unit and the angle reported as the spring's "length"."""
+    from kinprop.analysis.units import unit_of
+
+    base = _fourbar_with(tmp_path, {"bar": {"type": "torsion", "joint": "O4", "stiffness": 2.0, "free_angle": 70.0}})
+    model = kp.propagate(base, {"O2.q": crank_deg}, tol=1e-13).after
+    _, w4, ang = _fourbar_ratios(model)
+    theta4 = math.degrees(ang["t4"]) % 360.0
+    assert float(model.coordinates["O4"][0]) == pytest.approx(math.radians(theta4), abs=1e-12)
+    s = kp.statics(model)
+    _bodies_balance(s)
+    T = 2.0 * (70.0 - theta4)
+    assert s.element_forces["bar"] == pytest.approx(T, rel=1e-12)
+    assert s.element_lengths["bar"] == pytest.approx(theta4, rel=1e-12)
+    assert s.efforts["O2.q"] == pytest.approx(-T * w4, rel=1e-10)
+    assert abs(s.reactions["O4"].local[1, 5]) < 1e-10 * abs(T)  # the spring carries the torque, not the pin
+    assert unit_of(model, "force:bar") == "N m"
+
+
+def test_torsion_spring_equilibrium(tmp_path: Path) -> None:
+    """A torsion spring on the crank (the input released) against a couple on the rocker: the
+    equilibrium angle against a root (scipy's brentq) of ``k (theta0 - theta2) + T4 w4`` written
+    from the loop's velocity ratio by hand."""
+    import scipy.optimize
+
+    from kinprop.analysis.statics import equilibrium
+
+    base = _fourbar_with(tmp_path, {"bar": {"type": "torsion", "joint": "O2", "stiffness": 0.5, "free_angle": 60.0}})
+    T4 = -8.0
+    e = equilibrium(base, PointLoad("rocker", (0.0, 0.0, 0.0), moment=(0.0, 0.0, T4)))
+    assert e.converged, e.message
+
+    def residual(theta2_deg: float) -> float:
+        m = kp.propagate(base, {"O2.q": theta2_deg}, tol=1e-14).after
+        return 0.5 * (60.0 - theta2_deg) + T4 * _fourbar_ratios(m)[1]
+
+    got = math.degrees(float(e.model.coordinates["O2"][0]))
+    truth = scipy.optimize.brentq(residual, got - 5.0, got + 5.0, xtol=1e-13)
+    assert got == pytest.approx(truth, abs=1e-9)
+    assert abs(got - 60.0) > 1.0  # the couple moved it
+    assert e.statics.element_forces["bar"] == pytest.approx(0.5 * (60.0 - truth), rel=1e-8)
+    _bodies_balance(e.statics, PointLoad("rocker", (0.0, 0.0, 0.0), moment=(0.0, 0.0, T4)))
+
+
+def test_torsion_spring_preload_and_bad_input(tmp_path: Path) -> None:
+    """A preload is the torque at the model's angle; a torsion spring needs a revolute or
+    cylindrical joint and takes no bodies or ends (errors name the element and the field)."""
+    from kinprop.errors import ModelError
+
+    base = _fourbar_with(tmp_path, {"bar": {"type": "torsion", "joint": "O4", "stiffness": 2.0, "preload": 5.0}})
+    assert kp.statics(base).element_forces["bar"] == pytest.approx(5.0, rel=1e-12)
+    moved = kp.propagate(base, {"O2.q": 70.0}, tol=1e-13).after
+    dtheta = math.degrees(float(moved.coordinates["O4"][0]) - float(base.coordinates["O4"][0]))
+    assert kp.statics(moved, reference=base).element_forces["bar"] == pytest.approx(5.0 - 2.0 * dtheta, rel=1e-10)
+    for spec, where, text in (
+        ({"type": "torsion", "joint": "B", "stiffness": 1.0}, "elements.bar.joint", "revolute or cylindrical"),
+        ({"type": "torsion", "joint": "NOPE", "stiffness": 1.0}, "elements.bar.joint", "unknown joint 'NOPE'"),
+        ({"type": "torsion", "joint": "O4"}, "elements.bar.stiffness", "needs 'stiffness'"),
+        ({"type": "torsion", "joint": "O4", "stiffness": 1.0, "bodies": ["ground", "rocker"]}, "elements.bar.bodies",
+         "takes no 'bodies'"),
+        ({"type": "spring", "bodies": ["ground", "rocker"], "s_i": [0, 0, 0], "s_j": [0, 0, 0], "stiffness": 1.0,
+          "joint": "O4"}, "elements.bar.joint", "takes no 'joint'"),
+    ):  # fmt: skip
+        with pytest.raises(ModelError) as exc:
+            _fourbar_with(tmp_path, {"bar": spec})
+        assert where in str(exc.value) and text in str(exc.value), str(exc.value)
+
+
+def test_torsion_spring_survives_writing(tmp_path: Path) -> None:
+    from kinprop.io import model_from_data
+    from kinprop.io.hardpoints import model_to_hardpoints
+    from kinprop.io.writer import dump_model
+
+    base = _fourbar_with(tmp_path, {"bar": {"type": "torsion", "joint": "O4", "stiffness": 2.0, "free_angle": 70.0}})
+    dump_model(base, tmp_path / "out.yaml")
+    assert kp.load_model(tmp_path / "out.yaml").torsion_springs == base.torsion_springs
+    assert model_from_data(model_to_hardpoints(base)).torsion_springs == base.torsion_springs
+    from kinprop.analysis.study import _model_from_payload, _model_payload
+
+    assert _model_from_payload(_model_payload(base)).torsion_springs == base.torsion_springs
+
+
+SLIDES = {
+    "kinprop": 1,
+    "name": "two slides in series and a spring across both",
+    "units": {"length": "mm", "angle": "deg", "force": "N"},
+    "bodies": {"ground": {"fixed": True}, "b1": {}, "b2": {}},
+    "joints": {
+        "J1": {"type": "translational", "bodies": ["ground", "b1"], "q": [100.0]},
+        "J2": {"type": "translational", "bodies": ["b1", "b2"], "q": [60.0]},
+    },
+    "inputs": ["J1", "J2"],
+    "elements": {
+        "spring": {
+            "type": "spring",
+            "bodies": ["ground", "b2"],
+            "s_i": [0, 0, 0],
+            "s_j": [0, 0, 0],
+            "stiffness": 20.0,
+            "free_length": 100.0,
+        }
+    },
+}
+
+
+@pytest.mark.parametrize("w1", [1.0, 4.0])
+def test_equilibrium_takes_the_least_change_in_a_neutral_direction(tmp_path: Path, w1: float) -> None:
+    """Two released slides in series: the spring fixes only their sum (``K`` singular), so the
+    equilibrium is a line; the least change in the propagation's metric splits the 60 mm
+    correction in proportion to the weights (``dq_k = w_k c / sum w``), and the pose is not
+    stable (neutral)."""
+    from kinprop.analysis.statics import equilibrium
+
+    model = _assembled(SLIDES, tmp_path)
+    e = equilibrium(model, weights={"J1.q": w1})
+    assert e.converged, e.message
+    q1, q2 = (float(e.model.coordinates[j][0]) for j in ("J1", "J2"))
+    assert q1 + q2 == pytest.approx(100.0, abs=1e-9)
+    assert q1 - 100.0 == pytest.approx(-60.0 * w1 / (w1 + 1.0), abs=1e-9)
+    assert e.statics.element_forces["spring"] == pytest.approx(0.0, abs=1e-9)
+    assert not e.stable
+
+
+def test_double_wishbone_equilibrium_design_derivatives() -> None:
+    """The ride height's design derivatives (``dq_D/dp = -K^-1 dtau/dp``, exact) against
+    central differences of equilibria of re-solved models, in the model's units (deg per mm)."""
+    from kinprop.analysis.statics import equilibrium, equilibrium_sensitivity
+
+    model = _assembled(EXAMPLES / "double_wishbone.yaml")
+    case = LoadCase("corner", wheels={"upright": (0.0, 0.0, 11000.0)})
+    e = equilibrium(model, case)
+    assert e.converged
+    wrt = ["UBJ.s_j[0]", "TR.length", "LBJ.s_i[2]"]
+    D, released, columns = equilibrium_sensitivity(e, wrt, case, reference=model)
+    assert released == ["LCA.q"]
+    for k, c in enumerate(columns):
+        key, _, index = c.partition("[")
+        x0 = float(np.atleast_1d(np.asarray(model.design[key], dtype=float)).ravel()[int(index[:-1]) if index else 0])
+
+        def at(t: float, c: str = c, x0: float = x0) -> float:
+            m = kp.propagate(model, {c: x0 + t}, tol=1e-14).after
+            eq = equilibrium(m, case)
+            assert eq.converged
+            return math.degrees(float(eq.model.coordinates["LCA"][0]))
+
+        h = 0.1
+        fd = (4 * (at(h / 2) - at(-h / 2)) / h - (at(h) - at(-h)) / (2 * h)) / 3
+        assert D[0, k] == pytest.approx(fd, rel=1e-6, abs=1e-9), (c, D[0, k], fd)
+    assert abs(D[0, columns.index("LBJ.s_i[2]")]) > 1e-3  # a real dependence (deg per mm)

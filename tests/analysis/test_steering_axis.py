@@ -14,8 +14,7 @@ from analysis_helpers import EXAMPLES
 from dw_oracle import HMMWV, solve
 
 from kinprop import SingularityWarning, load_model, propagate
-from kinprop.analysis.context import OutputContext
-from kinprop.analysis.metrics import steering_points, suspension_metrics
+from kinprop.analysis.metrics import suspension_metrics
 from kinprop.analysis.outputs import evaluate_outputs
 from kinprop.cli.sensitivity import sensitivities
 from kinprop.errors import ModelError
@@ -169,6 +168,8 @@ def test_mcpherson_default_axis_is_top_mount_to_lower_ball_joint():
     }
     data["units"]["axes"] = "right-handed"
     strut = model_from_data(data, "mcp.yaml")
-    upper, lower = steering_points(OutputContext.of(strut), "wheel")
-    assert upper == pytest.approx(data["joints"]["ST"]["point"])
-    assert lower == pytest.approx(data["joints"]["RS"]["point_j"])
+    # the axis from the top mount (upper) to the ball joint: caster and KPI of exactly that line
+    k = np.array(data["joints"]["ST"]["point"], dtype=float) - np.array(data["joints"]["RS"]["point_j"], dtype=float)
+    m = suspension_metrics(strut, "wheel")  # a left wheel: its spin axis has y >= 0
+    assert m["caster"] == pytest.approx(math.degrees(math.atan2(-k[0], k[2])))
+    assert m["kpi"] == pytest.approx(math.degrees(math.atan2(-k[1], k[2])))

@@ -66,3 +66,56 @@ def test_equilibrium_option() -> None:
     from kinprop.analysis.statics import wheel_rate
 
     assert eq["wheel_rate"] == pytest.approx(wheel_rate(at), rel=1e-8)
+
+
+def test_plot_draws_the_reported_forces(tmp_path: Path) -> None:
+    """``--plot`` writes a PNG; its arrows are the reported forces: the wheel force at the
+    contact point, each joint's force on its body j at its point (the tie rod coloured by the
+    sign of its tension), the spring's force on its body-j end along the spring."""
+    from kinprop.analysis.metrics import contact_point
+    from kinprop.plot.forces import force_arrows
+
+    out = tmp_path / "loads.png"
+    p = run_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--load-case", "braking_1g", "--plot", out)
+    assert p.returncode == 0, p.stderr
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    model = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
+    case = model.loads.case("braking_1g")
+    s = kp.statics(model, case)
+    arrows = {a.label: a for a in force_arrows(s, case)}
+    tr = arrows["TR"]
+    assert tr.kind == ("tension" if s.member_forces["TR"] > 0 else "compression")
+    assert np.allclose(tr.force, s.reactions["TR"].force[1]) and np.allclose(tr.origin, s.reactions["TR"].points[1])
+    assert arrows["UBJ"].kind == "reaction"
+    spring = arrows["spring"]
+    e = model.element("spring")
+    kin = kp.compile(model).kinematics(model.design, model.coordinates)
+    Pi = kin.r[e.body_i] + kin.A[e.body_i] @ np.array(e.s_i)
+    Pj = kin.r[e.body_j] + kin.A[e.body_j] @ np.array(e.s_j)
+    assert np.allclose(spring.origin, Pj)
+    assert np.allclose(spring.force, s.element_forces["spring"] * (Pj - Pi) / np.linalg.norm(Pj - Pi))
+    load = arrows["upright wheel"]
+    pts = dict(model.mechanism.body("upright").points)
+    centre = kin.r["upright"] + kin.A["upright"] @ np.array(pts["wheel_centre"])
+    axis = kin.A["upright"] @ (np.array(pts["spin_axis"]) - np.array(pts["wheel_centre"]))
+    radius = np.linalg.norm(np.array(pts["contact_patch"]) - np.array(pts["wheel_centre"]))
+    assert np.allclose(load.origin, contact_point(centre, axis, radius))
+    assert np.allclose(load.force, case.wheels["upright"])
+    bad = run_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--plot", tmp_path / "loads.svg")
+    assert bad.returncode == 2 and "--plot" in one_error_line(bad)
+
+
+def test_sensitivity_of_loads_names_its_method() -> None:
+    """``kinprop sensitivity --of force:TR@CASE``: the exact (direct) derivative, the same number
+    as ``kp.output_sensitivity``, and each row's method in the JSON."""
+    from kinprop.analysis.sensitivity import CENTRAL, DIRECT
+
+    p = run_kinprop("sensitivity", EXAMPLES / "double_wishbone.yaml", "--of", "force:TR@braking_1g", "--of", "camber",
+                    "--wrt", "TR.length", "--json")  # fmt: skip
+    assert p.returncode == 0, p.stderr
+    data = json.loads(p.stdout)
+    assert data["method"] == {"force:TR@braking_1g": DIRECT, "camber": CENTRAL}
+    model = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
+    D = kp.output_sensitivity(model, ["force:TR@braking_1g"], ["TR.length"])
+    assert data["matrix"][0][0] == pytest.approx(D.iloc[0, 0], rel=1e-9)
+    assert abs(D.iloc[0, 0]) > 1.0

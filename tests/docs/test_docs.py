@@ -39,7 +39,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
 SKIP = re.compile(r"<!--\s*doc-test:\s*skip\b(?P<why>[^>]*)-->")
-NUMBERS = re.compile(r"<!--\s*doc-test:\s*numbers\s*-->")
+NUMBERS = re.compile(r"^\s*<!--\s*doc-test:\s*numbers\s*-->\s*$")
 FENCE = re.compile(r"^```(?P<lang>[a-z]*)\s*$")
 NUMBER = re.compile(r"(?<![\w.])[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?![\w.])", re.IGNORECASE)
 CLI = [sys.executable, "-c", "from kinprop.cli import main; main()"]
@@ -93,7 +93,7 @@ def blocks(doc: Path) -> list[Block]:
     lines = doc.read_text(encoding="utf-8").splitlines()
     k = 0
     while k < len(lines):
-        if NUMBERS.search(lines[k]):  # the table or paragraph below: its numbers are outputs
+        if NUMBERS.match(lines[k]):  # the table or paragraph below: its numbers are outputs
             start = k + 1
             k += 1
             while k < len(lines) and lines[k].strip():

@@ -106,6 +106,10 @@ def test_sections_survive_writing_and_converting(tmp_path: Path) -> None:
         assert np.allclose(a.reactions["UBJ"].force[1], b.reactions["UBJ"].force[1], rtol=1e-8)
     prop = kp.propagate(model, {"LCA.q": [3.0]}, free=["q"])
     assert prop.after.loads == model.loads
+    # a distributed study's workers rebuild the model from its payload: the loads come along
+    from kinprop.analysis.study import _model_from_payload, _model_payload
+
+    assert _model_from_payload(_model_payload(model)).loads == model.loads
 
 
 def test_bad_loads_are_located() -> None:

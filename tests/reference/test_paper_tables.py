@@ -8,10 +8,15 @@ kinprop.reference.paper). Iteration counts are exact.
 
 from __future__ import annotations
 
+import json
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
+from typer.testing import CliRunner
 
 from kinprop import load_model, propagate
+from kinprop.cli import app
 from kinprop.propagation import assemble
 from kinprop.reference import TABLES
 from kinprop.reference.paper import PRECISION_FLOOR, compare_column, reproduce, ulp
@@ -25,6 +30,44 @@ def test_every_printed_quantity_agrees(table: str, index: int) -> None:
     col, prop = RUNS[table][index]
     bad = [c for c in compare_column(prop, col) if not c.ok]
     assert not bad, "\n".join(f"{c.label}: paper {c.printed} vs kinprop {c.ours}" for c in bad)
+
+
+@pytest.mark.parametrize("table", sorted(TABLES))
+def test_cli_tol_alone_reproduces_every_column(table: str, examples, tmp_path) -> None:
+    """``kinprop assemble/propagate ... --tol 1e-3`` without ``--method`` (the paper's stopping
+    rule selects the paper's iteration): every printed quantity of every column, iterations and
+    residuals included, read from the written model (-o, full precision) and the JSON."""
+    t = TABLES[table]
+    model = examples / t.model
+    runs = []
+    if t.initial_assembly:
+        runs.append((t.columns[0], ["assemble", model], tmp_path / "assembled.yaml"))
+    start = runs[0][2] if runs else model
+    sets = [f"--set={k}={','.join(repr(float(x)) for x in v)}" for k, v in t.change.items()]
+    for i, col in enumerate(t.columns[len(runs) :]):
+        free = [a for f in col.free for a in ("--free", f)]
+        runs.append((col, ["propagate", start, *sets, *free], tmp_path / f"col{i}.yaml"))
+    for col, args, out in runs:
+        r = CliRunner().invoke(app, [str(a) for a in [*args, "--tol", "1e-3", "--json", "-o", out]])
+        assert r.exit_code == 0, r.output
+        obj = json.loads(r.stdout)
+        assert obj["method"] == "paper"
+        prop = SimpleNamespace(after=load_model(out), result=SimpleNamespace(**obj))
+        bad = [c for c in compare_column(prop, col) if not c.ok]
+        assert not bad, "\n".join(f"{col.name} {c.label}: paper {c.printed} vs CLI {c.ours}" for c in bad)
+
+
+def test_cli_default_and_explicit_method(examples) -> None:
+    """Without --tol the CLI returns the least change; --method least-change with --tol 1e-3
+    too (its optimality residual below 1e-3)."""
+    base = ["propagate", str(examples / "slider_crank.yaml"), "--set", "J12.s_j=-2.8,0.2,0.1", "--free", "q", "--json"]
+    default = json.loads(CliRunner().invoke(app, base).stdout)
+    loose = json.loads(CliRunner().invoke(app, [*base, "--tol", "1e-3", "--method", "least-change"]).stdout)
+    paper = json.loads(CliRunner().invoke(app, [*base, "--tol", "1e-3"]).stdout)
+    assert (default["method"], loose["method"], paper["method"]) == ("least-change", "least-change", "paper")
+    assert default["coordinates"]["J01"][0] == pytest.approx(44.898928344, abs=1e-7)  # the closest assembly
+    assert loose["optimality_residual"] < 1e-3 and loose["residual"] < 1e-3
+    assert paper["coordinates"]["J01"][0] == pytest.approx(44.893707, abs=np.degrees(PRECISION_FLOOR))  # Table 4
 
 
 def test_iteration_counts_and_residuals_are_the_papers() -> None:

@@ -298,7 +298,7 @@ def test_state_describes_the_model(make_client) -> None:
     c = make_client(DW)
     st = c.get("/api/state").json()
     assert st["units"]["length"] == "mm" and st["result"]["status"] == "converged"
-    assert [s["address"] for s in st["sliders"]] == ["LCA.q", "UCA.q"]
+    assert [s["address"] for s in st["sliders"]] == ["LCA.q"]  # the declared input; UCA.q depends on it
     assert all(s["unit"] == "deg" for s in st["sliders"])
     assert st["default_outputs"] == ["metric:upright.camber", "metric:upright.toe"]
     rows = {v["address"]: v for v in st["variables"]}
@@ -340,6 +340,36 @@ def test_curve_defaults_without_a_wheel(make_client) -> None:
     st = make_client(MC).get("/api/state").json()
     assert [d["spec"] for d in st["drives"]] == ["TD", "ST[4]"] and st["sliders"] == []
     assert st["drives"][0]["unit"] == "m"
+
+
+def test_sliders_are_the_independent_inputs(make_client) -> None:
+    """Sliders for the declared inputs only; without declared inputs, as many single coordinates
+    as the mobility, each settable on its own (the slider-crank: one of its three revolutes and
+    slider, not a dependent one; checked by setting it: the propagation converges)."""
+    st = make_client("fourbar.yaml").get("/api/state").json()
+    assert [s["address"] for s in st["sliders"]] == ["O2.q"]
+    c = make_client("slider_crank.yaml")
+    st = c.get("/api/state").json()
+    assert c.get("/api/check").json()["mobility"] == len(st["sliders"]) == 1
+    s = st["sliders"][0]
+    r = c.post("/api/propagate", json={"set": {s["address"]: s["value"] + 0.1}})
+    assert r.json()["status"] == "converged"
+
+
+def test_status_line_is_the_last_applied_change(make_client) -> None:
+    """The status line names the change that made the current model; a refused change leaves it;
+    undo says so and shows the model it went back to."""
+    c = make_client("double_wishbone.yaml")
+    assert c.get("/api/state").json()["status_line"].startswith("loaded: converged")
+    r = c.post("/api/propagate", json={"set": {"LCA.q": 3.0}}).json()
+    line = c.get("/api/state").json()["status_line"]
+    assert line.startswith("LCA.q = 3: converged") and f"{r['iterations']} iterations" in line
+    assert c.post("/api/propagate", json={"set": {"TR.length": 5000.0}}).json()["status"] != "converged"
+    assert c.get("/api/state").json()["status_line"] == line
+    c.post("/api/undo")
+    assert c.get("/api/state").json()["status_line"].startswith("undo: loaded: converged")
+    c.post("/api/redo")
+    assert c.get("/api/state").json()["status_line"] == "redo: " + line
 
 
 def test_page_and_static_files(make_client) -> None:

@@ -64,18 +64,10 @@ class OutputContext:
 
     def body_point(self, body: str, point: str) -> Array:
         """Global position of the named point ``point`` of ``body``."""
-        mech = self.model.mechanism
-        if body not in mech.body_names:
-            raise AddressError(f"unknown body {body!r}; bodies are {', '.join(mech.body_names)}")
-        b = mech.body(body)
-        pts = dict(b.points)
-        if point not in pts:
-            known = ", ".join(pts) or "none"
-            raise AddressError(f"body {body!r} has no named point {point!r}; its points: {known}")
-        ref = b.joint_point(point)
-        if ref is not None:  # a joint's point: it follows the joint (kinprop.model.joint_points)
-            return self.hardpoint(*ref)
-        return self.kin.r[body] + self.kin.A[body] @ np.asarray(pts[point], dtype=float)
+        source = locate_point(self.model, body, point)
+        if source[0] == "joint":  # a joint's point: it follows the joint (kinprop.model.joint_points)
+            return self.hardpoint(source[1], source[2])
+        return self.kin.r[body] + self.kin.A[body] @ source[2]
 
     def body_pose(self, body: str) -> Array:
         """``[x, y, z, roll, pitch, yaw]`` of ``body``: its frame's global origin and the
@@ -129,6 +121,37 @@ class OutputContext:
         if m and m.group("c") is None:
             return self.hardpoint(m.group("joint"), m.group("side"))
         raise AddressError(f"{spec!r} is not a point: expected point:BODY.NAME or hardpoint:JOINT.i|j")
+
+
+def locate_point(model: Model, body: str, point: str) -> tuple[str, str, Array] | tuple[str, str, str]:
+    """Where the named point ``point`` of ``body`` comes from: ``("joint", JOINT, side)`` for a
+    joint's point (:mod:`kinprop.model.joint_points`), else ``("body", body, p')`` (body frame).
+    Raises :class:`AddressError` for an unknown body or point."""
+    mech = model.mechanism
+    if body not in mech.body_names:
+        raise AddressError(f"unknown body {body!r}; bodies are {', '.join(mech.body_names)}")
+    b = mech.body(body)
+    pts = dict(b.points)
+    if point not in pts:
+        known = ", ".join(pts) or "none"
+        raise AddressError(f"body {body!r} has no named point {point!r}; its points: {known}")
+    ref = b.joint_point(point)
+    if ref is not None:
+        return "joint", ref[0], ref[1]
+    return "body", body, np.asarray(pts[point], dtype=float)
+
+
+def find_point(model: Model, wheel: str, name: str, on_wheel: bool = True) -> tuple[str, str] | None:
+    """(body, point name) of a wheel point by the lookup rule of :mod:`kinprop.analysis.metrics`:
+    on the wheel body (``on_wheel``), else on a fixed body as ``WHEEL.NAME``, then as ``NAME``."""
+    mech = model.mechanism
+    if on_wheel and name in dict(mech.body(wheel).points):
+        return wheel, name
+    for key in (f"{wheel}.{name}", name):
+        for b in mech.bodies:
+            if b.fixed and key in dict(b.points):
+                return b.name, key
+    return None
 
 
 def pivot_point(model: Model, joint: str, name: str) -> tuple[str, str]:

@@ -41,12 +41,11 @@ steering axis can also be given per call as two point specs (``hardpoint:JOINT.i
 from __future__ import annotations
 
 import functools
-import math
 from typing import Any
 
 import numpy as np
 
-from kinprop.analysis.context import OutputContext, WheelSpec
+from kinprop.analysis.context import OutputContext, WheelSpec, find_point
 from kinprop.analysis.firstorder import (
     FIRST_ORDER,
     GAIN_METRICS,
@@ -58,12 +57,14 @@ from kinprop.analysis.firstorder import (
     first_order_unit,
 )
 from kinprop.analysis.motion import point_of
+from kinprop.analysis.program import ProgramBuilder
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
+from kinprop.engine import outputs as compiled
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.joint_points import steering_joints
-from kinprop.spatial import EZ, Array
+from kinprop.spatial import Array
 
 ANGLE_METRICS = ("camber", "toe", "caster", "kpi")
 LENGTH_METRICS = ("scrub_radius", "trail", "wheel_centre_dx", "wheel_centre_dy", "wheel_centre_dz")
@@ -75,63 +76,39 @@ METRIC_ALIASES = {"kingpin_inclination": "kpi", "scrub": "scrub_radius", "wheel_
 
 
 # --- closed-form geometry (vectors in vehicle axes) -----------------------------------------
-def wheel_side(axis: Array) -> int:
-    """+1 for a left wheel (outboard spin axis towards +y), -1 for a right wheel."""
-    return 1 if axis[1] >= 0 else -1
+def _vec(x: Array) -> Array:
+    return np.ascontiguousarray(x, dtype=float)
 
 
 def camber_toe(axis: Array) -> tuple[float, float]:
     """``(camber, toe)`` in degrees from the outboard spin axis (any length)."""
-    a = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-    camber = math.degrees(math.asin(float(np.clip(-a[2], -1.0, 1.0))))
-    toe = math.degrees(math.atan2(float(a[0]), abs(float(a[1]))))
-    return camber, toe
+    a = _vec(axis)
+    return compiled.camber_toe(a[0], a[1], a[2])
 
 
 def steering_angles(upper: Array, lower: Array, side: int) -> tuple[float, float]:
     """``(caster, kpi)`` in degrees of the steering axis through ``lower`` and ``upper``."""
-    k = np.asarray(upper, dtype=float) - np.asarray(lower, dtype=float)
-    caster = math.degrees(math.atan2(-k[0], k[2]))
-    kpi = math.degrees(math.atan2(-side * k[1], k[2]))
-    return caster, kpi
+    k = _vec(upper) - _vec(lower)
+    return compiled.steering_angles(k[0], k[1], k[2], float(side))
 
 
 def contact_point(centre: Array, axis: Array, radius: float) -> Array:
-    """Lowest point of the wheel circle (centre, unit outboard axis, radius)."""
-    a = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-    down = -EZ + a[2] * a  # -z projected onto the wheel plane
-    return np.asarray(centre, dtype=float) + radius * down / np.linalg.norm(down)
+    """Lowest point of the wheel circle (centre, outboard axis of any length, radius)."""
+    out = np.empty(3)
+    compiled.contact_point(_vec(centre), _vec(axis), float(radius), out)
+    return out
 
 
 def ground_offsets(upper: Array, lower: Array, contact: Array, axis: Array) -> tuple[float, float]:
     """``(scrub_radius, trail)``: the steering axis' ground point G relative to the contact
-    point, in the horizontal plane through the contact point."""
-    k = np.asarray(upper, dtype=float) - np.asarray(lower, dtype=float)
-    G = lower + k * (contact[2] - lower[2]) / k[2]
-    a = np.asarray(axis, dtype=float)
-    side = wheel_side(a)
-    lateral = np.array([a[0], a[1], 0.0])
-    lateral /= np.linalg.norm(lateral)
-    heading = side * np.cross(lateral, EZ)
-    return float((contact - G) @ lateral), float((G - contact) @ heading)
+    point, in the horizontal plane through the contact point (``axis``: unit outboard)."""
+    return compiled.ground_offsets(_vec(upper), _vec(lower), _vec(contact), _vec(axis))
 
 
 # --- wheels of a model -------------------------------------------------------------------------
 def wheel_bodies(model: Model) -> list[str]:
     """Bodies carrying both ``wheel_centre`` and ``spin_axis`` named points."""
     return [b.name for b in model.mechanism.bodies if {"wheel_centre", "spin_axis"} <= {n for n, _ in b.points}]
-
-
-def _find_point(model: Model, wheel: str, name: str, on_wheel: bool = True) -> tuple[str, str] | None:
-    """(body, point name) of a wheel point by the lookup rule of the module docstring."""
-    mech = model.mechanism
-    if on_wheel and name in dict(mech.body(wheel).points):
-        return wheel, name
-    for key in (f"{wheel}.{name}", name):
-        for b in mech.bodies:
-            if b.fixed and key in dict(b.points):
-                return b.name, key
-    return None
 
 
 def available_metrics(
@@ -141,17 +118,17 @@ def available_metrics(
     out = ["camber", "toe"]
     steer = (
         (spec is not None and spec.steering_axis is not None)
-        or all(_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
+        or all(find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
         or steering_joints(model.mechanism, wheel) is not None
     )
     if steer:
         out += ["caster", "kpi"]
         if "contact_patch" in dict(model.mechanism.body(wheel).points):
             out += ["scrub_radius", "trail"]
-    if has_reference or _find_point(model, wheel, "wheel_centre_ref", on_wheel=False):
+    if has_reference or find_point(model, wheel, "wheel_centre_ref", on_wheel=False):
         out += ["wheel_centre_dx", "wheel_centre_dy", "wheel_centre_dz"]
     contact = "contact_patch" in dict(model.mechanism.body(wheel).points)
-    ref = has_reference or _find_point(model, wheel, "contact_patch_ref", on_wheel=False) is not None
+    ref = has_reference or find_point(model, wheel, "contact_patch_ref", on_wheel=False) is not None
     out += first_order_names(model, contact, steer, ref)
     return out
 
@@ -208,31 +185,18 @@ def resolve_metric(model: Model, name: str) -> tuple[str, str]:
     return wheel, metric
 
 
-def steering_points(ctx: OutputContext, wheel: str) -> tuple[Array | None, Array | None]:
-    """Global upper and lower points of the wheel's steering axis at the context's state: the
-    declared ``kingpin_upper``/``kingpin_lower`` points (coordinates, or references to joints
-    that follow them), else the default joints of :func:`kinprop.model.joint_points.steering_joints`
-    (two ball joints, or a strut top mount and the lower ball joint), the higher one upper."""
-    model = ctx.model
-    found_upper, found_lower = (_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower"))
-    if found_upper is not None and found_lower is not None:
-        return ctx.body_point(*found_upper), ctx.body_point(*found_lower)
-    pair = steering_joints(model.mechanism, wheel)
-    if pair is None:
-        return None, None
-    a, b = (ctx.hardpoint(*p) for p in pair)
-    return (a, b) if a[2] >= b[2] else (b, a)
-
-
 def steering_bodies(
     ctx: OutputContext, wheel: str
 ) -> tuple[tuple[str, Array, tuple[str, str] | None], tuple[str, Array, tuple[str, str] | None]] | None:
     """``((body, point, source), (body, point, source))`` of the steering axis' upper and lower
-    points (as :func:`steering_points`), each with the body it moves with (a joint's point: that
-    side's) and the joint frame it is (``OutputContext.point_source``)."""
+    points at the context's state — the declared ``kingpin_upper``/``kingpin_lower`` points, else
+    the default joints of :func:`kinprop.model.joint_points.steering_joints`, the higher one upper
+    (the rule :class:`kinprop.analysis.program.ProgramBuilder` compiles) — each with the body it
+    moves with (a joint's point: that side's) and the joint frame it is
+    (``OutputContext.point_source``)."""
     model = ctx.model
     mech = model.mechanism
-    found = [_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
+    found = [find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
     if found[0] is not None and found[1] is not None:
         out = []
         for body, name in found:  # type: ignore[misc]
@@ -262,7 +226,7 @@ def steering_axis_mismatch(model: Model) -> list[str]:
     ctx = None  # forward kinematics only when a wheel declares its axis by coordinates
     for wheel in wheel_bodies(model):
         pair = steering_joints(model.mechanism, wheel)
-        found = [_find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
+        found = [find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
         if pair is None or None in found:
             continue
         if all(model.mechanism.body(b).joint_point(k) is not None for b, k in found):  # type: ignore[misc]
@@ -340,7 +304,7 @@ def _first_order_inputs(
         if ctx.reference is not None:
             ref = _contact_of(OutputContext.of(ctx.reference, engine=engine), wheel, radius)
         else:
-            found_ref = _find_point(model, wheel, "contact_patch_ref", on_wheel=False)
+            found_ref = find_point(model, wheel, "contact_patch_ref", on_wheel=False)
             if found_ref is not None:
                 body, name = found_ref
                 ref = (engine.body_index[body], ctx.body_point(body, name), ctx.point_source(body, name))
@@ -365,39 +329,17 @@ def wheel_first_order_derivatives(
 
 
 def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:
-    """Every metric the wheel supports at the context's state (angles deg, lengths model unit)."""
-    model = ctx.model
-    spec = spec if spec is not None else ctx.wheels.get(wheel) if ctx.wheels else None
-    centre = ctx.body_point(wheel, "wheel_centre")
-    axis = ctx.body_point(wheel, "spin_axis") - centre
-    axis /= np.linalg.norm(axis)
-    side = wheel_side(axis)
-    camber, toe = camber_toe(axis)
-    out = {"camber": camber, "toe": toe}
-    upper = lower = None
-    if spec is not None and spec.steering_axis is not None:
-        upper, lower = (ctx.point(s) for s in spec.steering_axis)
-    else:
-        upper, lower = steering_points(ctx, wheel)
-    if upper is not None and lower is not None:
-        out["caster"], out["kpi"] = steering_angles(upper, lower, side)
-        pts = dict(model.mechanism.body(wheel).points)
-        if "contact_patch" in pts:
-            v = ctx.body_point(wheel, "contact_patch") - centre
-            radius = float(np.linalg.norm(v - (v @ axis) * axis))
-            contact = contact_point(centre, axis, radius)
-            out["scrub_radius"], out["trail"] = ground_offsets(upper, lower, contact, axis)
-    ref = None
-    if ctx.reference is not None:
-        ref = OutputContext.of(ctx.reference, engine=ctx.engine).body_point(wheel, "wheel_centre")
-    else:
-        found_ref = _find_point(model, wheel, "wheel_centre_ref", on_wheel=False)
-        if found_ref is not None:
-            ref = ctx.body_point(*found_ref)
-    if ref is not None:
-        d = centre - ref
-        out["wheel_centre_dx"], out["wheel_centre_dy"], out["wheel_centre_dz"] = (float(x) for x in d)
-    return out
+    """Every position-level metric the wheel supports at the context's state (angles deg,
+    lengths model unit), by the compiled kernel (:mod:`kinprop.engine.outputs`)."""
+    engine = ctx.engine if ctx.engine is not None else compile_engine(ctx.model.mechanism)
+    wheels = {wheel: spec} if spec is not None else ctx.wheels
+    b = ProgramBuilder(ctx.model, engine, ctx.reference, wheels)
+    _, given = b.wheel(wheel)
+    for metric in given:
+        b.add_metric(metric, wheel, metric)
+    program = b.build()
+    values = program.evaluate(ctx.state if ctx.state is not None else engine.state_of(ctx.model))
+    return dict(zip(given, (float(v) for v in values), strict=True))
 
 
 def suspension_metrics(
@@ -446,6 +388,7 @@ __all__ = [
     "metric_names",
     "metric_unit",
     "steering_angles",
+    "steering_bodies",
     "suspension_metrics",
     "wheel_bodies",
     "wheel_first_order",

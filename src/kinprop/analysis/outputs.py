@@ -17,8 +17,10 @@ its components, e.g. ``point:wheel.wheel_centre`` into ``...[x]``, ``...[y]``, `
 * suspension metrics of a wheel body (:mod:`kinprop.analysis.metrics`):
   ``metric:WHEEL.camber`` (``camber`` alone when the model has one wheel); angles in degrees.
 
-Lengths are in the model's length unit. Everything is evaluated from one forward-kinematics
-pass over the spanning tree; the model is not re-assembled here.
+Lengths are in the model's length unit. Points, distances, variables and position-level
+metrics are evaluated by one compiled kernel from one forward-kinematics pass over the spanning
+tree (:func:`output_program`, :mod:`kinprop.engine.outputs`), for one state or a whole batch;
+the model is not re-assembled here.
 """
 
 from __future__ import annotations
@@ -37,11 +39,11 @@ from kinprop.analysis.metrics import (
     resolve_metric,
     wheel_first_order,
     wheel_first_order_derivatives,
-    wheel_metrics,
 )
+from kinprop.analysis.program import OutputProgram, ProgramBuilder
 from kinprop.analysis.statics import is_load_output, load_value
 from kinprop.analysis.units import derivative_scale
-from kinprop.engine import Engine
+from kinprop.engine import Engine, State
 from kinprop.engine import compile as compile_engine
 from kinprop.engine.units import check_units
 from kinprop.errors import AddressError
@@ -153,52 +155,104 @@ def _parse_variable(engine: Engine, name: str) -> Address:
     return addr
 
 
-def _scalar(
-    ctx: OutputContext,
-    name: str,
-    metric_cache: dict[str, dict[str, float]],
-    resolved: dict[str, tuple[str, str]] | None = None,
-) -> float:
-    """One output's value (``resolved``: metric names already resolved to ``(wheel, metric)``,
-    kept across states by :func:`output_function`)."""
+def output_program(
+    model: Model,
+    names: Sequence[str],
+    *,
+    reference: Model | None = None,
+    wheels: Mapping[str, WheelSpec] | None = None,
+    engine: Engine | None = None,
+) -> OutputProgram:
+    """The expanded outputs as a compiled :class:`~kinprop.analysis.program.OutputProgram`:
+    every point, distance, variable and position-level metric evaluated by the kernel of
+    :mod:`kinprop.engine.outputs`; first-order metrics and loads are rows the program leaves
+    to :func:`evaluate_outputs` (NaN). Raises :class:`AddressError` for unknown names and for a
+    metric the wheel cannot give (naming what it needs)."""
+    eng = engine if engine is not None else compile_engine(model.mechanism)
+    b = ProgramBuilder(model, eng, reference, wheels)
+    for name in expand_outputs(model, names, eng):
+        if is_load_output(name) or name.startswith("body:"):
+            b.add_other(name)
+        elif name.startswith("distance:"):
+            b.add_distance(name, *_distance_ends(name))
+        elif name.startswith("point:") and (m := _POINT.match(name)):
+            b.add_point(name, f"point:{m.group('body')}.{m.group('name')}", AXES[m.group("c")])
+        elif name.startswith("hardpoint:") and (m := _HARD.match(name)):
+            b.add_point(name, f"hardpoint:{m.group('joint')}.{m.group('side')}", AXES[m.group("c")])
+        elif name.startswith("metric:") or "." not in name:
+            wheel, metric = resolve_metric(model, name)
+            if is_first_order(metric):
+                b.add_other(name)
+                continue
+            _, given = b.wheel(wheel)
+            if metric not in given:
+                needs = METRIC_NEEDS.get(metric, "more named points").replace("WHEEL", wheel)
+                raise AddressError(f"output {name!r}: metric {metric!r} of wheel {wheel!r} needs {needs}; "
+                                   f"this model gives: {', '.join(given)}")  # fmt: skip
+            b.add_metric(name, wheel, metric)
+        else:
+            _parse_variable(eng, name)
+            b.add_variable(name, name)
+    return b.build()
+
+
+def _other(ctx: OutputContext, name: str, cache: dict[str, dict[str, float]]) -> float:
+    """An output the program leaves to Python: a load, a body's pose, or a first-order metric
+    (one velocity analysis per wheel and state, :func:`~kinprop.analysis.metrics.wheel_first_order`)."""
     if is_load_output(name):
-        return load_value(ctx.model, name, metric_cache, ctx.engine, ctx.reference)
-    if name.startswith("distance:"):
-        a, b = _distance_ends(name)
-        return float(np.linalg.norm(ctx.point(a) - ctx.point(b)))
+        return load_value(ctx.model, name, cache, ctx.engine, ctx.reference)
     if name.startswith("body:"):
         m = BODY.match(name)
         return float(ctx.body_pose(m["body"])[POSE.index(m["c"])])  # type: ignore[index]
-    m = _POINT.match(name)
-    if name.startswith("point:") and m:
-        return float(ctx.body_point(m.group("body"), m.group("name"))[AXES[m.group("c")]])
-    m = _HARD.match(name)
-    if name.startswith("hardpoint:") and m:
-        return float(ctx.hardpoint(m.group("joint"), m.group("side"))[AXES[m.group("c")]])
-    if name.startswith("metric:") or "." not in name:
-        found = resolved.get(name) if resolved is not None else None
-        wheel, metric = found if found is not None else resolve_metric(ctx.model, name)
-        if resolved is not None:
-            resolved[name] = (wheel, metric)
-        first = is_first_order(metric)
-        key = f"{wheel}\x00first" if first else wheel
-        if key not in metric_cache:
-            metric_cache[key] = wheel_first_order(ctx, wheel) if first else wheel_metrics(ctx, wheel)
-        values = metric_cache[key]
-        if metric not in values:
-            needs = METRIC_NEEDS.get(metric, "more named points").replace("WHEEL", wheel)
-            raise AddressError(
-                f"output {name!r}: metric {metric!r} of wheel {wheel!r} needs {needs}; "
-                f"this model gives: {', '.join(values)}"
-            )
-        return float(values[metric])
-    addr = _parse_variable(ctx.engine, name)
-    model = ctx.model
-    if addr.field == "q":
-        v = np.atleast_1d(np.asarray(model.coordinates[addr.joint], dtype=float))
-    else:
-        v = np.atleast_1d(np.asarray(model.design[addr.key], dtype=float)).ravel()
-    return float(v[addr.index or 0])
+    wheel, metric = resolve_metric(ctx.model, name)
+    key = f"{wheel}\x00first"
+    if key not in cache:
+        cache[key] = wheel_first_order(ctx, wheel)
+    values = cache[key]
+    if metric not in values:
+        needs = METRIC_NEEDS.get(metric, "more named points").replace("WHEEL", wheel)
+        raise AddressError(f"output {name!r}: metric {metric!r} of wheel {wheel!r} needs {needs}; "
+                           f"this model gives: {', '.join(values)}")  # fmt: skip
+    return float(values[metric])
+
+
+def program_values(
+    program: OutputProgram, model: Model, reference: Model | None = None, wheels: Mapping[str, WheelSpec] | None = None
+) -> Array:
+    """Every output of ``program`` at the model's state (solver units): the compiled ones in one
+    kernel call, the others (first-order metrics, loads) from one shared context."""
+    eng = program.engine
+    values = program.evaluate(eng.state_of(model))
+    others = np.flatnonzero(~program.compiled)
+    if others.size:
+        ctx = OutputContext.of(model, reference, wheels, eng)
+        cache: dict[str, dict[str, float]] = {}
+        for k in others:
+            values[k] = _other(ctx, program.names[k], cache)
+    return values
+
+
+def program_batch(
+    program: OutputProgram,
+    model: Model,
+    states: State,
+    ok: Array | None = None,
+    reference: Model | None = None,
+    wheels: Mapping[str, WheelSpec] | None = None,
+) -> Array:
+    """Every output of ``program`` at each state of a batch (N, no; solver units; NaN where not
+    ``ok``): the compiled ones in one kernel call, the others per state (``model``: units and
+    structure of the states)."""
+    values = program.evaluate(states, ok)
+    others = np.flatnonzero(~program.compiled)
+    if others.size:
+        eng = program.engine
+        for i in range(values.shape[0]) if ok is None else np.flatnonzero(ok):
+            ctx = OutputContext.of(eng.model_of(states[i], model), reference, wheels, eng)
+            cache: dict[str, dict[str, float]] = {}
+            for k in others:
+                values[i, k] = _other(ctx, program.names[k], cache)
+    return values
 
 
 def first_order_of(model: Model, name: str) -> tuple[str, str] | None:
@@ -261,9 +315,9 @@ def evaluate_outputs(
     """
     to_model = check_units(units)
     eng = engine if engine is not None else compile_engine(model.mechanism)
-    ctx = OutputContext.of(model, reference, wheels, eng)
-    cache: dict[str, dict[str, float]] = {}
-    values = {n: _scalar(ctx, n, cache) for n in expand_outputs(model, names, eng)}
+    program = output_program(model, names, reference=reference, wheels=wheels, engine=eng)
+    got = program_values(program, model, reference, wheels)
+    values = dict(zip(program.names, (float(v) for v in got), strict=True))
     if to_model:
         values = {n: v * derivative_scale(model, n, eng) for n, v in values.items()}
     return values
@@ -277,7 +331,8 @@ def output_function(
     wheels: Mapping[str, WheelSpec] | None = None,
     engine: Engine | None = None,
 ) -> tuple[Callable[[Model], Array], list[str]]:
-    """``(f, expanded)``: ``f(model) -> array`` of the expanded outputs.
+    """``(f, expanded)``: ``f(model) -> array`` of the expanded outputs (``f.program``: the
+    :class:`~kinprop.analysis.program.OutputProgram`, for batches of states).
 
     Checked once, here: every output is evaluated at ``model`` (whether an output exists
     does not depend on the pose), so one that the model cannot give (a metric without the
@@ -285,20 +340,14 @@ def output_function(
     solve, instead of a blank column later.
     """
     eng = engine if engine is not None else compile_engine(model.mechanism)
-    expanded = expand_outputs(model, names, eng)
-
-    resolved: dict[str, tuple[str, str]] = {}  # metric names: the same wheel at every state
+    program = output_program(model, names, reference=reference, wheels=wheels, engine=eng)
 
     def f(m: Model) -> Array:
-        ctx = OutputContext.of(m, reference, wheels, eng)
-        cache: dict[str, dict[str, float]] = {}
-        return np.array([_scalar(ctx, n, cache, resolved) for n in expanded])
+        return program_values(program, m, reference, wheels)
 
-    ctx0 = OutputContext.of(model, reference, wheels, eng)
-    cache0: dict[str, dict[str, float]] = {}
-    for n in expanded:
-        _scalar(ctx0, n, cache0)
-    return f, expanded
+    f.program = program  # type: ignore[attr-defined]
+    f(model)
+    return f, list(program.names)
 
 
 def output_names(model: Model, engine: Engine | None = None) -> list[str]:
@@ -321,4 +370,13 @@ def output_names(model: Model, engine: Engine | None = None) -> list[str]:
     return names
 
 
-__all__ = ["OutputContext", "evaluate_outputs", "expand_outputs", "output_function", "output_names"]
+__all__ = [
+    "OutputContext",
+    "evaluate_outputs",
+    "expand_outputs",
+    "output_function",
+    "output_names",
+    "output_program",
+    "program_batch",
+    "program_values",
+]

@@ -10,7 +10,9 @@ column ``k`` the state moves along the direction ``e_k + S[:, k]`` (the design v
 itself plus the analytic free-variable response). The first-order metrics (gains, instant
 centres, roll-centre height, anti-dive/squat, motion ratios, wheel rate) are differentiated
 exactly along it (:func:`kinprop.analysis.outputs.first_order_derivatives`: the velocity
-state's analytic derivatives, :func:`kinprop.engine.motion.motion_derivatives`). Every other
+state's analytic derivatives, :func:`kinprop.engine.motion.motion_derivatives`), and so are
+the load outputs (``reaction:``, ``force:``, ``effort:``: the differentiated equilibrium,
+:mod:`kinprop.engine.statics_rates`, the direct method). Every other
 output function of the state (:mod:`kinprop.analysis.outputs`) is differenced centrally
 along that direction on the manifold (``retract``: additive for q, s', l; exponential map for
 C); coordinates and design variables are linear in the state, so for them the difference is
@@ -27,6 +29,7 @@ import numpy as np
 
 from kinprop.analysis.metrics import WheelSpec
 from kinprop.analysis.outputs import first_order_derivatives, first_order_of, output_function
+from kinprop.analysis.statics import is_load_output, load_derivatives
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine
 from kinprop.engine.units import check_units
@@ -45,11 +48,16 @@ RESIDUAL_WARN = 1e-6
 FD_STEP = 1e-6
 #: :func:`derivative_method` values
 EXACT, CENTRAL = "exact (analytic velocity derivatives)", "central difference of the output map along the exact tangent"
+#: a load output's method: the differentiated equilibrium (:mod:`kinprop.engine.statics_rates`)
+DIRECT = "exact (the differentiated equilibrium, direct method)"
 
 
 def derivative_method(model: Model, name: str) -> str:
     """How :func:`output_sensitivity` differentiates the expanded output ``name``: exactly for
-    the first-order metrics, by a central difference of the output map for the rest."""
+    the first-order metrics and the load outputs, by a central difference of the output map for
+    the rest."""
+    if is_load_output(name):
+        return DIRECT
     return EXACT if first_order_of(model, name) is not None else CENTRAL
 
 
@@ -100,7 +108,10 @@ def output_sensitivity_matrix(
     D = np.zeros((len(names), sens.wrt_columns.size))
     for i, row in exact.items():
         D[i] = row
-    rest = [i for i in range(len(names)) if i not in exact]
+    loads = [i for i, n in enumerate(names) if is_load_output(n)]
+    if loads:  # exact: the differentiated equilibrium (direct method)
+        D[loads] = load_derivatives(model, [names[i] for i in loads], directions.T, engine=engine, reference=reference)
+    rest = [i for i in range(len(names)) if i not in exact and i not in loads]
     if rest:
         f, _ = output_function(model, [names[i] for i in rest], reference=reference, wheels=wheels, engine=engine)
         for k, col in enumerate(sens.wrt_columns):
@@ -178,6 +189,7 @@ def output_sensitivity(
 
 __all__ = [
     "CENTRAL",
+    "DIRECT",
     "EXACT",
     "Sensitivity",
     "derivative_method",

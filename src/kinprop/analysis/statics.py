@@ -19,6 +19,10 @@ Sign conventions and units (force unit ``F`` = the model's ``units.force``, leng
   of a coil spring; the ``preload`` convention), ``f = k (L0 - L)`` from ``free_length``
   ``L0``, or ``preload + k (L_model - L)`` with ``L_model`` the length in the given model; a
   damper carries no force at rest.
+* **torsion spring** on a revolute joint's angle (``type: torsion``, an anti-roll bar's
+  twist): its torque ``T = k (free_angle - q)`` or ``preload + k (q_model - q)`` (``F L``;
+  ``k`` per the model's angle unit), positive turning body j towards increasing ``q``; its
+  "length" is the joint angle (the model's angle unit).
 * **effort** at a declared input: the generalised force the input applies to its coordinate
   to hold the pose, positive along increasing ``q``: a torque (``F L``) for an angle whatever
   the angle unit, a force for a slide. By virtual work ``effort = -sum F_k . dP_k/dq``.
@@ -28,6 +32,7 @@ Sign conventions and units (force unit ``F`` = the model's ``units.force``, leng
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -39,18 +44,23 @@ from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
 from kinprop.engine.motion import motion_state
 from kinprop.engine.statics import (
+    Law,
     PointForces,
     StaticsState,
+    TorsionLaw,
     distance_rows,
     element_laws,
     element_state,
     reduced_stiffness,
     statics_state,
 )
+from kinprop.engine.statics_rates import StaticsRates, statics_rates
 from kinprop.engine.status import Status
+from kinprop.engine.units import address_scale
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.loads import LoadCase, PointLoad
+from kinprop.propagation.sensitivity import design_sensitivity
 from kinprop.spatial import Array
 
 COMPONENTS = ("fx", "fy", "fz", "mx", "my", "mz")
@@ -173,6 +183,22 @@ class Statics:
         return "\n".join(lines)
 
 
+def _angle_unit(model: Model) -> float:
+    """Radians per unit of the model's angles."""
+    return math.pi / 180.0 if model.units.get("angle") == "deg" else 1.0
+
+
+def model_laws(model: Model, engine: Engine, reference: Any, at_pose: bool = False) -> tuple[list[Law], list[bool]]:
+    """The force laws of the model's elements and torsion springs (preloads at the state
+    ``reference``) and, per law, whether its force is held at its preload whatever the pose
+    (``at_pose``: the preload is at the analysed pose itself, so a change of the pose moves the
+    free length with it)."""
+    laws = element_laws(engine, model.elements, reference, model.torsion_springs, _angle_unit(model))
+    held = [at_pose and e.has_spring and e.free_length is None for e in model.elements]
+    held += [at_pose and t.free_angle is None for t in model.torsion_springs]
+    return laws, held
+
+
 def input_columns(engine: Engine, inputs: Sequence[str]) -> tuple[list[int], list[str]]:
     """Layout q columns and their addresses of driven inputs (``JOINT`` or ``JOINT.q[k]``)."""
     cols, names = [], []
@@ -201,6 +227,7 @@ def _point(model: Model, body: str, point: str | Sequence[float]) -> Array:
 def applied_points(model: Model, engine: Engine, r: Array, A: Array, case: LoadCase | None) -> PointForces:
     """The loads of a case as forces and couples at body points, global axes at poses ``r``, ``A``."""
     body, Ps, Fs, Ms, follows = [], [], [], [], []
+    wheel_of: list[tuple[float, Array, Array, bool]] = []  # (radius, centre, unit axis, SAE) or radius 0
     if case is None:
         return PointForces.empty()
     names = set(model.mechanism.body_names)
@@ -210,6 +237,8 @@ def applied_points(model: Model, engine: Engine, r: Array, A: Array, case: LoadC
             raise AddressError(f"unknown body {b_name!r}; bodies are {', '.join(model.mechanism.body_names)}")
         body.append(engine.body_index[b_name])
         Ps.append(P), Fs.append(F), Ms.append(M), follows.append(turns)
+        if len(wheel_of) < len(body):
+            wheel_of.append((0.0, np.zeros(3), np.zeros(3), False))
 
     for ld in case.forces:
         b = engine.body_index.get(ld.body, -1)
@@ -232,6 +261,7 @@ def applied_points(model: Model, engine: Engine, r: Array, A: Array, case: LoadC
         centre = r[b] + A[b] @ _point(model, wheel, "wheel_centre")
         axis = r[b] + A[b] @ _point(model, wheel, "spin_axis") - centre
         F = np.asarray(force, float) * (np.array([1.0, -1.0, -1.0]) if sae else 1.0)
+        wheel_of.append((float(radius), centre, axis / np.linalg.norm(axis), sae))
         if sae:  # down is +z: the lowest point of the wheel circle in the z-mirrored axes, mirrored back
             flip = np.array([1.0, 1.0, -1.0])
             add(wheel, flip * contact_point(flip * centre, flip * axis, radius), F, np.zeros(3))
@@ -242,10 +272,13 @@ def applied_points(model: Model, engine: Engine, r: Array, A: Array, case: LoadC
         for m in model.loads.masses if model.loads is not None else ():
             b = engine.body_index[m.body]
             add(m.body, r[b] + A[b] @ _point(model, m.body, m.cm), m.weight * g, np.zeros(3))
-    z = np.zeros((0, 3))
-    return PointForces(np.array(body, np.int64), np.array(Ps).reshape(-1, 3) if Ps else z,
-                       np.array(Fs).reshape(-1, 3) if Fs else z, np.array(Ms).reshape(-1, 3) if Ms else z,
-                       np.array(follows, bool))  # fmt: skip
+
+    def stack(x: list) -> Array:
+        return np.array(x, dtype=float).reshape(-1, 3)
+
+    return PointForces(np.array(body, np.int64), stack(Ps), stack(Fs), stack(Ms), np.array(follows, bool),
+                       np.array([w[0] for w in wheel_of]), stack([w[1] for w in wheel_of]),
+                       stack([w[2] for w in wheel_of]), np.array([w[3] for w in wheel_of], bool))  # fmt: skip
 
 
 def applied_wrenches(model: Model, engine: Engine, r: Array, A: Array, case: LoadCase | None) -> Array:
@@ -285,7 +318,7 @@ def statics(
     r, A, _, _ = eng.poses(st)
     W = applied_wrenches(model, eng, r, A, case)
     cols, names = input_columns(eng, model.mechanism.inputs if inputs is None else inputs)
-    laws = element_laws(eng, model.elements, st if reference is None else eng.state_of(reference))
+    laws, _ = model_laws(model, eng, st if reference is None else eng.state_of(reference), reference is None)
     ss = statics_state(eng, st, W, cols, laws)
     mech = model.mechanism
     reactions = {}
@@ -305,16 +338,89 @@ def statics(
         elif j.jtype.name == "distance":  # a distance joint in the tree: the force along its line
             u = ss.P[k, 1] - ss.P[k, 0]
             members[j.name] = float(-ss.at_point[k, 1, :3] @ u / np.linalg.norm(u))
-    ef = {e.name: float(ss.element_force[k]) for k, e in enumerate(model.elements)}
-    el = {e.name: float(ss.element_length[k]) for k, e in enumerate(model.elements)}
+    named = [*model.elements, *model.torsion_springs]
+    angle = _angle_unit(model)
+    ef = {e.name: float(ss.element_force[k]) for k, e in enumerate(named)}
+    el = {e.name: float(ss.element_length[k]) / (angle if e.kind == "torsion" else 1.0) for k, e in enumerate(named)}
     efforts = {n: float(ss.efforts[k]) for k, n in enumerate(names)}
     return Statics(model, eng, ss, case.name if case else None, reactions, members, ef, el, efforts,
                    tuple(undetermined))  # fmt: skip
 
 
+# --- design derivatives ------------------------------------------------------------------------
+def _rate(s: Statics, rates: StaticsRates, name: str) -> Array:
+    """(K,) rate of the load output ``name`` (no ``@CASE``) along the directions of ``rates``."""
+    s.value(name)  # the output exists (AddressError naming what does otherwise)
+    kind, _, rest = name.partition(":")
+    mech = s.model.mechanism
+    if kind == "reaction":
+        joint, _, comp = rest.partition(".")
+        k = mech.joint_names.index(joint)
+        local = comp.startswith("local.")
+        comp = comp[len("local.") :] if local else comp
+        arr, now = (rates.local, s.state.local) if local else (rates.at_point, s.state.at_point)
+        if comp == "f":
+            F = now[k, 1, :3]
+            return arr[:, k, 1, :3] @ F / float(np.linalg.norm(F))
+        return arr[:, k, 1, COMPONENTS.index(comp)]
+    if kind == "force":
+        if rest in s.element_forces:
+            return rates.element_force[:, list(s.element_forces).index(rest)]
+        k = mech.joint_names.index(rest)
+        if not np.isnan(s.state.member[k]):  # a cut joint's rod
+            return rates.member[:, k]
+        # a distance joint in the tree: -F_j . u / |u|
+        u = s.state.P[k, 1] - s.state.P[k, 0]
+        du = rates.point_rates[:, k, 1] - rates.point_rates[:, k, 0]
+        n = float(np.linalg.norm(u))
+        F = s.state.at_point[k, 1, :3]
+        return -(rates.at_point[:, k, 1, :3] @ u + du @ F - (du @ u) * (F @ u) / n**2) / n
+    key = rest if "." in rest else f"{rest}.q"
+    return rates.efforts[:, list(s.efforts).index(key)]
+
+
+def load_derivatives(
+    model: Model,
+    names: Sequence[str],
+    directions: Array,
+    *,
+    engine: Engine | None = None,
+    reference: Model | None = None,
+    inputs: Sequence[str] | None = None,
+    loads: str | LoadCase | PointLoad | Sequence[PointLoad] | None = None,
+) -> Array:
+    """(len(names), K): exact rates of the load outputs ``NAME[@CASE]`` (with ``loads``: every
+    name under those loads, as :func:`statics` takes them) along ``directions``
+    (K, n_columns), state directions tangent to the constraints (e.g. a design column plus the
+    coordinates' response, :func:`kinprop.analysis.sensitivity.output_sensitivity`), in solver
+    units, by the direct method of :mod:`kinprop.engine.statics_rates`. Preloads as
+    :func:`statics` takes them: at ``reference``'s pose, else at the model's own pose (then the
+    element's force stays its preload); held by ``inputs`` (default: the declared ones)."""
+    eng = engine or compile_engine(model)
+    st = eng.state_of(model)
+    X = np.atleast_2d(np.asarray(directions, dtype=float))
+    out = np.zeros((len(names), X.shape[0]))
+    r, A, _, _ = eng.poses(st)
+    r, A = np.array(r), np.array(A)
+    cols, _ = input_columns(eng, model.mechanism.inputs if inputs is None else inputs)
+    laws, held = model_laws(model, eng, st if reference is None else eng.state_of(reference), reference is None)
+    by_case: dict[str, list[int]] = {}
+    for i, n in enumerate(names):
+        by_case.setdefault(n.partition("@")[2], []).append(i)
+    for case_name, rows in by_case.items():
+        case = _case(model, loads if loads is not None else case_name or None)
+        s = statics(model, case, inputs=inputs, engine=eng, reference=reference)
+        rates = statics_rates(eng, st, applied_points(model, eng, r, A, case), X, cols, laws, held)
+        for i in rows:
+            out[i] = _rate(s, rates, names[i].partition("@")[0])
+    return out
+
+
 # --- static equilibrium and wheel rate --------------------------------------------------------
 #: Newton on the reduced equilibrium: converged when |tau| < EQ_TOL * (force scale x length scale)
 EQ_TOL, EQ_MAX_ITER, EQ_TRUST = 1e-12, 50, 0.35
+#: relative singular value of the weighted stiffness below which a direction is neutral
+EQ_RCOND = 1e-10
 
 
 @dataclass(frozen=True)
@@ -341,9 +447,10 @@ class Equilibrium:
 
 def _tau_scale(pf: PointForces, laws: Sequence[Any], model: Model, eng: Engine, st: Any) -> float:
     L = eng.length_scale or eng._length_scale(st)
-    r, A, _, _ = eng.poses(st)
-    f_el = np.abs(element_state(laws, np.array(r), np.array(A))[0]).sum()
-    return float((np.abs(pf.F).sum() + f_el) * L + np.abs(pf.M).sum()) or 1.0
+    r, A, P, R = (np.array(x) for x in eng.poses(st))
+    f = np.abs(element_state(laws, r, A, st.Q, P, R)[0])
+    arm = np.array([1.0 if isinstance(e, TorsionLaw) else L for e in laws])
+    return float(np.abs(pf.F).sum() * L + float(f @ arm) + np.abs(pf.M).sum()) or 1.0
 
 
 def equilibrium(
@@ -354,19 +461,26 @@ def equilibrium(
     tol: float = EQ_TOL,
     max_iter: int = EQ_MAX_ITER,
     engine: Engine | None = None,
+    weights: Mapping[str, float] | None = None,
 ) -> Equilibrium:
     r"""The static equilibrium of the spring-supported ``model`` under ``loads`` with the
     ``release``\ d inputs (default: the declared inputs) free: Newton on ``tau(q_D) = 0`` with
     the exact tangent stiffness (:func:`kinprop.engine.statics.reduced_stiffness`), each step
     re-assembled on the start's branch (``Engine.propagate``), steps limited to a trust radius.
-    Preloads are taken at the given model's pose."""
+    Least change, as in propagation: each step is the minimum-norm solution of ``K dq = -tau``
+    in the propagation's metric ``sum (si_k dq_k)^2 / w_k`` (changes in metres and radians,
+    ``weights`` by address as ``propagate`` takes them), so where the loads leave the pose
+    undetermined (a neutral direction, ``K`` singular) the released inputs move as little as
+    the metric allows. Preloads are taken at the given model's pose."""
     eng = engine or compile_engine(model)
     st0 = eng.state_of(model)
     case = _case(model, loads)
     names = list(model.mechanism.inputs if release is None else release)
     cols, addresses = input_columns(eng, names)
     labels = eng.column_labels
-    laws = element_laws(eng, model.elements, st0)
+    laws, _ = model_laws(model, eng, st0)
+    w = eng.weights_for(np.array(cols, np.int64), weights)
+    w_half = np.sqrt(w) if w is not None else np.ones(len(cols))
     st, status, message, K, it = st0, Status.NOT_CONVERGED, "", np.zeros((len(cols), len(cols))), 0
     for it in range(1, max_iter + 1):
         r, A, _, _ = eng.poses(st)
@@ -378,7 +492,7 @@ def equilibrium(
         if float(np.max(np.abs(tau), initial=0.0)) <= tol * _tau_scale(pf, laws, model, eng, st):
             status, message = Status.CONVERGED, f"converged in {it - 1} step(s)"
             break
-        dq = -np.linalg.lstsq(K, tau, rcond=None)[0]
+        dq = -w_half * np.linalg.lstsq(K * w_half[None, :], tau, rcond=EQ_RCOND)[0]
         size = float(np.max(np.abs(dq * eng.col_scale[cols])))
         if size > EQ_TRUST:
             dq *= EQ_TRUST / size
@@ -394,6 +508,42 @@ def equilibrium(
     s = statics(at, case, inputs=names, engine=eng, reference=model)
     stable = bool(np.all(np.linalg.eigvalsh(0.5 * (K + K.T)) > 0)) if K.size else True
     return Equilibrium(status, message, at, s, it, tuple(addresses), K, stable)
+
+
+def equilibrium_sensitivity(
+    eq: Equilibrium,
+    wrt: Sequence[str],
+    loads: str | LoadCase | PointLoad | Sequence[PointLoad] | None = None,
+    *,
+    reference: Model | None = None,
+    engine: Engine | None = None,
+) -> tuple[Array, list[str], list[str]]:
+    """``(D, released, columns)``: exact derivatives of the equilibrium's released inputs with
+    respect to the design columns ``wrt``, in the model's units. At equilibrium ``tau(q_D, p) =
+    0``, so ``dq_D/dp = -K^-1 dtau/dp``: ``K`` the reduced tangent stiffness
+    (:func:`equilibrium`) and ``dtau/dp`` the efforts' design derivatives with the inputs held
+    (:func:`kinprop.engine.statics_rates.statics_rates` along ``e_p + dq/dp``, the other
+    coordinates' response by the implicit-function theorem). ``loads`` as the equilibrium
+    took them; preloads at ``reference``'s pose (the model the equilibrium started from;
+    default: the equilibrium's own)."""
+    model = eq.model
+    eng = engine or compile_engine(model)
+    st = eng.state_of(model)
+    cols, names = input_columns(eng, list(eq.released))
+    labels = eng.column_labels
+    held = [labels[c] for c in range(eng.n_coordinates) if c not in cols]
+    sens = design_sensitivity(model, wrt, held, engine=eng, units="solver")
+    X = np.zeros((sens.wrt_columns.size, eng.n_columns))
+    X[np.arange(sens.wrt_columns.size), sens.wrt_columns] = 1.0
+    X[:, sens.free_columns] = sens.matrix.T
+    r, A, _, _ = eng.poses(st)
+    pf = applied_points(model, eng, np.array(r), np.array(A), _case(model, loads))
+    laws, _ = model_laws(model, eng, st if reference is None else eng.state_of(reference))
+    dtau = statics_rates(eng, st, pf, X, cols, laws).efforts  # (K, nd)
+    D = -np.linalg.solve(eq.stiffness, dtau.T)
+    so = np.array([address_scale(model, n, eng) for n in names])
+    si = np.array([address_scale(model, c, eng) for c in sens.columns])
+    return D * so[:, None] / si[None, :], list(names), list(sens.columns)
 
 
 def wheel_rate(
@@ -426,7 +576,7 @@ def wheel_rate(
     r, A, _, _ = eng.poses(st)
     r, A = np.array(r), np.array(A)
     pf = applied_points(model, eng, r, A, _case(model, loads))
-    tau, K, msg = reduced_stiffness(eng, st, pf, cols, element_laws(eng, model.elements, st))
+    tau, K, msg = reduced_stiffness(eng, st, pf, cols, model_laws(model, eng, st)[0])
     if msg != "ok":
         return float("nan")
     ms = motion_state(eng, st, {eng.column_labels[cols[0]]: 1.0}, {})
@@ -452,6 +602,8 @@ def load_output_unit(model: Model, name: str) -> str:
     base = name.partition("@")[0]
     if base.startswith("reaction:") and base.rsplit(".", 1)[-1] in ("mx", "my", "mz"):
         return f"{F} {L}"
+    if base.startswith("force:") and base[len("force:") :] in {t.name for t in model.torsion_springs}:
+        return f"{F} {L}"  # a torsion spring's torque
     if base.startswith("effort:"):
         joint = base[len("effort:") :].split(".")[0]
         if joint in model.mechanism.joint_names and model.mechanism.joint(joint).jtype.angle_indices:
@@ -488,8 +640,10 @@ __all__ = [
     "Statics",
     "applied_wrenches",
     "equilibrium",
+    "equilibrium_sensitivity",
     "input_columns",
     "is_load_output",
+    "load_derivatives",
     "load_output_unit",
     "load_value",
     "statics",

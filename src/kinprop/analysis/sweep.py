@@ -46,7 +46,7 @@ import numpy as np
 
 from kinprop.analysis.drives import ROLL, STEER, DrivenOutputs, augment, expand_driven, is_drive, is_driven, wheel_for
 from kinprop.analysis.metrics import metric_names
-from kinprop.analysis.outputs import evaluate_outputs, expand_outputs, output_function
+from kinprop.analysis.outputs import evaluate_outputs, expand_outputs, output_function, program_batch
 from kinprop.analysis.units import derivative_scale, unit_of
 from kinprop.engine import Engine, Solution, State, Status
 from kinprop.engine import compile as compile_engine
@@ -484,7 +484,6 @@ def sweep(
     columns = list(dict.fromkeys(["step", *drive_cols, *META[1:], *(c for c, *_ in coord_cols), *expanded, *driven,
                                   "message"]))  # fmt: skip
     rows: list[dict[str, Any]] = []
-    good = user
     sink = (
         open_sink(output, columns, labels=header_labels(model, columns, engine))
         if isinstance(output, (str, Path))
@@ -493,8 +492,19 @@ def sweep(
     free_set = free_addresses(engine, free)
     drive_values = np.column_stack([d.values * (f if d.angle else 1.0) for d, f in zip(dr, to_solver, strict=True)])
 
-    def emit(k: int, status: Status, iterations: int, residual: float, message: str, state: State | None) -> None:
-        nonlocal good
+    program = fout.program  # type: ignore[attr-defined]
+    qcol = {col: engine.layout[f"{joint}.q"].start + idx for col, joint, idx, _ in coord_cols}
+    last: list[State] = []  # the last converged step's state (its model is built once, at the end)
+
+    def outputs_of(states: State, ok: Array) -> Array | None:
+        """Every step's outputs in one compiled call (None: one of them fails at some step)."""
+        try:
+            return None if drv is not None else program_batch(program, model, states, ok)
+        except Exception:  # one output that cannot be evaluated there: never blank the others
+            return None
+
+    def emit(k: int, status: Status, iterations: int, residual: float, message: str, state: State | None,
+             values: Array | None) -> None:  # fmt: skip
         row: dict[str, Any] = dict.fromkeys(columns, float("nan"))
         row.update({"step": k, **{d.label: float(d.values[k]) for d in dr}})
         converged = status is Status.CONVERGED and state is not None
@@ -513,21 +523,26 @@ def sweep(
             }
         )
         if converged:
-            good = engine.model_of(state, model) if drv is None else drv.base_of(engine, state)
-            for col, joint, idx, deg in coord_cols:
+            last[:] = [state]
+            for col, _, _, deg in coord_cols:
                 if col in drive_cols:
                     continue  # the driven value exactly as given (not degrees -> radians -> degrees)
-                val = float(np.atleast_1d(good.coordinates[joint])[idx])
+                val = float(state.Q[qcol[col]])
                 row[col] = val * to_model[col] if deg else val
-            try:
-                values = fout(good)
-                row.update(
-                    zip(expanded, (float(values[i]) * s for i, s in zip(keep, out_scale, strict=True)), strict=True)
-                )
-            except Exception:  # one output that cannot be evaluated here: never blank the others
-                row.update(_each_output(good, names, expanded, out_scale, user_engine, message))
+            # with a drive joint: the outputs of the user's model (no drive joints) at this state
+            view = engine.model_of(state, model) if drv is None else drv.base_of(engine, state)
+            if values is not None:
+                row.update(zip(expanded, (float(values[i]) * s for i, s in zip(keep, out_scale, strict=True)),
+                               strict=True))  # fmt: skip
+            else:
+                try:
+                    got = fout(view)
+                    row.update(zip(expanded, (float(got[i]) * s for i, s in zip(keep, out_scale, strict=True)),
+                                   strict=True))  # fmt: skip
+                except Exception:  # one output that cannot be evaluated here: never blank the others
+                    row.update(_each_output(view, names, expanded, out_scale, user_engine, message))
             if at is not None:  # outputs at a drive position: from this step, one engine solve each
-                row.update({n: float(v[0]) * driven_scale[n] for n, v in at.values([good]).items()})
+                row.update({n: float(v[0]) * driven_scale[n] for n, v in at.values([view]).items()})
         rows.append(row)
         if sink is not None:
             sink.write(row)
@@ -540,7 +555,10 @@ def sweep(
         sol = solve_changes(engine, model, first, free, tol=tol, max_iter=max_iter, units="solver")
         cols = sol.free if sol.free.size else engine.free_columns(free_set, [d.address for d in dr])
         note = _diagnosis(model, sol, free) if continuation and not sol.converged else "; ".join(sol.notes)
-        emit(0, sol.status, sol.iterations, sol.residual, note or sol.message, sol.state if sol.converged else None)
+        one = State(*(getattr(sol.state, a)[None] for a in "QSCL"))
+        values0 = outputs_of(one, np.ones(1, bool)) if sol.converged else None
+        emit(0, sol.status, sol.iterations, sol.residual, note or sol.message, sol.state if sol.converged else None,
+             None if values0 is None else values0[0])  # fmt: skip
         start = sol.state if sol.converged else engine.state_of(model)
         addresses = [d.address for d in dr]
         # later steps: the engine's compiled sequence, each from the last good step on its branch,
@@ -548,6 +566,7 @@ def sweep(
         for k0 in range(1, n_steps, SEQUENCE_CHUNK):
             k1 = min(n_steps, k0 + SEQUENCE_CHUNK)
             _, seq = engine.solve_sequence(start, addresses, drive_values[k0:k1], cols, tol=tol, max_iter=max_iter)
+            values = outputs_of(seq.state, seq.converged)
             for i in range(k1 - k0):
                 st = seq.state[i]
                 status = seq.status(i)
@@ -561,7 +580,7 @@ def sweep(
                 else:
                     note = ""
                 emit(k0 + i, status, seq.iterations[i], seq.residual[i], note or seq.message(i),
-                     st if status is Status.CONVERGED else None)  # fmt: skip
+                     st if status is Status.CONVERGED else None, None if values is None else values[i])  # fmt: skip
     finally:
         if sink is not None:
             sink.close()
@@ -573,6 +592,10 @@ def sweep(
     frame.attrs["column_units"] = {
         c: u for c in columns if c not in (*META, "message") and (u := unit_of(model, c, engine))
     }
+    if not last:
+        good = user
+    else:
+        good = engine.model_of(last[0], model) if drv is None else drv.base_of(engine, last[0])
     return SweepResult(frame, dr, expanded + driven, good)
 
 

@@ -90,6 +90,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "Joint reactions, member forces (tension positive), spring and damper forces (positive pushing apart) "
         "and the efforts that hold the inputs, at the model's assembled pose.",
     ),
+    "report": (
+        "kinprop.cli.report",
+        "Write a self-contained HTML report: the global hardpoints and the default curves.",
+    ),
     "serve": (
         "kinprop.cli.serve",
         "Start the design-propagation workbench in the browser (edit, propagate, sweep, undo).",

@@ -26,10 +26,21 @@ def check_tol(tol: float, option: str = "--tol") -> None:
         raise AddressError(f"{option} {tol!r}: expected a positive finite number (e.g. 1e-10)")
 
 
-def check_method(method: str) -> None:
-    """``--method``: ``least-change`` or ``paper`` (``kinprop.engine.METHODS``)."""
-    if method not in ("least-change", "paper"):
+#: ``assemble``/``propagate``'s tolerance when no ``--tol`` is given: a true assembly
+DEFAULT_TOL = 1e-10
+
+
+def method_and_tol(method: str | None, tol: float | None) -> tuple[str, float]:
+    """``--method`` and ``--tol`` of ``assemble``/``propagate`` (docs/analysis/weights.md): a
+    method given is used (``least-change`` or ``paper``, ``kinprop.engine.METHODS``). Without
+    one, a ``--tol`` given is the paper's stopping rule ``||Phi|| < TOL``, which defines the
+    paper's iteration's end point, so it selects ``paper``; no ``--tol`` either: the least
+    change (the closest assembly, which no tolerance defines) to :data:`DEFAULT_TOL`."""
+    if method is not None and method not in ("least-change", "paper"):
         raise AddressError(f"--method {method!r}: expected least-change or paper")
+    if tol is not None:
+        check_tol(tol)
+    return method or ("least-change" if tol is None else "paper"), DEFAULT_TOL if tol is None else tol
 
 
 def check_int(option: str, value: int, low: int, high: int) -> None:
@@ -91,6 +102,7 @@ def check_suffix(option: str, path: Path | None, suffixes: Sequence[str]) -> Non
 
 
 __all__ = [
+    "DEFAULT_TOL",
     "MAX_ITER",
     "MAX_SAMPLES",
     "check_int",
@@ -98,4 +110,5 @@ __all__ = [
     "check_set_not_free",
     "check_suffix",
     "check_tol",
+    "method_and_tol",
 ]

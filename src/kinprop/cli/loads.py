@@ -136,6 +136,10 @@ def loads(
         bool,
         typer.Option("--equilibrium", help="first find the pose where the springs hold the loads (inputs released)"),
     ] = False,
+    plot: Annotated[
+        Path | None,
+        typer.Option("--plot", help="draw the forces as arrows on the mechanism (.png; red tension, blue compression)"),
+    ] = None,
 ) -> None:
     """Joint reactions, member forces (tension positive), spring and damper forces (positive
     pushing apart) and the efforts that hold the inputs, at the model's assembled pose.
@@ -144,7 +148,8 @@ def loads(
     A redundant mechanism's undetermined reaction components are named and shown as nan.
     """
     check_suffix("--csv", csv, (".csv",))
-    check_outputs([model], [("--csv", csv)])
+    check_suffix("--plot", plot, (".png",))
+    check_outputs([model], [("--csv", csv), ("--plot", plot)])
     m = load_model_cli(model)
     case = build_case(m, load_case, wheel, force, moment, gravity)
     asm = assemble(m, tol=tol)
@@ -161,6 +166,13 @@ def loads(
     s = statics(at, case, inputs=input_ or None, reference=asm.after)
     if csv is not None and s.ok:
         atomic_write(csv, statics_csv(s))
+    if plot is not None and s.ok:
+        from kinprop.plot import layers
+        from kinprop.plot.forces import force_arrows
+        from kinprop.plot.static import render_png
+
+        title = f"{at.mechanism.name}: load case {s.case or '(elements only)'}"
+        atomic_write(plot, render_png(layers(at), title, arrows=force_arrows(s, case), force_unit=s.units["force"]))
     rate = _wheel_rate(at, input_) if equilibrium_ else None
     if json_out:
         data = statics_json(s)
@@ -221,8 +233,10 @@ def _print(s: Statics) -> None:
         t.add_column("force", justify="right")
         for n, v in s.member_forces.items():
             t.add_row(n, "member", f"{v:.6g}")
+        kinds = {e.name: e.kind for e in (*s.model.elements, *s.model.torsion_springs)}
         for n, v in s.element_forces.items():
-            t.add_row(n, s.model.element(n).kind, f"{v:.6g}")
+            unit = f" {u['moment']}" if kinds[n] == "torsion" else ""
+            t.add_row(n, kinds[n], f"{v:.6g}{unit}")
         out.print(t)
     for a, v in s.efforts.items():
         jt = s.model.mechanism.joint(a.split(".")[0]).jtype

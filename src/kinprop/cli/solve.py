@@ -25,11 +25,11 @@ from kinprop.cli.app import (
 from kinprop.cli.checks import (
     MAX_ITER,
     check_int,
-    check_method,
     check_outputs,
     check_set_not_free,
     check_suffix,
     check_tol,
+    method_and_tol,
 )
 from kinprop.cli.continuation import run_propagation, shown_warnings
 from kinprop.cli.targets import run_targets
@@ -45,15 +45,22 @@ from kinprop.propagation.hardpoints import free_addresses, free_weights, is_glob
 from kinprop.propagation.propagate import hold as hold_joints
 from kinprop.propagation.propagate import shown, unit_text
 
-Tol = Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL (the paper used 1e-3)")]
+Tol = Annotated[
+    float | None,
+    typer.Option(
+        "--tol",
+        help="stop when ||Phi||_2 < TOL (default 1e-10); given without --method it is the paper's stopping rule "
+        "and selects --method paper (with 1e-3: the paper's tables)",
+    ),
+]
 MaxIter = Annotated[int, typer.Option("--max-iter", help="maximum Newton iterations")]
 Method = Annotated[
-    str,
+    str | None,
     typer.Option(
         "--method",
         help="with freedom left: least-change (the assembly closest to the start, in metres and radians, scaled "
-        "by --weight) or paper (the end point of the paper's generalized-inverse iteration; with --tol 1e-3 "
-        "its tables)",
+        "by --weight; the default) or paper (the end point of the paper's generalized-inverse iteration; the "
+        "default when --tol is given)",
     ),
 ]
 Output = Annotated[Path | None, typer.Option("-o", "--output", help="write the resulting model (full precision)")]
@@ -149,7 +156,7 @@ def report(
             out.print(comparison_table(prop, title))
             out.print(
                 f"free: {' '.join(prop.free)}   rank {r.rank} of {prop.engine.n_rows} equations, "
-                f"{r.free.size} free columns"
+                f"{r.free.size} free columns   method {r.method}"
             )
             out.print(f"||Phi|| history: {'  '.join(f'{x:.6g}' for x in r.residual_history)}")
         out.print(r.message, style="green" if r.converged else "red")
@@ -165,19 +172,19 @@ def report(
 @handles_user_errors
 def assemble(
     model: Annotated[Path, typer.Argument(help="model file (YAML or JSON)")],
-    tol: Tol = 1e-10,
+    tol: Tol = None,
     max_iter: MaxIter = 50,
     free: FreeOption = None,
     output: Output = None,
     as_json: Json = False,
     csv: Csv = None,
     plot: Plot = None,
-    method: Method = "least-change",
+    method: Method = None,
 ) -> None:
     """Solve for the joint coordinates from the model's estimates (with freedom left: the
     assembly closest to them)."""
+    method, tol = method_and_tol(method, tol)
     check_report_options(model, output, csv, plot, tol, max_iter)
-    check_method(method)
     m = load_model_cli(model)
     with shown_warnings():
         prop = propagate(m, {}, tuple(free or ["q"]), tol=tol, max_iter=max_iter, method=method)
@@ -199,7 +206,7 @@ def propagate_cmd(
     free: FreeOption = None,
     hold: HoldOption = None,
     weight: WeightOption = None,
-    tol: Tol = 1e-10,
+    tol: Tol = None,
     max_iter: MaxIter = 50,
     output: Output = None,
     as_json: Json = False,
@@ -214,12 +221,12 @@ def propagate_cmd(
         typer.Option("--target", help="OUTPUT[@COND]=VALUE[UNIT], e.g. metric:camber@travel=50mm=-1.5deg"),
     ] = None,
     quiet: Annotated[bool, typer.Option("-q", "--quiet", help="print only the outcome line (no table)")] = False,
-    method: Method = "least-change",
+    method: Method = None,
 ) -> None:
     """Change design variables and re-assemble, moving only the free variables; with
     --target, find the smallest change of the --free design variables meeting the targets."""
+    method, tol = method_and_tol(method, tol)
     check_report_options(model, output, csv, plot, tol, max_iter)
-    check_method(method)
     given = parse_assignments("--set", set_)
     check_set_not_free(given, free)
     weights = parse_weights(weight)

@@ -13,6 +13,7 @@ import numpy as np
 import typer
 from rich.table import Table
 
+from kinprop.analysis.study import CHUNK_SIZE
 from kinprop.cli.app import (
     EXIT_NOT_CONVERGED,
     app,
@@ -82,7 +83,14 @@ def study_cmd(
         str | None, typer.Option("--scheduler", help="Dask scheduler address, tcp://host:8786")
     ] = None,
     resume: Annotated[bool, typer.Option("--resume", help="complete an interrupted study in OUTPUT")] = False,
-    chunk_size: Annotated[int, typer.Option("--chunk-size", help="variants per chunk (one Parquet part each)")] = 256,
+    chunk_size: Annotated[
+        int | None,
+        typer.Option(
+            "--chunk-size",
+            help=f"variants per chunk (one batch solve, one Parquet part each); default "
+            f"{CHUNK_SIZE}, on a cluster about four chunks per worker",
+        ),
+    ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print a JSON summary")] = False,
     engine: Annotated[
         str, typer.Option("--engine", help="auto (compiled when possible), fast (compiled) or reference (numpy)")
@@ -92,7 +100,8 @@ def study_cmd(
     check_tol(tol)
     check_int("--max-iter", max_iter, 1, MAX_ITER)
     check_int("--samples", samples, 1, MAX_SAMPLES)
-    check_int("--chunk-size", chunk_size, 1, MAX_SAMPLES)
+    if chunk_size is not None:
+        check_int("--chunk-size", chunk_size, 1, MAX_SAMPLES)
     if method not in ("grid", "lhs", "mc"):
         raise AddressError(f"--method {method!r}: expected grid, lhs or mc")
     if engine not in ("auto", "fast", "reference"):
@@ -129,44 +138,43 @@ def study_cmd(
         values = sample_plan(factors, method, samples, seed)
         addresses, plan = global_plan(compiled, compiled.reference, [f.address for f in factors], values)
     try:
-        frame = run_study(
+        totals = run_study(
             m, factors, method=method, samples=samples, seed=seed, free=tuple(free or ["q"]), sets=sets,
             outputs=out_names, tol=tol, max_iter=max_iter, chunk_size=chunk_size, output=output, resume=resume,
             scheduler=scheduler, progress=not as_json, plan=plan, addresses=addresses, engine=engine,
             scale=model_unit_scale(m, [f.address for f in factors], out_names, compiled), units="solver",
-            compiled=compiled, given=None if plan is None else ([f.address for f in factors], values),
+            compiled=compiled, given=None if plan is None else ([f.address for f in factors], values), collect=False,
         )  # fmt: skip
     except (KeyboardInterrupt, SystemError) as exc:
         if not is_interrupt(exc):
             raise
         err.print(f"interrupted: finished chunks are kept in {output!s}; run again with --resume")
         raise typer.Exit(interrupt_status(exc)) from None
-    n_failed = int((~frame["converged"]).sum()) if len(frame) else 0
+    n_failed = totals.failed
     if as_json:
-        print_json({"variants": len(frame), "failed": n_failed, "output": str(output)})
+        print_json({"variants": totals.variants, "failed": n_failed, "output": str(output)})
     else:
-        out.print(f"{len(frame)} variants, {n_failed} failed; wrote {output!s}/ (read with pandas.read_parquet)")
-        if len(frame):
-            out.print(_summary(frame, [f.address for f in factors], out_names or []))
+        out.print(f"{totals.variants} variants, {n_failed} failed; wrote {output!s}/ (read with pandas.read_parquet)")
+        if totals.variants:
+            out.print(_summary(totals, [f.address for f in factors], out_names or []))
     if n_failed:
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
-def _summary(frame, inputs: list[str], outputs: list[str], limit: int = 12) -> Table:
+def _summary(totals, inputs: list[str], outputs: list[str], limit: int = 12) -> Table:
     """min/mean/max of the converged variants: the factors, the requested outputs (all of
     them), iterations and residual, then up to ``limit`` other columns, each once."""
     t = Table(title="study summary (converged variants)", title_justify="left")
     for c in ("column", "min", "mean", "max"):
         t.add_column(c, justify="left" if c == "column" else "right")
-    ok = frame[frame["converged"]]
-    skip = {"variant", "converged", "status"}
-    asked = [c for o in outputs for c in frame.columns if c == o or c.startswith(f"{o}[")]
+    columns = list(totals.columns)
+    asked = [c for o in outputs for c in columns if c == o or c.startswith(f"{o}[")]
     head = [*inputs, *asked, "iterations", "residual"]
-    rest = [c for c in frame.columns if c not in skip and c not in head][:limit]
+    rest = [c for c in columns if c not in head][:limit]
     for c in dict.fromkeys(head + rest):
-        if c in ok and len(ok):
-            col = ok[c].astype(float)
-            t.add_row(c, f"{col.min():.6g}", f"{col.mean():.6g}", f"{col.max():.6g}")
+        row = totals.summary(c)
+        if row is not None:
+            t.add_row(c, *(f"{x:.6g}" for x in row))
     return t
 
 

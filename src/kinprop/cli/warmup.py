@@ -72,6 +72,7 @@ def build() -> None:
     import numpy as np
 
     import kinprop as kp
+    from kinprop.analysis import output_names
     from kinprop.jit import warm_marker
     from kinprop.resources import examples_dir
 
@@ -89,6 +90,7 @@ def build() -> None:
         q = engine.target(f"{model.mechanism.joints[0].name}.q")
         if q.group == "q" and q.size == 1:
             engine.solve_sequence(engine.reference, [q.key], np.array([[0.0]]) + engine.get(engine.reference, q.key))
+        kp.evaluate_outputs(model, output_names(model, engine)[:1], engine=engine)  # the compiled outputs
     warm_marker().parent.mkdir(parents=True, exist_ok=True)
     warm_marker().write_text(f"kinprop kernels compiled {time.strftime('%Y-%m-%d %H:%M:%S')}\n")
 

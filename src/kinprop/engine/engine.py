@@ -199,12 +199,16 @@ class Solution:
                        self.substeps, self.flags, self.optimality, self.max_iter)  # fmt: skip
 
     @cached_property
-    def design(self) -> Design:
-        return self.engine.unpack(self.state)[0]
+    def _unpacked(self) -> tuple[Design, Mapping[str, Array]]:
+        return self.engine.unpack(self.state)
 
-    @cached_property
+    @property
+    def design(self) -> Design:
+        return self._unpacked[0]
+
+    @property
     def coordinates(self) -> Mapping[str, Array]:
-        return self.engine.unpack(self.state)[1]
+        return self._unpacked[1]
 
     def value(self, address: str) -> Array:
         """Current value of an address (``O2.q``, ``L1.length``, ``J.s_i[1]``)."""
@@ -382,7 +386,9 @@ class Engine:
         plan = self._plans.get(key)
         if plan is None:
             rows, cols = self.pattern
-            plan = build_plan(self.n_rows, self.n_columns, rows, cols, free, self._variable_of, weights, self.row_scale)
+            rotations = [v.start for v in self.layout.group("C")]
+            plan = build_plan(self.n_rows, self.n_columns, rows, cols, free, self._variable_of, weights, self.row_scale,
+                              np.array(rotations, dtype=np.int64))  # fmt: skip
             self._plans[key] = plan
         return plan
 
@@ -771,6 +777,26 @@ class Engine:
             done[address] = np.asarray(value, dtype=float)
         self._set_scalars(st, pending, done)
         return st, done, keys
+
+    def set_batch(self, states: State, address: str, values: Array) -> Array:
+        """Write one number per state of a C-contiguous batch (leading axis, as :meth:`stack`
+        builds it) to the one-number ``address``; returns the rows that took it: the others
+        (not finite, beyond the length bound, a length not positive: :meth:`set`'s checks) are
+        left as they were."""
+        t = self.target(address)
+        slot = _scalar_slot(t)
+        if slot is None:
+            raise AddressError(f"{address!r}: not a one-number address (give a component, e.g. {t.key}[0])")
+        name, flat, rule = slot
+        vals = np.asarray(values, dtype=float).reshape(-1)
+        bound = ABSURD * max(1.0, self.length_scale or 1.0)
+        ok = np.isfinite(vals) & ((rule == _ANY) | (np.abs(vals) <= bound)) & ((rule != _POSITIVE) | (vals > 0))
+        arr = getattr(states, name)
+        view = arr.reshape(vals.size, -1)
+        if not np.shares_memory(view, arr):
+            raise ValueError("set_batch needs a C-contiguous batch of states")
+        view[ok, flat] = vals[ok]
+        return ok
 
     def _set_scalars(self, state: State, scalars: list[tuple[str, float, tuple[str, int, int]]],
                      done: dict[str, Array]) -> None:  # fmt: skip

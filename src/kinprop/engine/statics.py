@@ -36,6 +36,7 @@ in equilibrium with no load; a reported component that any of them changes is *u
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -63,7 +64,7 @@ from kinprop.kinematics.tables import (
     T_PARENT,
     T_REVERSED,
 )
-from kinprop.model.elements import Element
+from kinprop.model.elements import Element, TorsionSpring
 from kinprop.spatial import Array
 
 if TYPE_CHECKING:
@@ -94,6 +95,25 @@ class ElementLaw:
 
 
 @dataclass(frozen=True)
+class TorsionLaw:
+    """A torsion spring on a tree joint's angle (layout column ``col``, about the joint's
+    ``z''``): torque ``T = T0 + k (theta0 - q)`` (per radian) turning ``body_j`` towards
+    increasing ``q``, and ``body_i`` the other way (a couple pair ``+-T z''``)."""
+
+    joint: int
+    body_i: int
+    body_j: int
+    col: int
+    k: float
+    theta0: float
+    T0: float
+
+
+#: a force element's law
+Law = ElementLaw | TorsionLaw
+
+
+@dataclass(frozen=True)
 class StaticsState:
     """Loads of one assembled state (solver units: the model's length and force units; the
     efforts of angular coordinates are torques, force x length per radian)."""
@@ -117,7 +137,8 @@ class StaticsState:
     undetermined: Array
     #: (nb, 6) applied wrench on each body (loads and elements), about the origin
     applied: Array
-    #: element forces (positive: pushing the ends apart) and lengths, by element
+    #: element forces (positive: pushing the ends apart; a torsion spring's torque) and lengths
+    #: (a torsion spring's angle, radians), by element
     element_force: Array
     element_length: Array
     #: (ne, 2, 3) element end points (global)
@@ -142,9 +163,9 @@ class StaticsState:
         return self.P[j, side]
 
 
-def _cut_partials(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, c: int) -> tuple[Array, Array]:
-    """``(Z_i, Z_j)`` (m, 6) of cut joint ``c``: its rows' partials with respect to the twists of
-    its bodies (module docstring), from the compiled basic-constraint rows."""
+def _cut_rows(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, c: int) -> tuple[Array, ...]:
+    """``(P_i, d, Phi_d, Phi_wi, Phi_wj)`` of cut joint ``c`` from the compiled basic-constraint
+    rows (``P_i`` slid along ``z''_i`` by a T-D joint's own coordinate, ``d = P_j - P_i``)."""
     tb = engine.tables
     j = tb.cut[c, K_JOINT]
     Pi = fr_P[j, 0].copy()
@@ -158,9 +179,24 @@ def _cut_partials(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, 
     for b in range(tb.cut[c, K_BASIC0], tb.cut[c, K_BASIC1]):
         r += basic_rows(tb.basic[b, B_KIND], tb.basic[b, B_ON_J], tb.basic_axes[b], d, fr_R[j, 0], fr_R[j, 1],
                         L[j], r, Phi, Pd, Wi, Wj, Pl)  # fmt: skip
-    Zi = np.hstack([-Pd, np.cross(Pd, Pi) + Wi])
-    Zj = np.hstack([Pd, -np.cross(Pd, fr_P[j, 1]) + Wj])
-    return Zi, Zj
+    return Pi, d, Pd, Wi, Wj
+
+
+def _skew(p: Array) -> Array:
+    """``S`` with ``a x p = a S`` for row vectors ``a``."""
+    x, y, z = float(p[0]), float(p[1]), float(p[2])
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+def cut_arms(Pi: Array, d: Array, Pd: Array, Wi: Array, Wj: Array) -> tuple[Array, Array]:
+    """``(Z_i, Z_j)`` (m, 6): a cut joint's rows' partials with respect to the twists of its
+    bodies (module docstring), from :func:`_cut_rows`."""
+    return np.hstack([-Pd, Pd @ _skew(Pi) + Wi]), np.hstack([Pd, Wj - Pd @ _skew(Pi + d)])
+
+
+def _cut_partials(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, c: int) -> tuple[Array, Array]:
+    """``(Z_i, Z_j)`` (m, 6) of cut joint ``c`` (module docstring)."""
+    return cut_arms(*_cut_rows(engine, fr_P, fr_R, Q, L, c))
 
 
 def distance_rows(engine: Engine, P: Array, R: Array, Q: Array) -> list[tuple[int, int, float]]:
@@ -179,11 +215,11 @@ def distance_rows(engine: Engine, P: Array, R: Array, Q: Array) -> list[tuple[in
 
 
 def subtree_sums(engine: Engine, W: Array) -> Array:
-    """``W_sub`` (nb, 6): each body's wrench plus those of every body below it in the tree."""
+    """``W_sub`` (..., nb, 6): each body's wrench plus those of every body below it in the tree."""
     tb = engine.tables
     Ws = np.array(W, dtype=float)
     for t in range(tb.tree.shape[0] - 1, -1, -1):
-        Ws[tb.tree[t, T_PARENT]] += Ws[tb.tree[t, T_CHILD]]
+        Ws[..., tb.tree[t, T_PARENT], :] += Ws[..., tb.tree[t, T_CHILD], :]
     return Ws
 
 
@@ -200,14 +236,27 @@ def generalized_forces(engine: Engine, Tq: Array, W: Array) -> Array:
     return Qg
 
 
-def element_state(laws: Sequence[ElementLaw], r: Array, A: Array) -> tuple[Array, Array, Array, Array]:
-    """Forces, lengths, end points (ne, 2, 3) of the elements and their wrenches (nb, 6)."""
+def element_state(
+    laws: Sequence[Law], r: Array, A: Array, Q: Array | None = None, P: Array | None = None, R: Array | None = None
+) -> tuple[Array, Array, Array, Array]:
+    """Forces, lengths, end points (ne, 2, 3) of the elements and their wrenches (nb, 6); a
+    torsion spring (its torque, its angle, its joint's points) needs the coordinates ``Q`` and
+    the joint frames ``P``, ``R``."""
     f, lengths, ends = np.zeros(len(laws)), np.zeros(len(laws)), np.zeros((len(laws), 2, 3))
     W = np.zeros((r.shape[0], 6))
     for k, e in enumerate(laws):
+        if isinstance(e, TorsionLaw):
+            if Q is None or P is None or R is None:
+                raise ValueError("a torsion spring needs the coordinates and the joint frames")
+            q = float(Q[e.col])
+            f[k], lengths[k], ends[k] = e.T0 + e.k * (e.theta0 - q), q, P[e.joint]
+            M = f[k] * R[e.joint, 0, :, 2]
+            W[e.body_j, 3:] += M
+            W[e.body_i, 3:] -= M
+            continue
         Pi, Pj = r[e.body_i] + A[e.body_i] @ e.s_i, r[e.body_j] + A[e.body_j] @ e.s_j
         d = Pj - Pi
-        length = float(np.linalg.norm(d))
+        length = math.sqrt(float(d @ d))
         f[k], lengths[k], ends[k] = e.f0 + e.k * (e.L0 - length), length, (Pi, Pj)
         if f[k] != 0.0:
             if length == 0.0:
@@ -218,10 +267,18 @@ def element_state(laws: Sequence[ElementLaw], r: Array, A: Array) -> tuple[Array
     return f, lengths, ends, W
 
 
-def element_laws(engine: Engine, elements: Sequence[Element], reference: State | None = None) -> list[ElementLaw]:
-    """The force laws of model elements; a ``preload`` is the force at the ``reference``
-    state's length (default: the engine's reference), ``free_length`` the length at zero force."""
-    laws = []
+def element_laws(
+    engine: Engine,
+    elements: Sequence[Element],
+    reference: State | None = None,
+    torsion: Sequence[TorsionSpring] = (),
+    angle_unit: float = 1.0,
+) -> list[Law]:
+    """The force laws of model elements, then of torsion springs; a ``preload`` is the force
+    (torque) at the ``reference`` state's length (angle) (default: the engine's reference),
+    ``free_length`` the length at zero force. ``angle_unit``: radians per unit of a torsion
+    spring's ``free_angle`` (its stiffness is per that unit)."""
+    laws: list[Law] = []
     r = A = None
     for e in elements:
         bi, bj = engine.body_index[e.body_i], engine.body_index[e.body_j]
@@ -239,6 +296,22 @@ def element_laws(engine: Engine, elements: Sequence[Element], reference: State |
                 r, A, _, _ = engine.poses(st)
             length = float(np.linalg.norm(r[bj] + A[bj] @ s_j - r[bi] - A[bi] @ s_i))
             laws.append(ElementLaw(bi, bj, s_i, s_j, k, length, float(e.preload or 0.0)))
+    tb = engine.tables
+    for t in torsion:
+        j = engine.mechanism.joint_names.index(t.joint)
+        if tb.joint[j, J_NQ] <= 0:
+            raise ValueError(f"torsion spring {t.name!r}: joint {t.joint!r} is cut (it has no angle coordinate); "
+                             "keep it in the tree (cut: false)")  # fmt: skip
+        col = int(tb.joint[j, J_QCOL])
+        if t.free_angle is not None:
+            theta0, T0 = float(t.free_angle) * angle_unit, 0.0
+        else:
+            st = reference if reference is not None else engine.reference
+            if st is None:
+                raise ValueError("a preloaded torsion spring needs the reference state its preload is given at")
+            theta0, T0 = float(st.Q[col]), float(t.preload or 0.0)
+        laws.append(TorsionLaw(j, int(tb.joint[j, J_BODY_I]), int(tb.joint[j, J_BODY_J]), col,
+                               float(t.stiffness) / angle_unit, theta0, T0))  # fmt: skip
     return laws
 
 
@@ -253,6 +326,14 @@ class PointForces:
     F: Array
     M: Array
     follows: Array
+    #: wheel loads (None: every point is a material point): ``radius`` (n,) > 0 where the
+    #: point is a wheel's contact point (the lowest point of the circle of that radius about
+    #: ``centre`` (n, 3) in the plane normal to the unit spin ``axis`` (n, 3)), ``sae`` (n,)
+    #: True where down is +z (the lowest point of the z-mirrored circle)
+    radius: Array | None = None
+    centre: Array | None = None
+    axis: Array | None = None
+    sae: Array | None = None
 
     @classmethod
     def empty(cls) -> PointForces:
@@ -267,43 +348,108 @@ class PointForces:
         return W
 
 
-def _wrench_rates(loads: PointForces, laws: Sequence[ElementLaw], r: Array, A: Array, V: Array) -> Array:
-    """(nb, 6) time derivative of the applied wrenches (loads and elements) about the origin
-    along the motion with body twists ``V``: a force at a material point P moving with ``v_P``
-    has ``dM_O = v_P x F``; body-axes components turn with ``omega``; an element's force
-    changes with its length (``df = -k dL``) and direction."""
-    nb = r.shape[0]
-    dW = np.zeros((nb, 6))
+def _cross(a: Array, b: Array) -> Array:
+    """Cross products on the last axis (broadcast; numpy's ``cross`` costs several times more
+    on these small stacks)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
-    def vel(b: int, x: Array) -> Array:
-        return V[b, :3] + cross3(V[b, 3:], x)
 
+def _velocity(T: Array, P: Array) -> Array:
+    """(K, 3) velocity of the point now at ``P`` moving with twists ``T`` (K, 6)."""
+    return T[:, :3] + _cross(T[:, 3:], P)
+
+
+def load_rates(loads: PointForces, V: Array) -> Array:
+    """(K, nb, 6) rates of the applied wrenches about the origin under body twists ``V``
+    (K, nb, 6): a force at a material point P has ``dM_O = v_P x F + P x dF`` (``dF = omega x F``
+    in body axes); a wheel load's contact point moves as :func:`contact_rate` says."""
+    dW = np.zeros(V.shape)
     for k in range(loads.body.shape[0]):
         b, P, F, M = loads.body[k], loads.P[k], loads.F[k], loads.M[k]
-        dF = cross3(V[b, 3:], F) if loads.follows[k] else np.zeros(3)
-        dM = cross3(V[b, 3:], M) if loads.follows[k] else np.zeros(3)
-        dW[b] += np.concatenate([dF, dM + cross3(vel(b, P), F) + cross3(P, dF)])
-    for e in laws:
+        w = V[:, b, 3:]
+        if loads.radius is not None and loads.radius[k] > 0.0:
+            vP = contact_rate(loads, k, V[:, b])
+        else:
+            vP = _velocity(V[:, b], P)
+        dF = _cross(w, F) if loads.follows[k] else np.zeros_like(w)
+        dM = _cross(w, M) if loads.follows[k] else np.zeros_like(w)
+        dW[:, b, :3] += dF
+        dW[:, b, 3:] += dM + _cross(vP, F) + _cross(P, dF)
+    return dW
+
+
+def contact_rate(loads: PointForces, k: int, Vb: Array) -> Array:
+    """(K, 3) velocity of wheel load ``k``'s contact point (the lowest point of the wheel circle
+    ``centre + radius n``, ``n`` along ``-z`` projected onto the wheel plane; in SAE axes the
+    lowest point of the z-mirrored circle) under the wheel body's twists ``Vb`` (K, 6)."""
+    assert loads.radius is not None and loads.centre is not None and loads.axis is not None
+    flip = np.array([1.0, 1.0, -1.0]) if loads.sae[k] else np.ones(3)
+    c, a = loads.centre[k], loads.axis[k]
+    vc, da = flip * _velocity(Vb, c), flip * _cross(Vb[:, 3:], a)
+    a = flip * a
+    g = np.array([0.0, 0.0, -1.0]) + a[2] * a
+    ng = float(np.linalg.norm(g))
+    n = g / ng
+    dg = da[:, 2:3] * a + a[2] * da
+    dn = (dg - (dg @ n)[:, None] * n) / ng
+    return flip * (vc + loads.radius[k] * dn)
+
+
+def element_rates(
+    laws: Sequence[Law],
+    held: Sequence[bool],
+    r: Array,
+    A: Array,
+    V: Array,
+    qdot: Array | None = None,
+    frame_w: Array | None = None,
+    R: Array | None = None,
+    Q: Array | None = None,
+) -> tuple[Array, Array, Array]:
+    """``(dW (K, nb, 6), df (K, ne), dL (K, ne))``: rates of the elements' wrenches, forces
+    and lengths under body twists ``V`` (K, nb, 6): ``df = -k dL`` (0 where ``held``: a force
+    held at its preload), ``d(f u)`` with the direction's rate. A torsion spring needs the
+    coordinates ``Q`` and their rates ``qdot`` (K, n_q), its joint frame i's angular velocity
+    ``frame_w`` (K, nj, 3) and the frames ``R``: ``d(T z'') = dT z'' + T omega x z''``."""
+    K = V.shape[0]
+    dW, df, dL = np.zeros(V.shape), np.zeros((K, len(laws))), np.zeros((K, len(laws)))
+    for k, e in enumerate(laws):
+        if isinstance(e, TorsionLaw):
+            if qdot is None or frame_w is None or R is None or Q is None:
+                raise ValueError("a torsion spring's rates need the coordinates, their rates and the joint frames")
+            a = R[e.joint, 0, :, 2]
+            dL[:, k] = qdot[:, e.col]
+            df[:, k] = 0.0 if held[k] else -e.k * dL[:, k]
+            T = e.T0 + e.k * (e.theta0 - float(Q[e.col]))
+            dM = df[:, k : k + 1] * a + T * _cross(frame_w[:, e.joint], a)
+            dW[:, e.body_j, 3:] += dM
+            dW[:, e.body_i, 3:] -= dM
+            continue
         Pi, Pj = r[e.body_i] + A[e.body_i] @ e.s_i, r[e.body_j] + A[e.body_j] @ e.s_j
         d = Pj - Pi
         length = float(np.linalg.norm(d))
         if length == 0.0:
             continue
         u = d / length
-        vi, vj = vel(e.body_i, Pi), vel(e.body_j, Pj)
+        vi, vj = _velocity(V[:, e.body_i], Pi), _velocity(V[:, e.body_j], Pj)
         dd = vj - vi
-        dL = float(u @ dd)
-        du = (dd - u * dL) / length
+        dL[:, k] = dd @ u
+        du = (dd - dL[:, k : k + 1] * u) / length
         f = e.f0 + e.k * (e.L0 - length)
-        dFv = -e.k * dL * u + f * du  # d(f u)/dt
+        df[:, k] = 0.0 if held[k] else -e.k * dL[:, k]
+        dF = df[:, k : k + 1] * u + f * du
         Fv = f * u
-        dW[e.body_j] += np.concatenate([dFv, cross3(vj, Fv) + cross3(Pj, dFv)])
-        dW[e.body_i] -= np.concatenate([dFv, cross3(vi, Fv) + cross3(Pi, dFv)])
-    return dW
+        dW[:, e.body_j, :3] += dF
+        dW[:, e.body_j, 3:] += _cross(vj, Fv) + _cross(Pj, dF)
+        dW[:, e.body_i, :3] -= dF
+        dW[:, e.body_i, 3:] -= _cross(vi, Fv) + _cross(Pi, dF)
+    return dW, df, dL
 
 
 def reduced_stiffness(
-    engine: Engine, state: State, loads: PointForces, driven: Sequence[int], laws: Sequence[ElementLaw] = ()
+    engine: Engine, state: State, loads: PointForces, driven: Sequence[int], laws: Sequence[Law] = ()
 ) -> tuple[Array, Array, str]:
     """``(tau, K, message)``: the efforts at the ``driven`` columns and their exact derivatives
     ``K[k, l] = d tau_k / d q_l`` (the other driven coordinates held, the constraints
@@ -314,23 +460,25 @@ def reduced_stiffness(
     symmetric part of ``dV^(k)/dq_l`` is the bias acceleration of the velocity analysis
     (:mod:`kinprop.engine.motion`, Haug's ``gamma``: second order, analytic) polarised over
     ``e_k + e_l``; the antisymmetric part is half the twists' spatial cross product
-    ``V^(l) x V^(k)``. Loads at material points (a wheel force at the contact point is
-    differentiated as fixed to the wheel body)."""
+    ``V^(l) x V^(k)``. Loads at material points; a wheel force's contact point moves as the
+    lowest point of the wheel circle (:func:`contact_rate`)."""
     labels = engine.column_labels
     nd = len(driven)
-    r, A, _, _ = engine.poses(state)
-    r, A = np.array(r), np.array(A)
-    W = loads.wrenches(r.shape[0]) + element_state(laws, r, A)[3]
+    r, A, P, R = (np.array(x) for x in engine.poses(state))
+    Q = state.Q
+    W = loads.wrenches(r.shape[0]) + element_state(laws, r, A, Q, P, R)[3]
+    body_i = engine.tables.joint[:, J_BODY_I]
 
     def rates(weights: dict[int, float]) -> dict[str, float]:
         return {labels[c]: weights.get(k, 0.0) for k, c in enumerate(driven)}
 
-    Vk, acc = [], {}
+    Vk, qk, acc = [], [], {}
     for k in range(nd):
         ms = motion_state(engine, state, rates({k: 1.0}), {})
         if not ms.ok:
             return np.full(nd, np.nan), np.full((nd, nd), np.nan), ms.message
         Vk.append(ms.V)
+        qk.append(ms.qdot)
         acc[k, k] = ms.dV
     for k in range(nd):
         for m in range(k + 1, nd):
@@ -339,7 +487,9 @@ def reduced_stiffness(
     tau = np.array([-float(np.sum(W * V)) for V in Vk])
     K = np.zeros((nd, nd))
     for m in range(nd):
-        dW = _wrench_rates(loads, laws, r, A, Vk[m])
+        V = Vk[m][None]
+        dW = load_rates(loads, V)[0] + element_rates(laws, [False] * len(laws), r, A, V, qk[m][None],
+                                                     V[:, body_i, 3:], R, Q)[0][0]  # fmt: skip
         for k in range(nd):
             sym = acc[min(k, m), max(k, m)]
             anti = 0.5 * np.array([spatial_cross(Vk[m][b], Vk[k][b]) for b in range(r.shape[0])])
@@ -371,17 +521,24 @@ def _reactions(engine: Engine, Zs: list[tuple[Array, Array]], lam: Array, W_appl
 
 def _at_points(W: Array, P: Array) -> Array:
     """Joint wrenches (nj, 2, 6) as force and moment about the joint's point on each body, global axes."""
-    return np.concatenate([W[..., :3], W[..., 3:] - np.cross(P, W[..., :3])], axis=-1)
+    return np.concatenate([W[..., :3], W[..., 3:] - _cross(P, W[..., :3])], axis=-1)
 
 
-def _local(W: Array, P: Array, R: Array) -> Array:
-    """Components of joint wrenches (nj, 2, 6): force and moment about the joint's point on
-    each body, in joint frame i's axes."""
-    G = _at_points(W, P)
-    Ri = R[:, 0][:, None]  # (nj, 1, 3, 3): frame i's axes for both sides
-    return np.concatenate([np.einsum("jsba,jsb->jsa", np.broadcast_to(Ri, (*G.shape[:2], 3, 3)), G[..., :3]),
-                           np.einsum("jsba,jsb->jsa", np.broadcast_to(Ri, (*G.shape[:2], 3, 3)), G[..., 3:])],
-                          axis=-1)  # fmt: skip
+def _local(G: Array, R: Array) -> Array:
+    """Joint wrenches at their points ``G`` (nj, 2, 6, :func:`_at_points`) in joint frame i's
+    axes (the same frame for both sides)."""
+    return np.einsum("jba,jstb->jsta", R[:, 0], G.reshape(*G.shape[:2], 2, 3)).reshape(G.shape)
+
+
+def equilibrium_system(engine: Engine, Phi_q: Array, driven: Sequence[int]) -> tuple[Array, Array, Array]:
+    """``(A_s, unscale, c_s)``: ``[Phi_q^T  E_D^T]`` with rows and columns scaled as the solver
+    scales them; ``A_s (y / unscale) = b / c_s`` for ``[Phi_q^T  E_D^T] y = b``."""
+    nq, nd = engine.n_coordinates, len(driven)
+    rs, cs = engine.row_scale, engine.col_scale[:nq]
+    E = np.zeros((nd, nq))
+    E[np.arange(nd), list(driven)] = 1.0
+    As = np.hstack([(Phi_q * rs[:, None] / cs[None, :]).T, E.T])  # unknowns [lambda / rs ; tau / cs_D]
+    return As, np.concatenate([rs, cs[list(driven)] if nd else np.zeros(0)]), cs
 
 
 def statics_state(
@@ -389,29 +546,27 @@ def statics_state(
     state: State,
     applied: Array,
     driven: Sequence[int] = (),
-    laws: Sequence[ElementLaw] = (),
+    laws: Sequence[Law] = (),
+    frames: _Frames | None = None,
 ) -> StaticsState:
     """Multipliers, input efforts, joint reactions and element forces of the assembled
     ``state`` under body wrenches ``applied`` (nb, 6) about the origin, held by the efforts
-    at the ``driven`` layout columns (module docstring)."""
-    fr = _Frames(engine, state)
+    at the ``driven`` layout columns (module docstring); ``frames``: the kernel's evaluation
+    of ``state`` when the caller has it."""
+    fr = frames if frames is not None else _Frames(engine, state)
     st = fr.state
     tb = engine.tables
-    nq, m, nd = engine.n_coordinates, engine.n_rows, len(driven)
-    f, lengths, ends, W_el = element_state(laws, fr.r, fr.A)
+    m, nd = engine.n_rows, len(driven)
+    f, lengths, ends, W_el = element_state(laws, fr.r, fr.A, fr.state.Q, fr.P, fr.R)
     W = np.asarray(applied, dtype=float) + W_el
     Qg = generalized_forces(engine, fr.Tq, W)
-    rs, cs = engine.row_scale, engine.col_scale[:nq]
-    E = np.zeros((nd, nq))
-    E[np.arange(nd), list(driven)] = 1.0
-    As = np.hstack([(fr.Phi_q * rs[:, None] / cs[None, :]).T, E.T])  # unknowns [lambda / rs ; tau / cs_D]
+    As, unscale, cs = equilibrium_system(engine, fr.Phi_q, driven)
     b = -Qg / cs
     U, s, Vt = np.linalg.svd(As, full_matrices=True)
     smax = float(s[0]) if s.size and s[0] > 0 else 1.0
     rank = int(np.sum(s > RANK_RTOL * smax))
     xs = Vt[:rank].T @ ((U[:, :rank].T @ b) / s[:rank])
     null = Vt[rank:]
-    unscale = np.concatenate([rs, cs[list(driven)] if nd else np.zeros(0)])
     resid = float(np.linalg.norm(As @ xs - b))
     Zs = [_cut_partials(engine, fr.P, fr.R, st.Q, st.L, c) for c in range(tb.cut.shape[0])]
     nj = tb.joint.shape[0]
@@ -441,7 +596,8 @@ def statics_state(
         member[j] = -2.0 * lam[row] * length
     member_und = np.zeros(nj, bool)
     for k, v in enumerate(null):
-        loc, glob = _local(stress[k], fr.P, fr.R), _at_points(stress[k], fr.P)
+        glob = _at_points(stress[k], fr.P)
+        loc = _local(glob, fr.R)
         loc[..., 3:] /= Lsc
         glob[..., 3:] /= Lsc
         t = v[m:] * unscale[m:] / Lsc if nd else np.zeros(0)  # efforts: torque-like scale
@@ -454,7 +610,8 @@ def statics_state(
             member_und[j] |= abs(2.0 * v[row] * unscale[row] * length) > UNDETERMINED_RTOL * size
         if nd:
             tau_und |= np.abs(t) > UNDETERMINED_RTOL * size
-    wrench_out, local, at_point = wrench.copy(), _local(wrench, fr.P, fr.R), _at_points(wrench, fr.P)
+    wrench_out, at_point = wrench.copy(), _at_points(wrench, fr.P)
+    local = _local(at_point, fr.R)
     local[und] = np.nan
     at_point[und_g] = np.nan
     wrench_out[und.any(axis=2)] = np.nan  # a side with an undetermined component: no global wrench
@@ -471,12 +628,19 @@ def statics_state(
 
 __all__ = [
     "ElementLaw",
+    "Law",
     "PointForces",
     "StaticsState",
+    "TorsionLaw",
+    "contact_rate",
+    "cut_arms",
     "distance_rows",
     "element_laws",
+    "element_rates",
     "element_state",
+    "equilibrium_system",
     "generalized_forces",
+    "load_rates",
     "reduced_stiffness",
     "statics_state",
     "subtree_sums",

@@ -42,7 +42,7 @@ from kinprop.engine import compile as compile_engine
 from kinprop.engine.units import tree_coordinates
 from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.couplings import build_couplings, couplings_to_data
-from kinprop.io.elements import build_elements, build_vehicle, elements_to_data, vehicle_to_data
+from kinprop.io.elements import build_elements, build_torsion_springs, build_vehicle, elements_to_data, vehicle_to_data
 from kinprop.io.loader import EULER_TOL, absurd_lengths, build_or_report
 from kinprop.io.loads import build_loads, loads_to_data
 from kinprop.io.points import attach_references, point_order, point_references, written_points
@@ -392,6 +392,8 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
     if problems:
         raise ModelError(problems)
     elements, eproblems = build_elements(spec.elements, set(pose), "hardpoints", file, lambda b: pose[b])
+    torsion, tproblems = build_torsion_springs(spec.elements, {j.name: j.type for j in joints}, file)
+    eproblems += tproblems
     loads, lproblems = build_loads(spec.loads, {b.name: [n for n, _ in b.points] for b in final}, "hardpoints", file,
                                    lambda b: pose[b])  # fmt: skip
     if eproblems or lproblems:
@@ -402,7 +404,7 @@ def build_from_hardpoints(spec: HardpointFile, file: str) -> Model:
     if spec.units.force is not None:
         units["force"] = spec.units.force
     model = Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle),
-                  loads)  # fmt: skip
+                  loads, torsion)  # fmt: skip
     return attach_references(model, refs, file, point_order(spec.bodies))
 
 
@@ -525,8 +527,9 @@ def model_to_hardpoints(model: Model, body_frames: str = "global", keep_coordina
         **({"inputs": list(mech.inputs)} if mech.inputs else {}),
         **({"couplings": couplings_to_data(model, _coupled_now(model, kept))} if mech.couplings else {}),
         **({"edits": mech.edits} if mech.edits != "design" else {}),
-        **({"elements": elements_to_data(model.elements, "hardpoints", lambda b: (kin.r[b], kin.A[b]))}
-           if model.elements else {}),
+        **({"elements": elements_to_data(model.elements, "hardpoints", lambda b: (kin.r[b], kin.A[b]),
+                                         model.torsion_springs)}
+           if model.elements or model.torsion_springs else {}),
         **({"vehicle": vehicle_to_data(model.vehicle)} if model.vehicle is not None else {}),
         **({"loads": loads_to_data(model.loads, "hardpoints", lambda b: (kin.r[b], kin.A[b]))}
            if model.loads is not None else {}),

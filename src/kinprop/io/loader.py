@@ -22,7 +22,7 @@ from kinprop.engine.engine import ABSURD
 from kinprop.engine.units import tree_coordinates
 from kinprop.errors import ModelError, Problem
 from kinprop.io.couplings import build_couplings
-from kinprop.io.elements import build_elements, build_vehicle
+from kinprop.io.elements import build_elements, build_torsion_springs, build_vehicle
 from kinprop.io.loads import build_loads
 from kinprop.io.points import attach_references, point_order, point_references
 from kinprop.io.schema import ModelFile
@@ -360,7 +360,8 @@ def build_model(spec: ModelFile, file: str) -> Model:
     problems += cproblems
     problems += [Problem(p.location, p.message, file) for p in validate_couplings(tuple(joints), couplings)]
     elements, eproblems = build_elements(spec.elements, {b.name for b in bodies}, "frames", file)
-    problems += eproblems
+    torsion, tproblems = build_torsion_springs(spec.elements, {j.name: j.type for j in joints}, file)
+    problems += eproblems + tproblems
     loads, lproblems = build_loads(spec.loads, {b.name: [n for n, _ in b.points] for b in bodies}, "frames", file)
     problems += lproblems
     if problems:
@@ -411,7 +412,7 @@ def build_model(spec: ModelFile, file: str) -> Model:
     if spec.units.force is not None:
         units["force"] = spec.units.force
     model = Model(mech, Design(values), as_coordinates(coords), units, file, elements, build_vehicle(spec.vehicle),
-                  loads)  # fmt: skip
+                  loads, torsion)  # fmt: skip
     return attach_references(model, refs, file, point_order(spec.bodies))
 
 

@@ -59,6 +59,7 @@ def propagation_json(prop: Propagation) -> dict[str, Any]:
         "iterations": r.iterations,
         "residual": r.residual,
         "optimality_residual": r.optimality,
+        "method": r.method,
         "residual_history": list(r.residual_history),
         "coordinates": coordinates_json(prop.after),
         "design": design_json(prop.after),

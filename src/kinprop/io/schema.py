@@ -92,12 +92,15 @@ class CouplingSpec(Strict):
 
 
 class ElementSpec(Strict):
-    """A spring, damper or spring-damper between two bodies (:mod:`kinprop.model.elements`).
-    Frame style: ``s_i``, ``s_j`` in the bodies' frames; hardpoint style: ``point_i``,
-    ``point_j`` global at the reference configuration. Numbers in the model's units."""
+    """A spring, damper or spring-damper between two bodies, or a torsion spring on a joint's
+    angle (:mod:`kinprop.model.elements`). Frame style: ``s_i``, ``s_j`` in the bodies' frames;
+    hardpoint style: ``point_i``, ``point_j`` global at the reference configuration. Numbers in
+    the model's units (a torsion spring's stiffness: torque per angle unit)."""
 
-    type: Literal["spring", "damper", "spring_damper"]
-    bodies: Annotated[list[str], Field(min_length=2, max_length=2)]
+    type: Literal["spring", "damper", "spring_damper", "torsion"]
+    bodies: Annotated[list[str], Field(min_length=2, max_length=2)] | None = None
+    #: a torsion spring's joint (a revolute, or a cylindrical's angle)
+    joint: str | None = None
     s_i: Vec3 | None = None
     s_j: Vec3 | None = None
     point_i: Vec3 | None = None
@@ -107,8 +110,11 @@ class ElementSpec(Strict):
     #: force per (length / second)
     damping: Annotated[float, Field(ge=0, allow_inf_nan=False)] | None = None
     free_length: Positive | None = None
-    #: force at the model's configuration (positive: compressed spring pushing the ends apart)
+    #: force at the model's configuration (positive: compressed spring pushing the ends apart);
+    #: a torsion spring's torque
     preload: Finite | None = None
+    #: a torsion spring's angle at zero torque (the model's angle unit)
+    free_angle: Finite | None = None
 
 
 Share = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]

@@ -91,7 +91,11 @@ def model_to_data(model: Model) -> dict[str, Any]:
         **({"inputs": list(mech.inputs)} if mech.inputs else {}),
         **({"couplings": couplings_to_data(model)} if mech.couplings else {}),
         **({"edits": mech.edits} if mech.edits != "mechanism" else {}),
-        **({"elements": elements_to_data(model.elements, "frames")} if model.elements else {}),
+        **(
+            {"elements": elements_to_data(model.elements, "frames", None, model.torsion_springs)}
+            if model.elements or model.torsion_springs
+            else {}
+        ),
         **({"vehicle": vehicle_to_data(model.vehicle)} if model.vehicle is not None else {}),
         **({"loads": loads_to_data(model.loads, "frames")} if model.loads is not None else {}),
     }

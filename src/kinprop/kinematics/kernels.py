@@ -210,7 +210,8 @@ def _emit(k, value, r, c, vals, rows, cols, record):
     return k + 1
 
 
-def _evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols):
+@kernel
+def evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols):
     """Phi and the Jacobian entries at one state; returns the number of entries.
 
     ``need`` (per layout column, int8): entries of a variable whose first column is 0 there
@@ -323,14 +324,6 @@ def _evaluate(tb, Q, S, C, L, ws, Phi, vals, need, rows, cols):
     if tb.coupling.shape[0] > 0:
         k = coupling_rows(tb, Q, L, Phi, vals, need, rows, cols, record, k)  # kinematics/couplings.py
     return k
-
-
-evaluate = kernel(_evaluate)
-#: the same function compiled into its caller, for the Newton loop's one evaluation site
-#: (``kinprop.solver.newton.solve``): a call hands over the tables and the workspace, some 300
-#: scalar arguments (0.12 us; 4 calls per Stewart solve). It costs compile time: +13 s on an
-#: empty cache with ``KINPROP_JIT=on`` (docs/architecture.md).
-evaluate_inlined = inlined(_evaluate)
 
 
 def count_entries(tb) -> int:

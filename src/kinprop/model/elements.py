@@ -1,5 +1,5 @@
-"""Force elements (springs, dampers) between two bodies, and the vehicle parameters of a
-suspension model: the ``elements:`` and ``vehicle:`` sections of a model file (one place;
+"""Force elements (springs, dampers) between two bodies, torsion springs on joint angles, and
+the vehicle parameters of a suspension model: the ``elements:`` and ``vehicle:`` sections of a model file (one place;
 the file schema is :mod:`kinprop.io.schema`, the builders :mod:`kinprop.io.loader` and
 :mod:`kinprop.io.hardpoints`).
 
@@ -56,6 +56,23 @@ class Element:
 
 
 @dataclass(frozen=True)
+class TorsionSpring:
+    """A torsion spring on a revolute joint's angle ``q`` (or a cylindrical joint's ``q[0]``),
+    e.g. an anti-roll bar's twist at its pivot: the torque ``T = preload + k (free_angle - q)``
+    turns the joint's body j about the joint axis towards increasing ``q`` (and body i the
+    other way). ``stiffness`` torque per the model's angle unit, ``free_angle`` in the
+    model's angle unit, ``preload`` the torque at the model's configuration (give one of the
+    two; neither: ``free_angle`` is the model's angle)."""
+
+    name: str
+    joint: str
+    stiffness: float
+    free_angle: float | None = None
+    preload: float | None = None
+    kind: str = "torsion"
+
+
+@dataclass(frozen=True)
 class Vehicle:
     """Vehicle parameters of a suspension model (module docstring); lengths in the model unit."""
 
@@ -93,4 +110,4 @@ def element_problems(
     return out
 
 
-__all__ = ["ELEMENT_KINDS", "Element", "Vehicle", "element_problems"]
+__all__ = ["ELEMENT_KINDS", "Element", "TorsionSpring", "Vehicle", "element_problems"]

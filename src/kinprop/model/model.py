@@ -6,7 +6,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 from kinprop.model.design import Design, as_coordinates
-from kinprop.model.elements import Element, Vehicle
+from kinprop.model.elements import Element, TorsionSpring, Vehicle
 from kinprop.model.loads import Loads
 from kinprop.model.mechanism import Mechanism
 from kinprop.spatial import Array
@@ -28,6 +28,8 @@ class Model:
     vehicle: Vehicle | None = None
     #: applied loads: body weights and named load cases (``loads:``, kinprop.model.loads), or None
     loads: Loads | None = None
+    #: torsion springs on joint angles (``elements:`` of ``type: torsion``), declaration order
+    torsion_springs: tuple[TorsionSpring, ...] = ()
 
     def element(self, name: str) -> Element:
         for e in self.elements:

@@ -7,6 +7,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from kinprop.plot.forces import FORCE_STYLE, ForceArrow, arrow_scale
 from kinprop.plot.scene import bounds, scale
 from kinprop.plot.style import (
     AXIS,
@@ -29,8 +30,11 @@ def render_png(
     view: tuple[float, float] = (20.0, -60.0),
     size: tuple[float, float] = (10.0, 7.5),
     dpi: int = 120,
+    arrows: Sequence[ForceArrow] = (),
+    force_unit: str = "",
 ) -> bytes:
-    """The layers (faded ones first) as one 3D stick figure, PNG bytes."""
+    """The layers (faded ones first) as one 3D stick figure, PNG bytes; ``arrows``: forces drawn
+    over the top layer (:mod:`kinprop.plot.forces`)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
@@ -88,6 +92,15 @@ def render_png(
                 if m.joint not in seen:
                     seen.add(m.joint)
                     ax.text(*m.position, f"  {m.joint}", fontsize=7, color="#333333")
+    lo, hi = bounds(scenes)
+    per = arrow_scale(arrows, float(np.max(hi - lo)))
+    for a in arrows:
+        colour, text = FORCE_STYLE[a.kind]
+        ax.quiver(*a.origin, *(a.force * per), color=colour, arrow_length_ratio=0.2, linewidth=2.0)
+        ax.text(*(a.origin + a.force * per), f" {a.label}", fontsize=6, color=colour)
+        handles.setdefault(f"~{text}", Line2D([], [], color=colour, lw=2.0))
+    if arrows and per > 0:
+        title = f"{title or top.scene.name}\nforce arrows: 1 {top.scene.unit} per {1.0 / per:.4g} {force_unit}".strip()
     states = (
         {
             ly.label: Line2D([], [], color="black", ls="--" if ly.faded else "-", alpha=FADED_ALPHA if ly.faded else 1)

@@ -34,11 +34,23 @@ SINGULAR_RTOL = 1e-2
 ZERO_RTOL = 1e-9
 
 
+#: row groups by the identity of an engine's row blocks (kept with them: the id stays theirs)
+_GROUPS: dict[int, tuple[Sequence[RowBlock], np.ndarray]] = {}
+
+
 def row_groups(blocks: Sequence[RowBlock]) -> np.ndarray:
-    """Group index per row of Phi: one group per (joint, basic-constraint type)."""
+    """Group index per row of Phi: one group per (joint, basic-constraint type); computed once
+    per row-block sequence (an engine's ``row_blocks`` never change)."""
+    hit = _GROUPS.get(id(blocks))
+    if hit is not None and hit[0] is blocks:
+        return hit[1]
     labels = [(b.joint, lab.split("[")[0]) for b in blocks for lab in b.labels]
     index = {k: i for i, k in enumerate(dict.fromkeys(labels))}
-    return np.array([index[k] for k in labels], dtype=int)
+    groups = np.array([index[k] for k in labels], dtype=int)
+    groups.setflags(write=False)
+    if isinstance(blocks, tuple):
+        _GROUPS[id(blocks)] = (blocks, groups)
+    return groups
 
 
 def scaled_jacobian(blocks: Sequence[RowBlock], J: Array) -> Array:

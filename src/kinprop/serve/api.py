@@ -50,11 +50,12 @@ from kinprop.io.commands import (
     sweep_inputs,
     sweep_json,
 )
-from kinprop.io.writer import dump_model_like
+from kinprop.io.writer import dump_model_like, file_style
 from kinprop.model import Model
+from kinprop.plot.report import report_html, slider_joints
 from kinprop.propagation import assemble
 from kinprop.serve.session import Session, Sessions
-from kinprop.serve.views import state_json
+from kinprop.serve.views import state_json, status_text
 
 STATIC = resources.files("kinprop.serve") / "static"
 SESSION_HEADER = "X-Kinprop-Session"
@@ -162,6 +163,10 @@ def create_app(model: Model, label: str | None = None, *, assemble_first: bool =
         else:
             start_note.append(f"{label}: cannot assemble the model: {prop.result.message}; shown as given")
     sessions = Sessions(model)
+    sliders = slider_joints(model)
+    source = model.source if model.source and Path(model.source).is_file() else None
+    hardpoint_style = source is not None and file_style(source)[0] == "hardpoints"
+    start_line = status_text({}, start_json) if start_json is not None else "loaded: the coordinates as given"
     app = FastAPI(title="kinprop workbench", docs_url="/api/docs", openapi_url="/api/openapi.json", redoc_url=None)
     app.state.sessions = sessions
 
@@ -175,6 +180,8 @@ def create_app(model: Model, label: str | None = None, *, assemble_first: bool =
 
     def session(sid: str | None, q: str | None) -> Session:
         s = sessions.get(sid or q or "default")
+        if not s.notes:
+            s.notes[id(s.start)] = start_line
         if s.result_json is None and start_json is not None and not s.undo_stack:
             s.result, s.result_json, s.warnings = start_prop, start_json, list(start_note)
         return s
@@ -224,7 +231,7 @@ def create_app(model: Model, label: str | None = None, *, assemble_first: bool =
     def state(sid: Sid = None, q: QSid = None) -> Response:
         s = session(sid, q)
         with s.lock:
-            return json_response(state_json(s, label))
+            return json_response(state_json(s, label, sliders, hardpoint_style))
 
     # --- the CLI's contracts ----------------------------------------------------------------
 
@@ -258,7 +265,7 @@ def create_app(model: Model, label: str | None = None, *, assemble_first: bool =
             obj = propagate_json(prop, res, newton_ran)
             applied = obj["status"] == "converged"
             if applied:
-                s.apply(prop)
+                s.apply(prop, status_text(req.set, obj))
             s.result, s.result_json, s.warnings = prop, obj, notes
         headers = {"X-Kinprop-Applied": str(applied).lower(), "X-Kinprop-Warnings": json.dumps(notes)}
         return json_response(obj, headers=headers)
@@ -333,10 +340,15 @@ def create_app(model: Model, label: str | None = None, *, assemble_first: bool =
         m = session(sid, q).model
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / "model.yaml"
-            source = model.source if model.source and Path(model.source).is_file() else None
             dump_model_like(m, path, source)  # a hardpoint-style input comes back hardpoint style
             text = path.read_text(encoding="utf-8")
         return Response(text, media_type="application/yaml", headers=_attachment(f"{stem}.yaml"))
+
+    @app.get("/api/report.html")
+    def report(sid: Sid = None, q: QSid = None) -> Response:
+        """``kinprop report`` of the current model: one self-contained HTML file."""
+        text = report_html(session(sid, q).model, f"kinprop report: {label}")
+        return Response(text, media_type="text/html", headers=_attachment(f"{stem}-report.html"))
 
     @app.get("/api/results.json")
     def results_json(sid: Sid = None, q: QSid = None) -> Response:

@@ -32,11 +32,15 @@ class Session:
     warnings: list[str] = field(default_factory=list)
     #: the key of a single-coordinate change (a slider), so a drag is one undo step
     _coalesce: str | None = None
+    #: the status line of each model in the history: the change that produced it (by ``id``)
+    notes: dict[int, str] = field(default_factory=dict)
+    #: the last history action (``undo``, ``redo``, ``reset``) since the last applied change
+    action: str = ""
     lock: threading.Lock = field(default_factory=threading.Lock)
 
-    def apply(self, prop: Propagation) -> None:
+    def apply(self, prop: Propagation, note: str = "") -> None:
         """Make ``prop.after`` the current model (one undo step; repeated moves of one slider
-        coordinate coalesce into one step)."""
+        coordinate coalesce into one step); ``note`` is its status line."""
         keys = list(prop.changes)
         key = keys[0] if len(keys) == 1 and keys[0].split("[")[0].endswith(".q") else None
         if not (key is not None and key == self._coalesce and self.undo_stack):
@@ -46,13 +50,22 @@ class Session:
         self.redo_stack.clear()
         self.model = prop.after
         self.last = prop
+        self.action = ""
+        alive = {id(m) for m in (*self.undo_stack, self.start)}
+        self.notes = {k: v for k, v in self.notes.items() if k in alive}
+        self.notes[id(self.model)] = note
+
+    def status_line(self) -> str:
+        """What the current model is: the change that made it (after an undo/redo, said so)."""
+        note = self.notes.get(id(self.model), "the loaded model")
+        return f"{self.action}: {note}" if self.action else note
 
     def undo(self) -> bool:
         if not self.undo_stack:
             return False
         self.redo_stack.append(self.model)
         self.model = self.undo_stack.pop()
-        self.last, self._coalesce = None, None
+        self.last, self._coalesce, self.action = None, None, "undo"
         return True
 
     def redo(self) -> bool:
@@ -60,7 +73,7 @@ class Session:
             return False
         self.undo_stack.append(self.model)
         self.model = self.redo_stack.pop()
-        self.last, self._coalesce = None, None
+        self.last, self._coalesce, self.action = None, None, "redo"
         return True
 
     def reset(self) -> None:
@@ -69,7 +82,7 @@ class Session:
             self.undo_stack.append(self.model)
             self.redo_stack.clear()
             self.model = self.start
-        self.last, self._coalesce = None, None
+        self.last, self._coalesce, self.action = None, None, "reset"
 
 
 class Sessions:

@@ -5,29 +5,23 @@ The page's own endpoint (``GET /api/state``); the CLI contracts are in :mod:`kin
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 
 from kinprop.analysis.drives import has_travel
-from kinprop.analysis.metrics import metric_names
+from kinprop.analysis.metrics import wheel_bodies
 from kinprop.analysis.outputs import output_names
 from kinprop.analysis.points import joint_hardpoints, named_points
 from kinprop.analysis.units import unit_of
-from kinprop.engine.units import METRES_PER, angle_indices, from_solver_units
+from kinprop.engine.units import METRES_PER, from_solver_units
 from kinprop.model import Model
+from kinprop.plot.report import coordinate_components, default_curve_outputs, hardpoint_rows
 from kinprop.plot.scene import Scene, bounds, build_scene, scale
 from kinprop.plot.style import AXIS, FADED_ALPHA, MARKERS, POINT, segment_colour
 from kinprop.serve.session import Session
 
 GROUPS = {"s_i": "s", "s_j": "s", "C_i": "C", "C_j": "C", "length": "l"}
-#: slider half-range: angles [deg], lengths [fraction of the mechanism's size]
-SLIDER_DEG, SLIDER_FRACTION = 45.0, 0.25
-#: default half-range of a curve's drive
-CURVE_DEG, CURVE_FRACTION = 10.0, 0.05
-#: the wheel-travel drive's default curve: +-50 mm, in the model's length unit
-TRAVEL_CURVE_M = 0.05
 
 
 def _xyz(v: np.ndarray) -> list[float]:
@@ -73,76 +67,6 @@ def scene_json(sc: Scene) -> dict[str, Any]:
     }
 
 
-def _coordinate_components(model: Model) -> list[dict[str, Any]]:
-    """Every joint coordinate a sweep can drive (not Euler parameters), in model units."""
-    deg = model.units.get("angle") == "deg"
-    size = scale([build_scene(model)])
-    out = []
-    for joint, q in model.coordinates.items():
-        q = np.atleast_1d(np.asarray(q, dtype=float))
-        jt = model.mechanism.joint(joint).jtype
-        angles = set(angle_indices(model, joint))
-        euler = (
-            set(range(jt.euler.start, jt.euler.stop)) if jt.euler is not None and q.size == jt.n_coordinates else set()
-        )
-        for k in range(q.size):
-            if k in euler:
-                continue
-            angle = k in angles
-            value = math.degrees(q[k]) if angle and deg else float(q[k])
-            unit = ("deg" if deg else "rad") if angle else model.units.get("length", "")
-            if angle:
-                half, wide = (CURVE_DEG, SLIDER_DEG) if deg else (math.radians(CURVE_DEG), math.radians(SLIDER_DEG))
-            else:
-                half, wide = CURVE_FRACTION * size, SLIDER_FRACTION * size
-            spec = joint if q.size == 1 else f"{joint}[{k}]"
-            out.append(
-                {
-                    "spec": spec,
-                    "address": f"{joint}.q" if q.size == 1 else f"{joint}.q[{k}]",
-                    "joint": joint,
-                    "type": jt.name,
-                    "angle": angle,
-                    "unit": unit,
-                    "value": value,
-                    "curve": [value - half, value + half],
-                    "slider": [value - wide, value + wide],
-                    "slider_ok": q.size == 1 and jt.n_coordinates == 1,  # one coordinate: revolute, translational
-                    "size": q.size,
-                }
-            )
-    # single coordinates first: a sweep drives a joint's whole coordinate vector (the others
-    # of a multi-coordinate joint stay as they are); a suspension's wheel travel before them
-    return _travel_drive(model) + sorted(out, key=lambda c: (not c["slider_ok"], c["size"] > 1))
-
-
-def _travel_drive(model: Model) -> list[dict[str, Any]]:
-    """The wheel-travel drive (``travel``, kinprop.analysis.drives) of a model whose wheels have
-    a ``wheel_centre_ref``: a sweep in equal length steps, +-50 mm by default."""
-    if not has_travel(model):
-        return []
-    length = model.units.get("length", "m")
-    half = TRAVEL_CURVE_M / METRES_PER.get(length, 1.0)
-    return [{"spec": "travel", "address": "travel", "joint": "", "type": "wheel travel", "angle": False,
-             "unit": length, "value": 0.0, "curve": [-half, half], "slider": [-half, half], "slider_ok": False,
-             "size": 1}]  # fmt: skip
-
-
-def default_curve_outputs(model: Model, drives: list[dict[str, Any]]) -> list[str]:
-    """Camber and toe of the first wheel body; else the other single coordinates (a four-bar's
-    rocker angle over its crank's), else a named point's or a hardpoint's z."""
-    metrics = [m for m in metric_names(model) if m.endswith((".camber", ".toe"))]
-    if metrics:
-        return metrics[:2]
-    others = [d["address"] for d in drives[1:] if d["size"] == 1]
-    if others:
-        return others[:2]
-    pts = [f"point:{b.name}.{p}[z]" for b in model.mechanism.bodies if not b.fixed for p, _ in b.points]
-    if pts:
-        return pts[:1]
-    return [f"hardpoint:{j.name}.j[z]" for j in model.mechanism.joints][:1]
-
-
 def variables_json(model: Model, session: Session) -> list[dict[str, Any]]:
     """One row per design variable: address, group, body, unit, value (before, when the last
     change moved it) and, for a joint point ``s``, where it is in global coordinates."""
@@ -182,7 +106,67 @@ def variables_json(model: Model, session: Session) -> list[dict[str, Any]]:
     return rows
 
 
-def state_json(session: Session, label: str) -> dict[str, Any]:
+def wheels_json(model: Model) -> dict[str, Any]:
+    """What the views draw of each wheel body (one with ``wheel_centre`` and ``spin_axis``
+    points): its centre, unit spin axis and loaded radius (the ``contact_patch`` point's distance
+    from the spin axis, None without one), global, model units; and the ground plane's height,
+    the lowest contact patch's z (ISO 8855: z up), or None without a contact patch."""
+    points = named_points(model)
+    wheels, ground = [], None
+    for w in wheel_bodies(model):
+        c = np.asarray(points[f"{w}.wheel_centre"])
+        a = np.asarray(points[f"{w}.spin_axis"]) - c
+        a = a / np.linalg.norm(a)
+        radius = None
+        if f"{w}.contact_patch" in points:
+            p = np.asarray(points[f"{w}.contact_patch"])
+            v = p - c
+            radius = float(np.linalg.norm(v - (v @ a) * a))
+            ground = float(p[2]) if ground is None else min(ground, float(p[2]))
+        wheels.append({"body": w, "centre": _xyz(c), "axis": _xyz(a), "radius": radius})
+    return {"wheels": wheels, "ground": ground}
+
+
+def _value_text(v: Any) -> str:
+    if isinstance(v, list | tuple):
+        return "[" + ", ".join(f"{float(x):.7g}" for x in v) + "]"
+    return f"{float(v):.7g}" if isinstance(v, float | int) else str(v)
+
+
+def status_text(changes: dict[str, Any], result: dict[str, Any]) -> str:
+    """The status line of an applied change: what was set (model units, as asked), the solve,
+    what moved; without changes, the loaded model's assembly."""
+    what = ", ".join(f"{a} = {_value_text(v)}" for a, v in changes.items()) or "loaded"
+    residual = result.get("residual")
+    parts = [
+        f"{what}: {result.get('status')}",
+        f"{result.get('iterations')} iterations",
+        "||Phi|| = " + ("nan" if residual is None or residual != residual else f"{residual:.3e}"),
+    ]
+    if result.get("changed"):
+        parts.append("moved: " + " ".join(result["changed"]))
+    return "  ·  ".join(parts)
+
+
+#: the wheel-travel drive's default curve: +-50 mm, in the model's length unit
+TRAVEL_CURVE_M = 0.05
+
+
+def _travel_drive(model: Model) -> list[dict[str, Any]]:
+    """The wheel-travel drive (``travel``, kinprop.analysis.drives) of a model whose wheels have
+    a ``wheel_centre_ref``, first: a sweep in equal length steps, +-50 mm by default."""
+    if not has_travel(model):
+        return []
+    length = model.units.get("length", "m")
+    half = TRAVEL_CURVE_M / METRES_PER.get(length, 1.0)
+    return [{"spec": "travel", "address": "travel", "joint": "", "type": "wheel travel", "angle": False,
+             "unit": length, "value": 0.0, "curve": [-half, half], "slider": [-half, half], "slider_ok": False,
+             "size": 1}]  # fmt: skip
+
+
+def state_json(
+    session: Session, label: str, sliders: tuple[str, ...] = (), hardpoint_style: bool = False
+) -> dict[str, Any]:
     """Everything the page draws for the session's current model."""
     model = session.model
     last = session.last
@@ -190,13 +174,16 @@ def state_json(session: Session, label: str) -> dict[str, Any]:
     if last is not None:
         scenes.append(build_scene(last.before))
     lo, hi = bounds(scenes)
-    comps = _coordinate_components(model)
+    comps = _travel_drive(model) + coordinate_components(model, sliders)
     res = session.result_json
     return {
         "model": label,
         "name": model.mechanism.name,
         "units": dict(model.units),
         "variables": variables_json(model, session),
+        "hardpoint_style": hardpoint_style,
+        "hardpoint_rows": hardpoint_rows(model),
+        "status_line": session.status_line(),
         "coordinates": {k: _xyz(v) for k, v in model.coordinates.items()},
         "hardpoints": joint_hardpoints(model),
         "points": named_points(model),
@@ -205,6 +192,7 @@ def state_json(session: Session, label: str) -> dict[str, Any]:
         "outputs": output_names(model),
         "default_outputs": default_curve_outputs(model, comps),
         "scene": scene_json(scenes[0]),
+        **wheels_json(model),
         "before_scene": scene_json(scenes[1]) if last is not None else None,
         "bounds": [_xyz(lo), _xyz(hi)],
         "faded_alpha": FADED_ALPHA,

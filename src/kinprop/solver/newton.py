@@ -23,7 +23,6 @@ from kinprop.kinematics.kernels import (
     W_MAT,
     W_VEC,
     evaluate,
-    evaluate_inlined,
     retract,
     workspace,
 )
@@ -195,6 +194,8 @@ def min_norm_step(J, rhs, out):
 
 #: slots of :func:`buffers`
 B_PHI, B_VALS, B_STORE, B_DX, B_DISP, B_WS, B_DX1, B_LU, B_RHS, B_OUT, B_NONE, B_SV, B_RANK, B_U = range(14)
+#: slots of the dense KKT step (:func:`kkt_step`; empty unless ``plan.second_order``)
+B_KKT, B_KRHS, B_JF, B_JF2, B_G, B_LAM, B_PHI2, B_VALS2, B_U2, B_M3, B_W3 = range(14, 25)
 
 
 @njit
@@ -202,12 +203,18 @@ def buffers(tb, plan, nnz):
     """Work arrays of one solve (slots ``B_*``), allocated once: Phi, entry values, block
     storage, step, displacement, the kinematics workspace, the first step; one block's
     weighted matrix, right side and solution; an empty index array (no sparsity pattern
-    recorded); LAPACK's singular values and rank; the change from the least-change reference."""
+    recorded); LAPACK's singular values and rank; the change from the least-change reference;
+    then those of :func:`kkt_step` (``B_KKT`` ..)."""
     nf, nr = plan.free.shape[0], plan.n_rows
     big = max(nf, nr, 1)
+    k = nf + nr if plan.second_order else 0  # the KKT system's size
+    kj = nf * nr if plan.second_order else 0
     return np.zeros(nr), np.zeros(nnz), np.zeros(plan.store_ptr[-1]), np.zeros(nf), np.zeros(nf), \
         workspace(tb), np.zeros(nf), np.zeros(plan.store_ptr[-1]), np.zeros(big), np.zeros(nf), \
-        np.zeros(0, np.int64), np.zeros(big), np.zeros(1, LAPACK_INT), np.zeros(nf)  # fmt: skip
+        np.zeros(0, np.int64), np.zeros(max(big, k)), np.zeros(1, LAPACK_INT), np.zeros(nf), \
+        np.empty(k * k), np.empty(k), np.empty(kj), np.empty(kj), np.empty(nf if k else 0), \
+        np.zeros(nr if k else 0), np.empty(nr if k else 0), np.empty(nnz if k else 0), np.empty(nf if k else 0), \
+        np.empty((4, 3, 3)), np.empty(3)  # fmt: skip
 
 
 @inlined
@@ -275,6 +282,65 @@ def _lu_blocks(plan, Phi, vals, buf, b0):
 
 
 @kernel
+def _left_jacobian(u0, u1, u2, A):
+    """``A = J_l(u)``, the left Jacobian of SO(3)'s exponential at the rotation vector ``u``:
+    ``exp(u + d) = exp(J_l(u) d) exp(u)`` to first order in ``d``;
+    ``J_l = I + (1 - cos t) / t^2 [u]x + (t - sin t) / t^3 [u]x^2``, ``t = |u|``."""
+    t2 = u0 * u0 + u1 * u1 + u2 * u2
+    if t2 < 1e-8:  # the series (error < 1e-18)
+        a, c = 0.5 - t2 / 24.0, 1.0 / 6.0 - t2 / 120.0
+    else:
+        t = np.sqrt(t2)
+        a, c = (1.0 - np.cos(t)) / t2, (t - np.sin(t)) / (t2 * t)
+    u = (u0, u1, u2)
+    for x in range(3):
+        for y in range(3):
+            A[x, y] = c * u[x] * u[y] + ((1.0 - c * t2) if x == y else 0.0)
+    A[0, 1] -= a * u2
+    A[1, 0] += a * u2
+    A[0, 2] += a * u1
+    A[2, 0] -= a * u1
+    A[1, 2] -= a * u0
+    A[2, 1] += a * u0
+
+
+@inlined
+def _rotation_block(plan, buf, b, mb, nb, A, after):
+    """The least-change step's orientation columns of block ``b`` in the rotation vector ``u``
+    from the reference (``C = exp(u) C_ref``; ``buf[B_U]``): before the solve (``after``
+    False) the weighted matrix's columns become those of ``J J_l(u)``, the Jacobian in ``u``
+    (the right side ``Phi - J u`` stays: ``J_l(u) u = u``); after it, the solution's change of
+    ``u`` becomes the retraction's ``dxi' = J_l(u) du``. Gauss-Newton in ``u`` is the exact
+    linearisation of the metric ``|u|^2`` (a step linear in ``xi'`` is not, far from the
+    reference)."""
+    u, c0 = buf[B_U], plan.col_ptr[b]
+    for k in range(plan.rotations.shape[0]):
+        if plan.rotations[k, 0] != b:
+            continue
+        f0 = plan.block_cols[c0 + plan.rotations[k, 1]]
+        f1 = plan.block_cols[c0 + plan.rotations[k, 2]]
+        f2 = plan.block_cols[c0 + plan.rotations[k, 3]]
+        _left_jacobian(u[f0], u[f1], u[f2], A)
+        if after:
+            dx = buf[B_DX]
+            d0, d1, d2 = dx[f0], dx[f1], dx[f2]
+            dx[f0] = A[0, 0] * d0 + A[0, 1] * d1 + A[0, 2] * d2
+            dx[f1] = A[1, 0] * d0 + A[1, 1] * d1 + A[1, 2] * d2
+            dx[f2] = A[2, 0] * d0 + A[2, 1] * d1 + A[2, 2] * d2
+        else:
+            store, M, s0 = buf[B_STORE], buf[B_LU], plan.store_ptr[b]
+            for i in range(mb):
+                r = s0 + i * nb
+                j0 = store[r + plan.rotations[k, 1]]
+                j1 = store[r + plan.rotations[k, 2]]
+                j2 = store[r + plan.rotations[k, 3]]
+                for e in range(3):
+                    y = plan.rotations[k, 1 + e]
+                    w = plan.sqrt_weights[plan.block_cols[c0 + y]]
+                    M[y * mb + i] = (j0 * A[0, e] + j1 * A[1, e] + j2 * A[2, e]) * w
+
+
+@kernel
 def newton_step(plan, Phi, vals, buf, project):
     """The minimum-norm step over the free columns (block by block, in the plan's order, each
     block's right side including the blocks solved before it) into ``buf[B_DX]`` (free order):
@@ -283,7 +349,8 @@ def newton_step(plan, Phi, vals, buf, project):
 
     ``project``: the least-change (Gauss-Newton) step from the reference instead, with ``u =
     x - x_ref`` in ``buf[B_U]``: ``dx = -u - W^1/2 pinv(J W^1/2) (Phi - J u)``, the step to
-    ``argmin ||W^-1/2 (x + dx - x_ref)||`` subject to ``Phi + J dx = 0``; it differs from the
+    ``argmin ||W^-1/2 (x + dx - x_ref)||`` subject to ``Phi + J dx = 0``, orientations measured
+    by their rotation vector from the reference (:func:`_rotation_block`); it differs from the
     plain step only in the blocks with freedom (the SVD ones: a square regular block's
     solution is unique)."""
     _scatter(plan, vals, buf[B_STORE])
@@ -297,6 +364,7 @@ def newton_step(plan, Phi, vals, buf, project):
             for i in range(mb):
                 for y in range(nb):
                     rhs[i] -= store[s0 + i * nb + y] * u[plan.block_cols[c0 + y]]
+            _rotation_block(plan, buf, b, mb, nb, buf[B_WS][W_MAT][2], False)
         M, r0 = buf[B_LU], plan.row_ptr[b]
         for i in range(mb):  # rows in SI units: the fit and the rank do not depend on the length unit
             f = plan.row_scale[plan.block_rows[r0 + i]]
@@ -314,6 +382,7 @@ def newton_step(plan, Phi, vals, buf, project):
             out[i] = rhs[i]
         _block_out(plan, buf, b, -1.0)
         if project:
+            _rotation_block(plan, buf, b, mb, nb, buf[B_WS][W_MAT][2], True)
             dx, u, c0 = buf[B_DX], buf[B_U], plan.col_ptr[b]
             for y in range(nb):
                 f = plan.block_cols[c0 + y]
@@ -351,6 +420,147 @@ def displacement(tb, free, Q, S, C, L, ref, u, ws):
 
 
 @kernel
+def _metric_jacobian(plan, vals, u, J, A):
+    """The free Jacobian in the metric's coordinates into ``J`` (rows x free, rows in SI:
+    ``plan.row_scale``): orientation columns in the rotation vector ``u`` from the reference,
+    ``J_xi J_l(u)`` (:func:`_left_jacobian`; ``A`` 3x3 scratch)."""
+    J[:, :] = 0.0
+    er, ef = plan.entry_row, plan.entry_free
+    for e in range(er.shape[0]):
+        if ef[e] >= 0:
+            J[er[e], ef[e]] += vals[e] * plan.row_scale[er[e]]
+    for k in range(plan.rotations.shape[0]):
+        c0 = plan.col_ptr[plan.rotations[k, 0]]
+        f0 = plan.block_cols[c0 + plan.rotations[k, 1]]
+        f1 = plan.block_cols[c0 + plan.rotations[k, 2]]
+        f2 = plan.block_cols[c0 + plan.rotations[k, 3]]
+        _left_jacobian(u[f0], u[f1], u[f2], A)
+        for i in range(J.shape[0]):
+            j0, j1, j2 = J[i, f0], J[i, f1], J[i, f2]
+            J[i, f0] = j0 * A[0, 0] + j1 * A[1, 0] + j2 * A[2, 0]
+            J[i, f1] = j0 * A[0, 1] + j1 * A[1, 1] + j2 * A[2, 1]
+            J[i, f2] = j0 * A[0, 2] + j1 * A[1, 2] + j2 * A[2, 2]
+
+
+@kernel
+def _copy3(a, b):
+    for x in range(3):
+        for y in range(3):
+            b[x, y] = a[x, y]
+
+
+#: finite-difference step of the KKT step's Lagrangian Hessian (SI: metres, radians)
+FD_STEP = 1e-7
+
+
+@kernel
+def kkt_step(tb, plan, Q, S, C, L, ref, buf, curvature):
+    """The least-change step by Newton on the KKT system of ``min |u|_W^2 / 2`` subject to
+    ``Phi = 0`` (``u`` the change from ``ref`` in the metric's coordinates, :func:`displacement`
+    in ``buf[B_U]``; Phi and its entries of the state ``Q, S, C, L`` in ``buf``)::
+
+        [W^-1 + H   J^T] [du]   [-W^-1 u]
+        [J          0  ] [lam] = [-Phi   ]     (rows in SI, J in u: :func:`_metric_jacobian`)
+
+    ``H = sum_i lam_i d2 Phi_i / du2``, the Lagrangian's curvature at the multipliers of the
+    previous step (``buf[B_LAM]``), by forward differences of ``J^T lam`` (one evaluation per
+    free column, step :data:`FD_STEP` in SI); without ``curvature`` ``H = 0``: the Gauss-Newton
+    step of :func:`newton_step`. Solved by ``dgelsd`` (redundant rows: minimum-norm
+    multipliers). Newton converges quadratically where Gauss-Newton's rate is the curvature of
+    the constraint times the distance to the start (slow for large changes, orientations
+    above all). The step ``dx`` (retraction coordinates: ``dxi' = J_l(u) du``) goes to
+    ``buf[B_DX]``, the new multipliers to ``buf[B_LAM]``; returns the step's length in the
+    metric ``|du|_W`` (the optimality residual)."""
+    free, nf, m = plan.free, plan.free.shape[0], plan.n_rows
+    k = nf + m
+    u, u2, dx, lam, g = buf[B_U], buf[B_U2], buf[B_DX], buf[B_LAM], buf[B_G]
+    M3, w3, ws = buf[B_M3], buf[B_W3], buf[B_WS]
+    A = M3[2]
+    J = buf[B_JF][: m * nf].reshape((m, nf))
+    K, rhs = buf[B_KKT], buf[B_KRHS]
+    _metric_jacobian(plan, buf[B_VALS], u, J, A)
+    for c in range(k * k):
+        K[c] = 0.0
+    for f in range(nf):  # W^-1, J^T, J (column-major)
+        K[f * k + f] = 1.0 / plan.sqrt_weights[f] ** 2
+        for i in range(m):
+            K[(nf + i) * k + f] = J[i, f]
+            K[f * k + nf + i] = J[i, f]
+    if curvature:
+        for f in range(nf):  # J^T lam at the state
+            s = 0.0
+            for i in range(m):
+                s += J[i, f] * lam[i]
+            g[f] = s
+        J2 = buf[B_JF2][: m * nf].reshape((m, nf))
+        Phi2, vals2, none = buf[B_PHI2], buf[B_VALS2], buf[B_NONE]
+        for y in range(nf):  # column y of H: d(J^T lam)/du_y
+            c = free[y]
+            kind, j, side = tb.column[c, V_KIND], tb.column[c, V_JOINT], tb.column[c, V_SIDE]
+            h = FD_STEP * plan.sqrt_weights[y]
+            comp = tb.column[c, V_COMPONENT]
+            keep = 0.0
+            if kind == VAR_Q:
+                keep = Q[c]
+                Q[c] += h
+            elif kind == VAR_S:
+                keep = S[j, side, comp]
+                S[j, side, comp] += h
+            elif kind == VAR_L:
+                keep = L[j]
+                L[j] += h
+            else:  # C = exp(u + h e) C_ref, u its rotation vector from the reference
+                _copy3(C[j, side], M3[0])
+                mmT_into(C[j, side], ref[2][j, side], M3[1])
+                log_so3_into(M3[1], w3)
+                w3[comp] += h
+                exp_so3_into(w3, M3[1])
+                mm_into(M3[1], ref[2][j, side], C[j, side])
+            evaluate(tb, Q, S, C, L, ws, Phi2, vals2, plan.need, none, none)
+            displacement(tb, free, Q, S, C, L, ref, u2, ws)
+            _metric_jacobian(plan, vals2, u2, J2, A)
+            if kind == VAR_Q:
+                Q[c] = keep
+            elif kind == VAR_S:
+                S[j, side, comp] = keep
+            elif kind == VAR_L:
+                L[j] = keep
+            else:
+                _copy3(M3[0], C[j, side])
+            for f in range(nf):
+                s = 0.0
+                for i in range(m):
+                    s += J2[i, f] * lam[i]
+                K[y * k + f] += 0.5 * (s - g[f]) / h  # symmetrised: (H + H^T) / 2
+                K[f * k + y] += 0.5 * (s - g[f]) / h
+    Phi = buf[B_PHI]
+    for f in range(nf):
+        rhs[f] = -u[f] / plan.sqrt_weights[f] ** 2
+    for i in range(m):
+        rhs[nf + i] = -Phi[i] * plan.row_scale[i]
+    if _lstsq(K, k, k, rhs, buf[B_SV], buf[B_RANK]) != 0:
+        for f in range(k):
+            rhs[f] = np.nan
+    o2 = 0.0
+    for f in range(nf):
+        dx[f] = rhs[f]
+        o2 += (rhs[f] / plan.sqrt_weights[f]) ** 2
+    for i in range(m):
+        lam[i] = rhs[nf + i]
+    for r in range(plan.rotations.shape[0]):  # the retraction's dxi' = J_l(u) du
+        c0 = plan.col_ptr[plan.rotations[r, 0]]
+        f0 = plan.block_cols[c0 + plan.rotations[r, 1]]
+        f1 = plan.block_cols[c0 + plan.rotations[r, 2]]
+        f2 = plan.block_cols[c0 + plan.rotations[r, 3]]
+        _left_jacobian(u[f0], u[f1], u[f2], A)
+        d0, d1, d2 = dx[f0], dx[f1], dx[f2]
+        dx[f0] = A[0, 0] * d0 + A[0, 1] * d1 + A[0, 2] * d2
+        dx[f1] = A[1, 0] * d0 + A[1, 1] * d1 + A[1, 2] * d2
+        dx[f2] = A[2, 0] * d0 + A[2, 1] * d1 + A[2, 2] * d2
+    return np.sqrt(o2)
+
+
+@kernel
 def rigid_signs(tb, R, out):
     """Sign (+1, -1) of ``x''_a(i) . x''_b(j)`` of every rigid axis pair (``tb.rigid``) from the
     global joint frames ``R`` (the workspace's, after an evaluation), into ``out``."""
@@ -377,7 +587,7 @@ def _residual(tb, plan, Q, S, C, L, row_scale, buf):
     """Evaluate Phi (kept in ``buf``) and the Jacobian entries the plan needs; return the
     scaled norm of Phi."""
     Phi, vals, ws, none = buf[B_PHI], buf[B_VALS], buf[B_WS], buf[B_NONE]
-    evaluate_inlined(tb, Q, S, C, L, ws, Phi, vals, plan.need, none, none)
+    evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, none, none)
     s = 0.0
     for i in range(Phi.shape[0]):
         r = Phi[i] * row_scale[i]
@@ -398,8 +608,10 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf, re
     the first and last step taken (0: not square or singular).
     ``history[k]`` receives the residual after k updates (may be shorter than ``max_iter + 1``).
 
-    ``project``: the least-change iteration (Gauss-Newton on ``min ||W^-1/2 (x - x_ref)||``
-    subject to ``Phi(x) = 0``, ``ref`` the reference state; :func:`newton_step`), converged when
+    ``project``: the least-change iteration on ``min ||W^-1/2 (x - x_ref)||`` subject to
+    ``Phi(x) = 0``, ``ref`` the reference state: Newton on its KKT system when the plan is
+    small (``plan.second_order``, :func:`kkt_step`; its first step is Gauss-Newton's), else
+    Gauss-Newton (:func:`newton_step`); converged when
     also ``opt``, the length of that step in the metric, is below ``cfg.opt_tol``: zero exactly
     at the closest assembly's KKT point, where ``W^-1 (x - x_ref)`` lies in the row space of
     the free Jacobian. Otherwise ``opt`` is 0 and ``ref`` unused.
@@ -430,12 +642,16 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf, re
         stepped = False
         if project and nf > 0:  # the least-change step first: its length is the stopping test
             displacement(tb, free, Q, S, C, L, ref, buf[B_U], buf[B_WS])
-            sign = newton_step(plan, Phi, vals, buf, True)
             stepped = True
-            o2 = 0.0
-            for i in range(nf):
-                o2 += (dx[i] / plan.sqrt_weights[i]) ** 2
-            opt = np.sqrt(o2)
+            if plan.second_order:  # Newton on the KKT system (the first step: Gauss-Newton's)
+                opt = kkt_step(tb, plan, Q, S, C, L, ref, buf, it > 0)
+                sign = 0
+            else:
+                sign = newton_step(plan, Phi, vals, buf, True)
+                o2 = 0.0
+                for i in range(nf):
+                    o2 += (dx[i] / plan.sqrt_weights[i]) ** 2
+                opt = np.sqrt(o2)
         if it == 0:
             first = max(norm, opt, 1e-300)
         elif not np.isfinite(norm) or norm > cfg.divergence * first:

@@ -27,6 +27,9 @@ from kinprop.spatial import Array
 
 #: square components up to this size are solved dense (exact min-norm even when singular)
 DENSE_MAX = 24
+#: a free set that leaves freedom with at most this many free columns plus rows takes the
+#: least change by Newton on its KKT system (dense, second order; larger: Gauss-Newton)
+KKT_MAX = 96
 
 
 class Plan(NamedTuple):
@@ -52,6 +55,16 @@ class Plan(NamedTuple):
     #: per row of Phi: its scale to SI (``Engine.row_scale``), applied to a pseudo-inverse block's
     #: rows, so that its least-squares fit and rank do not depend on the model's length unit
     row_scale: Array
+    #: (k, 4): ``[block, y0, y1, y2]``, the local columns (components 0, 1, 2) of each
+    #: orientation whose three columns are free in one block: the least-change step takes them
+    #: in the rotation vector from the reference (``kinprop.solver.newton.newton_step``)
+    rotations: Array
+    #: per Jacobian entry: its row and its free index (-1: not free), for the dense KKT system
+    entry_row: Array
+    entry_free: Array
+    #: the least change by Newton on the dense KKT system (freedom left, at most KKT_MAX
+    #: free columns plus rows; ``kinprop.solver.newton.kkt_step``)
+    second_order: bool
 
     @property
     def n_blocks(self) -> int:
@@ -95,10 +108,13 @@ def build_plan(
     column_variable: Array,
     weights: Array | None = None,
     row_scale: Array | None = None,
+    rotations: Array | None = None,
 ) -> Plan:
     """The plan for ``free`` columns (sorted) of an ``m x n`` Jacobian with entries at
     ``rows``/``cols``; ``column_variable`` maps a column to its variable's first column;
-    ``weights`` (per free column) of the step's metric, ``row_scale`` (per row) of its fit."""
+    ``weights`` (per free column) of the step's metric, ``row_scale`` (per row) of its fit;
+    ``rotations``: the first column of each orientation variable (three columns, the
+    components of its rotation vector)."""
     free = np.ascontiguousarray(free, dtype=np.int64)
     nf = free.size
     fidx = -np.ones(n, dtype=np.int64)
@@ -158,10 +174,17 @@ def build_plan(
     def ptr(parts: list[Array]) -> Array:
         return np.concatenate([[0], np.cumsum([p.size for p in parts])]).astype(np.int64)
 
+    rot = []
+    for c0 in () if rotations is None else rotations:
+        f = fidx[c0 : c0 + 3]
+        if f.size == 3 and np.all(f >= 0) and np.all(block_of_col[f] == block_of_col[f[0]]):
+            rot.append([block_of_col[f[0]], *local_col[f]])
     sw = np.ones(nf) if weights is None else np.sqrt(np.asarray(weights, dtype=float))
     rows_b, cols_b = [r for r, _ in blocks], [c for _, c in blocks]
+    square = bool(all(r.size == c.size for r, c in blocks if c.size))
     return Plan(m, free, sw, need, np.zeros(n, dtype=np.int8), slot, cat(rows_b), ptr(rows_b), cat(cols_b), ptr(cols_b),
                 store_ptr,
                 c_entry.astype(np.int64), c_row.astype(np.int64), c_free.astype(np.int64), c_ptr,
-                bool(all(r.size == c.size for r, c in blocks if c.size)),
-                np.ones(m) if row_scale is None else np.ascontiguousarray(row_scale, dtype=float))  # fmt: skip
+                square, np.ones(m) if row_scale is None else np.ascontiguousarray(row_scale, dtype=float),
+                np.array(rot, dtype=np.int64).reshape(-1, 4), np.ascontiguousarray(rows, dtype=np.int64),
+                fidx[cols].astype(np.int64), bool(nf and not square and nf + m <= KKT_MAX))  # fmt: skip

@@ -84,17 +84,11 @@ function showWarnings(lines) {
   box.hidden = lines.length === 0;
 }
 
-function showStatus(res, prefix = "") {
+function showStatus() {
+  // the status line is the server's: the change that made the current model (never a failed one)
   const s = $("status");
-  if (!res) { s.textContent = ""; return; }
-  s.className = "status " + (res.status === "converged" ? "ok" : "failed");
-  const parts = [
-    prefix + res.status,
-    `${res.iterations} iterations`,
-    `||Phi|| = ${res.residual === null ? "nan" : res.residual.toExponential(3)}`,
-  ];
-  if (res.changed && res.changed.length) parts.push("moved: " + res.changed.join(" "));
-  s.replaceChildren(el("span", { id: "status-text", text: parts.join("  ·  ") }), el("span", { class: "muted", text: "  " + (res.message || "") }));
+  s.className = "status ok";
+  s.replaceChildren(el("span", { id: "status-text", text: state.status_line || "" }));
 }
 
 // --- free set ------------------------------------------------------------------------------
@@ -146,6 +140,50 @@ function renderDesign() {
   body.replaceChildren(...rows);
 }
 
+function renderHardpoints() {
+  const body = $("hardpoints").querySelector("tbody");
+  const rows = [];
+  let section = null;
+  for (const h of state.hardpoint_rows) {
+    if (h.section !== section) {
+      section = h.section;
+      rows.push(el("tr", { class: "section" }, [el("th", { colspan: 5, text: section })]));
+    }
+    const tr = el("tr", { "data-address": h.address || "", class: state.changes.includes(h.address) ? "role-set" : "",
+      title: h.address ? `${h.address} (global, ${state.units.length || ""})` : "follows the bodies (read-only)" });
+    tr.append(el("td", { class: "addr", text: h.label }), el("td", { text: h.body }));
+    h.value.forEach((x, k) => {
+      const td = el("td");
+      if (h.address) {
+        const inp = el("input", { type: "number", step: "any", value: fmt(x), "data-hardpoint": h.address, "data-index": k,
+          "aria-label": `${h.address}[${"xyz"[k]}]` });
+        inp.addEventListener("change", () => editHardpoint(h, k, inp));
+        td.append(inp);
+      } else {
+        td.className = "readonly";
+        td.textContent = fmt(x);
+      }
+      tr.append(td);
+    });
+    rows.push(tr);
+  }
+  body.replaceChildren(...rows);
+  $("hardpoints").hidden = rows.length === 0;
+}
+
+function editHardpoint(h, k, inp) {
+  const x = Number(inp.value);
+  if (inp.value.trim() === "" || !Number.isFinite(x)) {
+    showError([`${h.address}: expected a number, found ${JSON.stringify(inp.value)}`]);
+    inp.value = fmt(h.value[k]);
+    return;
+  }
+  const value = h.value.slice();
+  value[k] = x;
+  $("wrt").value = h.address;
+  run(() => propagate({ [h.address]: value }, freeSet(), true, inp));
+}
+
 function editDesign(v, k, inp) {
   const x = Number(inp.value);
   if (inp.value.trim() === "" || !Number.isFinite(x)) {
@@ -176,12 +214,10 @@ async function propagate(set, free, design, input) {
     const lines = [`not applied: ${Object.keys(set).join(", ")} cannot be assembled with free ${free.join(" ")}: ${res.message}`];
     if (res.continuation) lines.push(res.continuation.message);
     showError(lines);
-    showStatus(res);
     await refresh(false);   // the table shows the unchanged model again
     return false;
   }
   showError([]);
-  showStatus(res);
   await refresh(design);
   return true;
 }
@@ -197,6 +233,8 @@ async function refresh(designChanged) {
   $("undo").disabled = state.history.undo === 0;
   $("redo").disabled = state.history.redo === 0;
   showWarnings(state.warnings || []);
+  showStatus();
+  renderHardpoints();
   renderDesign();
   renderSliders();
   draw3d();
@@ -220,13 +258,11 @@ function sceneTraces(sc, faded, alpha) {
       line: { color: g.colour, width: width[g.kind] || 4, dash: faded && g.kind === "body" ? "dash" : dash[g.kind] || "solid" } }));
   }
   const byKind = {};
-  const labelled = new Set();
   for (const m of sc.markers) (byKind[m.kind] = byKind[m.kind] || []).push(m);
   for (const ms of Object.values(byKind)) {
-    traces.push(legend({ type: "scatter3d", mode: faded ? "markers" : "markers+text", opacity,
+    // labels on hover only: dense hardpoints would overlap as permanent text
+    traces.push(legend({ type: "scatter3d", mode: "markers", opacity,
       x: ms.map((m) => m.at[0]), y: ms.map((m) => m.at[1]), z: ms.map((m) => m.at[2]),
-      text: ms.map((m) => (labelled.has(m.joint) ? "" : (labelled.add(m.joint), m.joint))),
-      textposition: "top right", textfont: { size: 10 },
       hovertext: ms.map((m) => `${m.joint} (${m.kind})`), hoverinfo: "text",
       name: ms[0].label + tag, legendgroup: faded ? "before" : "after",
       marker: { symbol: ms[0].symbol, size: 5, color: "white", line: { color: "black", width: 2 } } }));
@@ -246,24 +282,82 @@ function sceneTraces(sc, faded, alpha) {
   const names = Object.keys(sc.points);
   if (names.length) {
     const p = names.map((n) => sc.points[n]);
-    traces.push(legend({ type: "scatter3d", mode: faded ? "markers" : "markers+text", opacity, name: "named points" + tag,
+    traces.push(legend({ type: "scatter3d", mode: "markers", opacity, name: "named points" + tag,
       legendgroup: faded ? "before" : "after", x: p.map((v) => v[0]), y: p.map((v) => v[1]), z: p.map((v) => v[2]),
-      text: names.map((n) => n.split(".").slice(1).join(".")), textfont: { size: 9 }, hovertext: names, hoverinfo: "text",
+      hovertext: names, hoverinfo: "text",
       marker: { symbol: "diamond", size: 3, color: sc.point_colour } }));
   }
   return traces;
 }
 
+// plotly camera presets (ISO 8855: x forward, y left, z up), orthographic but for "3d"
+const VIEWS = {
+  "3d": { eye: { x: 1.5, y: 1.5, z: 1.0 }, up: { x: 0, y: 0, z: 1 }, projection: { type: "perspective" } },
+  front: { eye: { x: 1.2, y: 0, z: 0 }, up: { x: 0, y: 0, z: 1 }, projection: { type: "orthographic" } },
+  side: { eye: { x: 0, y: 1.2, z: 0 }, up: { x: 0, y: 0, z: 1 }, projection: { type: "orthographic" } },
+  top: { eye: { x: 0, y: 0, z: 1.2 }, up: { x: 1, y: 0, z: 0 }, projection: { type: "orthographic" } },
+};
+let view = "3d";
+
+function wheelTraces(lo, hi) {
+  // each wheel: the tyre as two circles (loaded radius, a drawn width of 0.4 radius) joined by
+  // spokes, its spin axis; the ground plane through the lowest contact patch
+  const traces = [];
+  for (const w of state.wheels) {
+    const c = w.centre, a = w.axis;
+    const L = w.radius || 0.2 * state.scene.scale;
+    traces.push({ type: "scatter3d", mode: "lines", name: `spin axis ${w.body}`, hoverinfo: "name",
+      x: [c[0] - 0.5 * L * a[0], c[0] + 0.8 * L * a[0]], y: [c[1] - 0.5 * L * a[1], c[1] + 0.8 * L * a[1]],
+      z: [c[2] - 0.5 * L * a[2], c[2] + 0.8 * L * a[2]], line: { color: "#333", width: 3, dash: "dashdot" } });
+    if (!w.radius) continue;
+    // u, v: an orthonormal basis of the wheel plane
+    const t = Math.abs(a[2]) < 0.9 ? [0, 0, 1] : [1, 0, 0];
+    const cross = (p, q) => [p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0]];
+    const norm = (p) => { const n = Math.hypot(...p); return p.map((x) => x / n); };
+    const u = norm(cross(a, t)), v = cross(a, u);
+    const x = [], y = [], z = [];
+    for (const off of [-0.2 * w.radius, 0.2 * w.radius]) {
+      for (let k = 0; k <= 48; k++) {
+        const th = (2 * Math.PI * k) / 48;
+        for (const [arr, i] of [[x, 0], [y, 1], [z, 2]])
+          arr.push(c[i] + off * a[i] + w.radius * (Math.cos(th) * u[i] + Math.sin(th) * v[i]));
+      }
+      x.push(null); y.push(null); z.push(null);
+    }
+    traces.push({ type: "scatter3d", mode: "lines", name: `tyre ${w.body}`, hoverinfo: "name", x, y, z,
+      line: { color: "#555", width: 3 } });
+  }
+  if (state.ground !== null && state.ground !== undefined) {
+    const g = state.ground;
+    traces.push({ type: "mesh3d", name: "ground plane", hoverinfo: "name", showlegend: true, opacity: 0.15, color: "#7a6a4f",
+      x: [lo[0], hi[0], hi[0], lo[0]], y: [lo[1], lo[1], hi[1], hi[1]], z: [g, g, g, g], i: [0, 0], j: [1, 2], k: [2, 3] });
+  }
+  return traces;
+}
+
+function viewBounds() {
+  // the scenes' bounds grown to hold the tyres and the ground
+  const [lo0, hi0] = state.bounds;
+  const lo = lo0.slice(), hi = hi0.slice();
+  for (const w of state.wheels) {
+    const r = w.radius || 0;
+    for (let i = 0; i < 3; i++) { lo[i] = Math.min(lo[i], w.centre[i] - r); hi[i] = Math.max(hi[i], w.centre[i] + r); }
+  }
+  if (state.ground !== null && state.ground !== undefined) lo[2] = Math.min(lo[2], state.ground);
+  return [lo, hi];
+}
+
 function draw3d() {
   const traces = [];
+  const [lo, hi] = viewBounds();
   if (state.before_scene) traces.push(...sceneTraces(state.before_scene, true, state.faded_alpha));
   traces.push(...sceneTraces(state.scene, false, 1));
-  const [lo, hi] = state.bounds;
+  traces.push(...wheelTraces(lo, hi));
   const u = state.scene.unit ? ` [${state.scene.unit}]` : "";
   const span = [0, 1, 2].map((k) => hi[k] - lo[k]);
   const big = Math.max(...span);
   const layout = {
-    uirevision: "keep",
+    uirevision: view,
     margin: { l: 0, r: 0, t: 0, b: 0 },
     showlegend: true,
     legend: { font: { size: 10 }, x: 0, y: 1 },
@@ -273,9 +367,17 @@ function draw3d() {
       zaxis: { title: { text: "z" + u }, range: [lo[2], hi[2]] },
       aspectmode: "manual",
       aspectratio: { x: span[0] / big, y: span[1] / big, z: span[2] / big },
+      camera: VIEWS[view],
     },
   };
   Plotly.react("view3d", traces, layout, { displaylogo: false, responsive: true });
+}
+
+function setView(name) {
+  view = name;
+  for (const b of document.querySelectorAll("#views button")) b.classList.toggle("active", b.dataset.view === name);
+  document.body.dataset.view = name;
+  draw3d();
 }
 
 // --- sliders -------------------------------------------------------------------------------
@@ -418,13 +520,11 @@ async function history(what) {
   const r = await api("POST", "/api/" + what);
   if (!r.ok) { showError(r.data.errors); return; }
   showError([]);
-  $("status").textContent = what;
-  $("status").className = "status";
   await refresh(true);
 }
 
 function downloads() {
-  for (const id of ["dl-model", "dl-csv", "dl-json"]) {
+  for (const id of ["dl-model", "dl-csv", "dl-json", "dl-report"]) {
     const a = $(id);
     a.href = a.getAttribute("href").split("?")[0] + "?session=" + encodeURIComponent(SESSION);
   }
@@ -434,6 +534,7 @@ function downloads() {
 
 window.addEventListener("DOMContentLoaded", () => {
   downloads();
+  for (const b of document.querySelectorAll("#views button")) b.addEventListener("click", () => setView(b.dataset.view));
   $("undo").addEventListener("click", () => run(() => history("undo")));
   $("redo").addEventListener("click", () => run(() => history("redo")));
   $("reset").addEventListener("click", () => run(() => history("reset")));
@@ -448,7 +549,7 @@ window.addEventListener("DOMContentLoaded", () => {
   });
   run(async () => {
     await refresh(false);
-    if (state.result) showStatus(state.result, "loaded: ");
+    $("body-frames").open = !state.hardpoint_style;  // a hardpoint file is edited by its hardpoints
     renderCurveControls();
     await Promise.all([sweepCurve(false), sensitivity()]);
   });

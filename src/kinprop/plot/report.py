@@ -1,0 +1,263 @@
+"""What the workbench and the report show of a model by default, and the report itself.
+
+* :func:`hardpoint_rows` — the global hardpoints in the order a suspension designer reads them;
+* :func:`slider_joints` — the independent inputs (a slider each), :func:`coordinate_components`
+  — every drivable coordinate with its default curve range, :func:`default_curve_outputs`;
+* :func:`report_html` — one self-contained HTML file: the hardpoint table and the default
+  charts (``kinprop report``, and the workbench's ``report.html`` download).
+"""
+
+from __future__ import annotations
+
+import html
+import math
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+
+from kinprop.analysis.metrics import metric_names
+from kinprop.analysis.points import joint_hardpoints, named_points, snapshot
+from kinprop.analysis.sweep import sweep
+from kinprop.engine import compile as compile_engine
+from kinprop.engine.units import angle_indices
+from kinprop.errors import AddressError
+from kinprop.io.commands import sweep_inputs, sweep_json
+from kinprop.model import Model
+from kinprop.plot.scene import build_scene, scale
+from kinprop.propagation.hardpoints import parse_global, pivots
+
+
+def _xyz(v: Any) -> list[float]:
+    return [float(x) for x in np.asarray(v, dtype=float).ravel()]
+
+
+#: slider half-range: angles [deg], lengths [fraction of the mechanism's size]
+SLIDER_DEG, SLIDER_FRACTION = 45.0, 0.25
+#: default half-range of a curve's drive
+CURVE_DEG, CURVE_FRACTION = 10.0, 0.05
+
+
+#: a coordinate counts as independent when its row of the Jacobian's null-space basis is this large
+INDEPENDENT_TOL = 1e-8
+
+
+def slider_joints(model: Model) -> tuple[str, ...]:
+    """The joints the page offers a slider for: the declared inputs (``inputs:``) with one
+    coordinate; without declared inputs, as many single-coordinate joints as the mechanism has
+    degrees of freedom, chosen so that each can be set independently (a column-pivoted QR of the
+    rows of a null-space basis of ``Phi_q``): a dependent coordinate (a double wishbone's upper
+    arm angle, fixed by the lower one) is never offered."""
+    mech = model.mechanism
+    single = [j.name for j in mech.joints if j.name in model.coordinates and j.jtype.n_coordinates == 1]
+    if mech.inputs:
+        return tuple(j for j in mech.inputs if j in single)
+    if not single:
+        return ()
+    asm = compile_engine(model)
+    _, J = asm.evaluate(model.design, model.coordinates)
+    cols = asm.layout.columns(["q", "inputs"])
+    null = scipy.linalg.null_space(J[:, cols]) if J.shape[0] else np.eye(len(cols))
+    if null.shape[1] == 0:
+        return ()
+    row = {c: k for k, c in enumerate(cols)}
+    cand = [j for j in single if asm.layout[f"{j}.q"].start in row]
+    rows = null[[row[asm.layout[f"{j}.q"].start] for j in cand]]
+    _, R, piv = scipy.linalg.qr(rows.T, mode="economic", pivoting=True)
+    d = np.abs(np.diag(R))
+    chosen = {cand[p] for p, r in zip(piv, d, strict=False) if r > INDEPENDENT_TOL}
+    return tuple(j for j in single if j in chosen)
+
+
+def coordinate_components(model: Model, sliders: tuple[str, ...] = ()) -> list[dict[str, Any]]:
+    """Every joint coordinate a sweep can drive (not Euler parameters), in model units;
+    ``slider_ok`` for the ``sliders`` joints (:func:`slider_joints`)."""
+    deg = model.units.get("angle") == "deg"
+    size = scale([build_scene(model)])
+    out = []
+    for joint, q in model.coordinates.items():
+        q = np.atleast_1d(np.asarray(q, dtype=float))
+        jt = model.mechanism.joint(joint).jtype
+        angles = set(angle_indices(model, joint))
+        euler = (
+            set(range(jt.euler.start, jt.euler.stop)) if jt.euler is not None and q.size == jt.n_coordinates else set()
+        )
+        for k in range(q.size):
+            if k in euler:
+                continue
+            angle = k in angles
+            value = math.degrees(q[k]) if angle and deg else float(q[k])
+            unit = ("deg" if deg else "rad") if angle else model.units.get("length", "")
+            if angle:
+                half, wide = (CURVE_DEG, SLIDER_DEG) if deg else (math.radians(CURVE_DEG), math.radians(SLIDER_DEG))
+            else:
+                half, wide = CURVE_FRACTION * size, SLIDER_FRACTION * size
+            spec = joint if q.size == 1 else f"{joint}[{k}]"
+            out.append(
+                {
+                    "spec": spec,
+                    "address": f"{joint}.q" if q.size == 1 else f"{joint}.q[{k}]",
+                    "joint": joint,
+                    "type": jt.name,
+                    "angle": angle,
+                    "unit": unit,
+                    "value": value,
+                    "curve": [value - half, value + half],
+                    "slider": [value - wide, value + wide],
+                    "slider_ok": q.size == 1 and joint in sliders,
+                    "size": q.size,
+                }
+            )
+    # inputs first, then single coordinates: a sweep drives a joint's whole coordinate vector
+    # (the others of a multi-coordinate joint stay as they are)
+    return sorted(out, key=lambda c: (not c["slider_ok"], c["size"] > 1))
+
+
+def default_curve_outputs(model: Model, drives: list[dict[str, Any]]) -> list[str]:
+    """Camber and toe of the first wheel body; else the other single coordinates (a four-bar's
+    rocker angle over its crank's), else a named point's or a hardpoint's z."""
+    metrics = [m for m in metric_names(model) if m.endswith((".camber", ".toe"))]
+    if metrics:
+        return metrics[:2]
+    others = [d["address"] for d in drives[1:] if d["size"] == 1]
+    if others:
+        return others[:2]
+    pts = [f"point:{b.name}.{p}[z]" for b in model.mechanism.bodies if not b.fixed for p, _ in b.points]
+    if pts:
+        return pts[:1]
+    return [f"hardpoint:{j.name}.j[z]" for j in model.mechanism.joints][:1]
+
+
+#: the design table's hardpoint sections, in the order a suspension designer reads them
+SECTIONS = ("chassis pickups", "upright points", "links and steering", "spring and damper", "wheel")
+
+
+def hardpoint_rows(model: Model) -> list[dict[str, Any]]:
+    """The global hardpoints, by section (:data:`SECTIONS`): each joint's ``hardpoint:``
+    addresses that an edit accepts (a revolute's two chassis pivots, a ball joint, a link's
+    two ends), in the model's length unit, then the force elements' ends and the moving bodies'
+    named points (read-only: ``address`` None). An edit of a row is ``kinprop propagate --set
+    ADDRESS=x,y,z`` with the file's reading of hardpoint edits (``edits:``)."""
+    mech = model.mechanism
+    asm = compile_engine(model)
+    snap = snapshot(model, asm)
+    fixed = {b.name for b in mech.bodies if b.fixed}
+    hp = joint_hardpoints(model)
+    rows: list[dict[str, Any]] = []
+
+    def valid(address: str) -> bool:
+        try:
+            parse_global(asm, address)
+        except AddressError:
+            return False
+        return True
+
+    for j in mech.joints:
+        piv = pivots(asm, j.name)
+        if piv is not None:
+            for name, p in piv[1].items():
+                rows.append({"section": SECTIONS[0], "label": f"{j.name} {name} pivot",
+                             "address": f"hardpoint:{j.name}.{name}", "body": (j.body_i, j.body_j)[piv[0]],
+                             "value": _xyz(p)})  # fmt: skip
+            continue
+        on_fixed = [b in fixed for b in (j.body_i, j.body_j)]
+        if j.jtype.name == "distance" or not valid(f"hardpoint:{j.name}"):
+            for k, side in enumerate("ij"):
+                address = f"hardpoint:{j.name}.{side}"
+                if not valid(address):
+                    continue
+                body = (j.body_i, j.body_j)[k]
+                section = SECTIONS[0] if on_fixed[k] else SECTIONS[2]
+                end = "inner" if on_fixed[k] else "outer" if any(on_fixed) else ("i", "j")[k]
+                rows.append({"section": section, "label": f"{j.name} {end} ({body})", "address": address,
+                             "body": body, "value": hp[f"{j.name}.{side}"]})  # fmt: skip
+            continue
+        section = SECTIONS[0] if any(on_fixed) else SECTIONS[1]
+        rows.append({"section": section, "label": f"{j.name} ({j.jtype.name})", "address": f"hardpoint:{j.name}",
+                     "body": f"{j.body_i}/{j.body_j}", "value": hp[f"{j.name}.i"]})  # fmt: skip
+    for e in model.elements:
+        for k, (body, p) in enumerate(((e.body_i, e.s_i), (e.body_j, e.s_j))):
+            g = snap.r[body] + snap.A[body] @ np.asarray(p, dtype=float)
+            rows.append({"section": SECTIONS[3], "label": f"{e.name} {('i', 'j')[k]} ({body})", "address": None,
+                         "body": body, "value": _xyz(g)})  # fmt: skip
+    points = named_points(model)
+    for b in mech.bodies:
+        if b.fixed:
+            continue
+        for name, _ in b.points:
+            if b.joint_point(name) is None:
+                rows.append({"section": SECTIONS[4], "label": f"{b.name}.{name}", "address": None, "body": b.name,
+                             "value": points[f"{b.name}.{name}"]})  # fmt: skip
+    order = {s: k for k, s in enumerate(SECTIONS)}
+    return sorted(rows, key=lambda r: order[r["section"]])  # stable: joint order inside a section
+
+
+def default_curves(model: Model, steps: int = 49) -> dict[str, Any] | None:
+    """The default charts' data: a sweep of the first input (:func:`slider_joints`) over its
+    default range with :func:`default_curve_outputs`, as ``kinprop sweep --json`` prints it
+    (model units); None when the model has no single-coordinate input to drive."""
+    comps = coordinate_components(model, slider_joints(model))
+    if not comps or comps[0]["size"] != 1:
+        return None
+    d = comps[0]
+    spec = f"{d['spec']}={d['curve'][0]!r}:{d['curve'][1]!r}:{steps}"
+    outputs = default_curve_outputs(model, comps)
+    drives, _ = sweep_inputs(model, [spec], [])
+    obj = sweep_json(sweep(model, drives, outputs=outputs), None)
+    obj["drive_spec"] = spec
+    return obj
+
+
+def _cell(x: Any) -> str:
+    return (
+        ""
+        if x is None or (isinstance(x, float) and math.isnan(x))
+        else html.escape(repr(x) if isinstance(x, float) else str(x))
+    )
+
+
+def report_html(model: Model, title: str) -> str:
+    """One self-contained HTML page (plotly.js inline, no network): the model's global
+    hardpoints (:func:`hardpoint_rows`) and its default charts (:func:`default_curves`), one
+    panel per output, with the curves' numbers in a table below (full precision)."""
+    import plotly.graph_objects as go
+    from plotly.subplots import make_subplots
+
+    unit = model.units.get("length", "")
+    parts = [f"<h1>{html.escape(title)}</h1>", f"<p>{html.escape(model.mechanism.name)}; lengths in {unit}</p>"]
+    parts.append('<h2>Hardpoints (global)</h2><table id="hardpoints"><tr><th>hardpoint</th><th>address</th>'
+                 f"<th>body</th><th>x [{unit}]</th><th>y [{unit}]</th><th>z [{unit}]</th></tr>")  # fmt: skip
+    section = None
+    for r in hardpoint_rows(model):
+        if r["section"] != section:
+            section = r["section"]
+            parts.append(f'<tr class="section"><th colspan="6">{html.escape(section)}</th></tr>')
+        cells = [r["label"], r["address"] or "", r["body"]]
+        parts.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells)
+                     + "".join(f"<td>{_cell(x)}</td>" for x in r["value"]) + "</tr>")  # fmt: skip
+    parts.append("</table>")
+    curves = default_curves(model)
+    if curves is not None:
+        drive, outs, rows, units = curves["drives"][0], curves["outputs"], curves["rows"], curves["units"]
+        label = {c: f"{c} [{units[c]}]" if units.get(c) else c for c in [drive, *outs]}
+        fig = make_subplots(rows=1, cols=len(outs), subplot_titles=[label[o] for o in outs])
+        for k, o in enumerate(outs, start=1):
+            fig.add_trace(go.Scatter(x=[r[drive] for r in rows], y=[r[o] for r in rows], name=o, mode="lines+markers",
+                                     marker={"size": 3}), row=1, col=k)  # fmt: skip
+            fig.update_xaxes(title_text=label[drive], row=1, col=k)
+        fig.update_layout(height=380, showlegend=False, margin={"l": 50, "r": 20, "t": 40, "b": 50})
+        parts.append(f"<h2>Curves over {html.escape(label[drive])}</h2>")
+        parts.append(f"<p>kinprop sweep --drive {html.escape(curves['drive_spec'])}: {curves['converged']} of "
+                     f"{curves['steps']} points converged</p>")  # fmt: skip
+        parts.append(fig.to_html(full_html=False, include_plotlyjs=True, div_id="curves"))
+        cols = [drive, *outs]
+        parts.append('<details><summary>the curves\' numbers</summary><table id="curve-rows"><tr>'
+                     + "".join(f"<th>{html.escape(label[c])}</th>" for c in cols) + "</tr>")  # fmt: skip
+        for r in rows:
+            parts.append("<tr>" + "".join(f"<td>{_cell(r.get(c))}</td>" for c in cols) + "</tr>")
+        parts.append("</table></details>")
+    style = ("body{font:13px system-ui,sans-serif;margin:20px;color:#222}table{border-collapse:collapse}"
+             "td,th{border-bottom:1px solid #ddd;padding:2px 8px;text-align:left}"
+             "tr.section th{background:#eef2f6}")  # fmt: skip
+    return (f'<!doctype html>\n<html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>'
+            f"<style>{style}</style></head><body>\n" + "\n".join(parts) + "\n</body></html>\n")  # fmt: skip
