@@ -592,9 +592,8 @@ def sweep(
     frame.attrs["column_units"] = {
         c: u for c in columns if c not in (*META, "message") and (u := unit_of(model, c, engine))
     }
-    if not last:
-        good = user
-    else:
+    good = user
+    if last:
         good = engine.model_of(last[0], model) if drv is None else drv.base_of(engine, last[0])
     return SweepResult(frame, dr, expanded + driven, good)
 
