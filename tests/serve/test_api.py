@@ -319,17 +319,6 @@ def test_state_describes_the_model(make_client) -> None:
     assert st["before_scene"] is not None and "LCA.q" not in st["changed"] and "UCA.q" in st["changed"]
 
 
-def test_a_suspension_is_driven_by_wheel_travel(make_client) -> None:
-    """The workbench's first drive of a suspension with a wheel-centre reference is the wheel
-    travel, +-50 mm (in the model's length unit); without the reference there is none."""
-    st = make_client("double_wishbone_hardpoints.yaml").get("/api/state").json()
-    travel = st["drives"][0]
-    assert (travel["spec"], travel["unit"], travel["curve"]) == ("travel", "mm", [-50.0, 50.0])
-    assert [d["spec"] for d in st["sliders"]] == ["LCA", "UCA"]  # travel is a curve's drive, not a slider
-    st = make_client("multilink_rear_axle.yaml").get("/api/state").json()
-    assert st["drives"][0]["curve"] == pytest.approx([-0.05, 0.05])  # metres
-
-
 def test_curve_defaults_without_a_wheel(make_client) -> None:
     """A four-bar's default curve: the rocker (and coupler) angle over the crank angle; the
     McPherson's drive is the rack (the strut's slide is one coordinate of a 5-coordinate joint)."""

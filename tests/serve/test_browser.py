@@ -120,8 +120,8 @@ def test_workbench_in_chromium(live_server, examples: Path, tmp_path: Path) -> N
             current = tmp_path / "current.yaml"
             current.write_text(page.request.get(srv.url + "api/model.yaml?session=" + sid(page)).text())
             drive = state["drives"][0]
-            spec = f"travel={page.input_value('#drive-from')}:{page.input_value('#drive-to')}:49"
-            assert drive["spec"] == "travel"  # a suspension's default drive: wheel travel in equal steps
+            spec = f"LCA={page.input_value('#drive-from')}:{page.input_value('#drive-to')}:49"
+            assert drive["spec"] == "LCA"
             sweep = cli_json("sweep", current, "--drive", spec, "--out", "metric:upright.camber", "--json")
             drawn = page.evaluate("document.getElementById('curves').data[1].y")
             assert len(drawn) == 50

@@ -52,8 +52,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from kinprop.analysis.context import OutputContext
-from kinprop.analysis.metrics import _find_point, is_first_order, wheel_bodies
+from kinprop.analysis.context import OutputContext, find_point
+from kinprop.analysis.metrics import is_first_order, wheel_bodies
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
 from kinprop.analysis.sensitivity import output_sensitivity_matrix
 from kinprop.analysis.targets import _number
@@ -139,14 +139,8 @@ def wheel_for(model: Model, name: str) -> list[str]:
     return [wheel]
 
 
-def has_travel(model: Model) -> bool:
-    """Whether the model can be driven by ``travel``: wheel bodies, each with its reference."""
-    wheels = wheel_bodies(model)
-    return bool(wheels) and all(_find_point(model, w, "wheel_centre_ref", on_wheel=False) for w in wheels)
-
-
 def _reference(model: Model, wheel: str) -> Array:
-    found = _find_point(model, wheel, "wheel_centre_ref", on_wheel=False)
+    found = find_point(model, wheel, "wheel_centre_ref", on_wheel=False)
     if found is None:
         raise AddressError(f"wheel travel of {wheel!r} needs its reference: a fixed-body point "
                            f"{wheel}.wheel_centre_ref (or wheel_centre_ref with one wheel)")  # fmt: skip
@@ -625,5 +619,5 @@ def outputs_at(
     return {n: out[n] for n in names}
 
 
-__all__ = ["Driven", "DrivenOutput", "DrivenOutputs", "augment", "driven_sensitivity", "expand_driven", "has_travel",
+__all__ = ["Driven", "DrivenOutput", "DrivenOutputs", "augment", "driven_sensitivity", "expand_driven",
            "is_drive", "is_driven", "outputs_at", "parse_driven", "travel_input"]  # fmt: skip

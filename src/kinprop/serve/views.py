@@ -9,12 +9,11 @@ from typing import Any
 
 import numpy as np
 
-from kinprop.analysis.drives import has_travel
 from kinprop.analysis.metrics import wheel_bodies
 from kinprop.analysis.outputs import output_names
 from kinprop.analysis.points import joint_hardpoints, named_points
 from kinprop.analysis.units import unit_of
-from kinprop.engine.units import METRES_PER, from_solver_units
+from kinprop.engine.units import from_solver_units
 from kinprop.model import Model
 from kinprop.plot.report import coordinate_components, default_curve_outputs, hardpoint_rows
 from kinprop.plot.scene import Scene, bounds, build_scene, scale
@@ -148,22 +147,6 @@ def status_text(changes: dict[str, Any], result: dict[str, Any]) -> str:
     return "  ·  ".join(parts)
 
 
-#: the wheel-travel drive's default curve: +-50 mm, in the model's length unit
-TRAVEL_CURVE_M = 0.05
-
-
-def _travel_drive(model: Model) -> list[dict[str, Any]]:
-    """The wheel-travel drive (``travel``, kinprop.analysis.drives) of a model whose wheels have
-    a ``wheel_centre_ref``, first: a sweep in equal length steps, +-50 mm by default."""
-    if not has_travel(model):
-        return []
-    length = model.units.get("length", "m")
-    half = TRAVEL_CURVE_M / METRES_PER.get(length, 1.0)
-    return [{"spec": "travel", "address": "travel", "joint": "", "type": "wheel travel", "angle": False,
-             "unit": length, "value": 0.0, "curve": [-half, half], "slider": [-half, half], "slider_ok": False,
-             "size": 1}]  # fmt: skip
-
-
 def state_json(
     session: Session, label: str, sliders: tuple[str, ...] = (), hardpoint_style: bool = False
 ) -> dict[str, Any]:
@@ -174,7 +157,7 @@ def state_json(
     if last is not None:
         scenes.append(build_scene(last.before))
     lo, hi = bounds(scenes)
-    comps = _travel_drive(model) + coordinate_components(model, sliders)
+    comps = coordinate_components(model, sliders)
     res = session.result_json
     return {
         "model": label,
