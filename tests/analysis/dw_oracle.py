@@ -32,6 +32,8 @@ HMMWV = {
     }.items()
 }
 HMMWV["SPIN"] = HMMWV["WC"] + np.array([0.0, 1.0, 0.0])
+#: loaded radius: the contact patch of examples/double_wishbone_hardpoints.yaml, 470 mm below the wheel centre
+RADIUS = 470.0
 
 
 def rotate(p, origin, axis, angle):
@@ -61,10 +63,15 @@ def solve(hp: dict[str, np.ndarray], theta_deg: float, tie_rod: float | None = N
     a = R.apply(hp["SPIN"] - hp["WC"])
     a /= np.linalg.norm(a)
     k = k1 / np.linalg.norm(k1)
+    down = np.array([0.0, 0.0, -1.0]) + a[2] * a  # -z in the wheel plane: the contact point 470 mm below
+    contact = centre + RADIUS * down / np.linalg.norm(down)
     return {
         "camber": math.degrees(math.asin(-a[2])),
         "toe": math.degrees(math.atan2(a[0], abs(a[1]))),
         "caster": math.degrees(math.atan2(-k[0], k[2])),
         "kpi": math.degrees(math.atan2(-k[1], k[2])),
         "wheel_centre_dz": float(centre[2] - hp["WC"][2]),
+        "centre_y": float(centre[1]),
+        "centre_z": float(centre[2]),
+        "contact_y": float(contact[1]),
     }

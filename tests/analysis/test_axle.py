@@ -14,9 +14,11 @@ from dw_oracle import HMMWV, solve
 from scipy.optimize import brentq
 
 from kinprop import propagate
-from kinprop.analysis.axle import ackermann, roll_centre, roll_gradients
+from kinprop.analysis.axle import ackermann, roll_centre, roll_gradients, steering_ratio, track_change
+from kinprop.analysis.drives import outputs_at
 from kinprop.analysis.metrics import suspension_metrics
 from kinprop.analysis.outputs import evaluate_outputs
+from kinprop.errors import AddressError
 from kinprop.io import model_from_data
 from kinprop.io.axle import mirror_corner
 
@@ -51,19 +53,36 @@ def _theta_at(travel: float) -> float:
     return brentq(lambda t: solve(HMMWV, t)["wheel_centre_dz"] - travel, -8.0, 8.0, xtol=1e-13)
 
 
-def test_roll_steer_against_two_travel_solves_of_the_independent_solver(axle):
-    """Roll steer and camber: body roll +-phi as opposite wheel travels; the oracle's toe and
-    camber at the two travels of the left wheel, differenced centrally."""
+def _theta_rolled(phi_deg: float) -> float:
+    """The left lower-arm angle at body roll ``phi``: the road plane turned by ``phi`` about the
+    x axis through the midpoint of the wheel-centre references (y = 0, z = z_ref; the left side
+    up for phi > 0), the wheel centre on the turned plane through its reference."""
+    phi = math.radians(phi_deg)
+    ref = HMMWV["WC"]
+    n = np.array([0.0, math.sin(phi), math.cos(phi)])  # the plane's normal turned about -x
+    p = np.array([ref[0], ref[1] * math.cos(phi), ref[2] - ref[1] * math.sin(phi)])
+
+    def off(t):
+        s = solve(HMMWV, t)
+        return n @ (np.array([ref[0], s["centre_y"], s["centre_z"]]) - p)
+
+    return brentq(off, -8.0, 8.0, xtol=1e-13)
+
+
+def test_roll_steer_against_the_independent_solver_on_the_rolled_road_plane(axle):
+    """Roll steer and camber: the oracle's toe and camber of the left wheel at body roll +-phi
+    (its centre on the rolled plane, closed form), differenced centrally; the right wheel's
+    roll steer is the left's mirrored."""
     phi = 1.0
-    got = roll_gradients(axle, "upright_L", "upright_R", held={"RACK.q": 0.0}, angle=phi)
-    y = HMMWV["WC"][1]
-    up, down = (solve(HMMWV, _theta_at(-y * math.sin(math.radians(s * phi)))) for s in (1, -1))
+    got = roll_gradients(axle, "upright_L", "upright_R", angle=phi)
+    up, down = (solve(HMMWV, _theta_rolled(s * phi)) for s in (1, -1))
+    assert up["wheel_centre_dz"] < 0 < down["wheel_centre_dz"]  # roll to the right: the left wheel droops
     assert got["roll_steer:upright_L"] == pytest.approx((up["toe"] - down["toe"]) / (2 * phi), abs=1e-8)
     assert got["roll_camber:upright_L"] == pytest.approx((up["camber"] - down["camber"]) / (2 * phi), abs=1e-8)
     assert got["roll_steer:upright_R"] == pytest.approx(-got["roll_steer:upright_L"], abs=1e-9)
 
 
-def _trapezoid(track=1500.0, arm=150.0, beta_deg=15.0, rack_half=500.0):
+def _trapezoid(track=1500.0, arm=150.0, beta_deg=15.0, rack_half=500.0, vehicle=None):
     """A planar trapezoidal steering linkage (all points in z = 0): kingpins vertical at
     y = +-track/2, steering arms behind them turned inboard by beta, a rack along y at x = -arm cos beta."""
     beta = math.radians(beta_deg)
@@ -95,6 +114,8 @@ def _trapezoid(track=1500.0, arm=150.0, beta_deg=15.0, rack_half=500.0):
     units = {"length": "mm", "angle": "deg", "axes": "ISO8855"}
     data = {"kinprop": 1, "name": "trapezoid", "style": "hardpoints", "units": units,
             "bodies": bodies, "joints": joints, "inputs": ["RACK"]}  # fmt: skip
+    if vehicle:
+        data["vehicle"] = vehicle
     return model_from_data(data, "trapezoid.yaml"), (track, arm, beta, rack_half)
 
 
@@ -145,3 +166,50 @@ def test_shipped_axles_are_mirror_images(file, arm):
     for name, value in left.items():
         mirrored = -right[name] if name == "wheel_centre_dy" else right[name]
         assert value == pytest.approx(mirrored, abs=1e-9), name
+
+
+def test_track_change_in_heave_and_roll_against_the_independent_solver(axle):
+    """Half-track change (the contact point's lateral move, outboard positive) at a travel of
+    each wheel, and the axle's track change in heave (both wheels) and roll: the oracle's
+    contact point (470 mm below the centre in the wheel plane)."""
+    ref = HMMWV["WC"][1]
+    got = track_change(axle, "upright_L", "upright_R", travel=40.0)
+    corner = solve(HMMWV, _theta_at(40.0))
+    assert got["half_track_change:upright_L"] == pytest.approx(corner["contact_y"] - ref, abs=1e-7)
+    assert got["track_change"] == pytest.approx(2 * (corner["contact_y"] - ref), abs=1e-7)
+    rolled = track_change(axle, "upright_L", "upright_R", roll=2.0)
+    left, right = (solve(HMMWV, _theta_rolled(s * 2.0)) for s in (1, -1))  # the right wheel mirrors the left at -roll
+    assert rolled["half_track_change:upright_L"] == pytest.approx(left["contact_y"] - ref, abs=1e-7)
+    assert rolled["half_track_change:upright_R"] == pytest.approx(right["contact_y"] - ref, abs=1e-7)
+    assert rolled["track_change"] == pytest.approx(left["contact_y"] + right["contact_y"] - 2 * ref, abs=1e-7)
+
+
+def test_steering_ratio_of_a_planar_trapezoid_against_its_closed_form():
+    """360 / c over the mean road-wheel angle's slope in rack travel: the closed-form steer
+    angles (circle intersections) differenced over the same +-1 mm, at the centre and at 40 mm."""
+    c = 50.0  # mm of rack per steering-wheel turn
+    model, geo = _trapezoid(vehicle={"wheelbase": 2800.0, "cg_height": 500.0, "rack_travel_per_turn": c})
+    for at in (0.0, 40.0):
+        slopes = [(_closed_steer(at + 1, side, *geo) - _closed_steer(at - 1, side, *geo)) / 2 for side in (1.0, -1.0)]
+        truth = 360.0 / c / abs(math.degrees(sum(slopes) / 2))
+        assert steering_ratio(model, "knuckle_L", "knuckle_R", at=at) == pytest.approx(truth, rel=1e-9)
+    bare, _ = _trapezoid()
+    with pytest.raises(AddressError, match="rack_travel_per_turn"):
+        steering_ratio(bare, "knuckle_L", "knuckle_R")
+
+
+def test_road_wheel_steer_as_the_drive_against_the_trapezoids_closed_form():
+    """The inner wheel's steer angle driven in equal degrees (steer:knuckle_L, a revolute about
+    the vertical and one dot-1 row): the outer wheel's angle and the rack travel against the
+    closed form (the rack travel that turns the inner knuckle so far, by brentq)."""
+    model, geo = _trapezoid()
+    for delta in (5.0, 15.0):
+        s = brentq(lambda x, d=delta: _closed_steer(x, 1.0, *geo) - math.radians(d), -40.0, 0.0, xtol=1e-13)
+        names = [f"metric:knuckle_L.toe@steer:knuckle_L={delta}", f"metric:knuckle_R.toe@steer:knuckle_L={delta}",
+                 f"RACK.q@steer:knuckle_L={delta}"]  # fmt: skip
+        v = outputs_at(model, names)
+        assert v[names[0]] == pytest.approx(-delta, abs=1e-9)  # the left wheel's steer is -toe
+        outer = (math.degrees(_closed_steer(s, -1.0, *geo)) + 180.0) % 360.0 - 180.0
+        assert v[names[1]] == pytest.approx(outer, abs=1e-8)  # the right wheel's steer is +toe
+        assert 0 < outer < delta  # the outer wheel turns less (a trapezoid's Ackermann)
+        assert v[names[2]] == pytest.approx(s, abs=1e-7)

@@ -115,6 +115,24 @@ def test_sweep_is_the_cli_json(make_client, examples: Path) -> None:
     assert c.get("/api/state").json()["history"]["undo"] == 0  # a sweep changes nothing
 
 
+def test_wheel_travel_drive_and_driven_outputs_are_the_cli_json(make_client, examples: Path) -> None:
+    """Wheel travel as the drive (equal millimetre steps) and outputs at a travel position
+    (issue 20): the API answers what the CLI prints."""
+    c = make_client("double_wishbone_hardpoints.yaml", assemble_first=False)
+    req = {"drive": ["travel=-30:30:3"], "out": ["camber", "slope:toe@travel=-30..30"]}
+    args = ["--drive", "travel=-30:30:3", "--out", "camber", "--out", "slope:toe@travel=-30..30", "--json"]
+    r = c.post("/api/sweep", json=req)
+    assert r.status_code == 200
+    assert r.json() == cli_json("sweep", examples / "double_wishbone_hardpoints.yaml", *args)
+    assert [x["travel"] for x in r.json()["rows"]] == [-30.0, -10.0, 10.0, 30.0]
+    req = {"wrt": ["hardpoint:TR.i[z]"], "of": ["camber@travel=30", "slope:toe@travel=-30..30"]}
+    args = ["--wrt", "hardpoint:TR.i[z]", "--of", "camber@travel=30", "--of", "slope:toe@travel=-30..30", "--json"]
+    r = c.post("/api/sensitivity", json=req)
+    assert r.status_code == 200
+    assert r.json() == cli_json("sensitivity", examples / "double_wishbone_hardpoints.yaml", *args)
+    assert r.json()["units"]["of"] == ["deg", "deg/mm"]
+
+
 def test_sweep_abscissa_is_the_cli_x(make_client, examples: Path, tmp_path: Path) -> None:
     """``x`` (the CLI's ``--x``): camber and toe against wheel travel; the response names it as
     the CLI's JSON does, and without it the first drive."""

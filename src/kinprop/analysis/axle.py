@@ -8,10 +8,14 @@ Vehicle Dynamics*, ch. 17 and 19; Dixon, *Suspension Geometry and Computation*, 
   positive above the ground). At a symmetric state it lies on ``y = 0`` at the corners' own
   ``roll_centre_height``; in heave or roll it migrates.
 * ``roll_gradients`` — **roll steer** and **roll camber** (deg/deg): the wheels' toe and camber
-  per degree of body roll. Body roll ``phi`` (positive: rolling about +x, the left side up) is
-  applied as the opposite wheel travels it causes with the body held, ``travel = -y_C sin(phi)``
-  for a wheel centre at ``y_C``, each held by one more constraint row (:mod:`kinprop.analysis.
-  drives`), the rack held; central over ``+-angle``.
+  per degree of body roll, central over ``+-angle``. Body roll ``phi`` (positive: rolling about
+  +x, the left side up) is the ``roll`` drive of :mod:`kinprop.analysis.drives` (the road plane
+  rolled under the chassis about the x axis through the midpoint of the wheel-centre
+  references; each wheel centre kept at its height above it), the rack held.
+* ``track_change`` — **half-track change** of each wheel and the axle's **track change** (their
+  sum) at a heave travel or a body roll;
+* ``steering_ratio`` — the overall **steering ratio**, steering-wheel angle per mean road-wheel
+  angle, from the rack's travel per steering-wheel turn (``vehicle: rack_travel_per_turn``);
 * ``ackermann`` — **Ackermann percentage** at a rack travel: ``100 (delta_i - delta_o) /
   (delta_i - delta_o,ack)`` with the road-wheel steer angles ``delta = -toe`` change of the
   inner and outer wheel and ``cot(delta_o,ack) - cot(delta_i) = t / L`` (track ``t`` between
@@ -29,6 +33,7 @@ from kinprop.analysis.context import OutputContext, WheelSpec
 from kinprop.analysis.drives import outputs_at
 from kinprop.analysis.metrics import _radius, contact_point
 from kinprop.analysis.outputs import evaluate_outputs
+from kinprop.engine.units import METRES_PER
 from kinprop.errors import AddressError
 from kinprop.model import Model
 
@@ -63,28 +68,57 @@ def roll_centre(model: Model, left: str, right: str, travel_inputs: Mapping[str,
     return {"y": float(rc[0]), "z": float(rc[1]), "height": float(rc[1] - ground)}
 
 
-def roll_gradients(
-    model: Model, left: str, right: str, *, held: Mapping[str, float] | None = None, angle: float = 1.0
-) -> dict[str, float]:
+def roll_gradients(model: Model, left: str, right: str, *, angle: float = 1.0) -> dict[str, float]:
     """Roll steer and roll camber (deg/deg) of both wheels (module docstring): keys
-    ``roll_steer:WHEEL``, ``roll_camber:WHEEL``. ``held``: coordinates held (``{"RACK.q": 0}``,
-    model units); ``angle``: the roll half-range in degrees."""
+    ``roll_steer:WHEEL``, ``roll_camber:WHEEL``; ``angle``: the roll half-range in degrees.
+    The declared inputs other than the wheels' (a rack) are held."""
+    names = {
+        f"{key}:{w}": f"slope:metric:{w}.{m}@roll={-angle!r}deg..{angle!r}deg"
+        for w in (left, right)
+        for key, m in (("roll_steer", "toe"), ("roll_camber", "camber"))
+    }
+    v = outputs_at(model, list(names.values()))  # angle per angle: the same in degrees and radians
+    return {k: v[n] for k, n in names.items()}
+
+
+def track_change(
+    model: Model, left: str, right: str, *, travel: float | None = None, roll: float | None = None
+) -> dict[str, float]:
+    """Half-track changes of both wheels (``half_track_change:WHEEL``: the contact point's
+    lateral move from its reference, outboard positive; :mod:`kinprop.analysis.firstorder`) and
+    the **track change** (``track_change``, their sum: the change of the contact points'
+    distance), at the model's state, at a wheel ``travel`` of both wheels (heave, the length
+    unit) or at a body ``roll`` (the angle unit), drives of :mod:`kinprop.analysis.drives`."""
+    if travel is not None and roll is not None:
+        raise AddressError("track_change: give a travel or a roll, not both")
+    at = f"@travel={travel!r}" if travel is not None else f"@roll={roll!r}" if roll is not None else ""
+    names = {w: f"metric:{w}.half_track_change{at}" for w in (left, right)}
+    v = outputs_at(model, list(names.values()))
+    out = {f"half_track_change:{w}": v[n] for w, n in names.items()}
+    return out | {"track_change": sum(out.values())}
+
+
+def steering_ratio(
+    model: Model, left: str, right: str, rack: str = "RACK.q", *, at: float = 0.0, step: float | None = None
+) -> float:
+    """Overall **steering ratio** (deg of steering wheel per deg of road-wheel steer) at rack
+    travel ``at``: ``360 / c / |d delta_mean / d rack|`` with the rack's travel per
+    steering-wheel turn ``c`` (``vehicle: rack_travel_per_turn``, the length unit) and the mean
+    road-wheel angle ``delta_mean = (delta_left + delta_right) / 2`` (``delta = -toe`` change
+    of each wheel, positive to the left), its slope central over ``at +- step`` of rack (default
+    1 mm in the model's length unit)."""
+    if step is None:
+        step = METRES_PER["mm"] / METRES_PER[model.units.get("length", "m")]
+    c = model.vehicle.rack_travel_per_turn if model.vehicle is not None else None
+    if c is None:
+        raise AddressError("steering_ratio needs 'vehicle: rack_travel_per_turn' (rack travel per steering-wheel turn)")
     ctx = OutputContext.of(model)
-    y = {w: float(ctx.body_point(w, "wheel_centre")[1]) for w in (left, right)}
-    hold = "".join(f"&{k}={v}" for k, v in (held or {}).items())
-    out: dict[str, float] = {}
-    names = []
-    for sign in (1, -1):
-        phi = math.radians(sign * angle)
-        cond = "&".join(f"metric:{w}.wheel_centre_dz={-y[w] * math.sin(phi)!r}" for w in (left, right)) + hold
-        names += [f"metric:{w}.{m}@{cond}" for w in (left, right) for m in ("toe", "camber")]
-    v = outputs_at(model, names)
-    half = len(names) // 2
-    for k, name in enumerate(names[:half]):
-        w, m = name.split("@")[0][len("metric:") :].split(".")
-        key = "roll_steer" if m == "toe" else "roll_camber"
-        out[f"{key}:{w}"] = (v[name] - v[names[half + k]]) / (2 * angle)
-    return out
+    side = {w: 1.0 if ctx.body_point(w, "wheel_centre")[1] > 0 else -1.0 for w in (left, right)}
+    names = {w: f"slope:metric:{w}.toe@{rack}={at - step!r}..{at + step!r}" for w in (left, right)}
+    v = outputs_at(model, list(names.values()))
+    per_deg = 1.0 if model.units.get("angle") == "deg" else 180.0 / math.pi  # toe slope -> deg per length
+    mean = sum(-side[w] * v[n] * per_deg for w, n in names.items()) / 2.0
+    return 360.0 / c / abs(mean)
 
 
 def ackermann(model: Model, inner: str, outer: str, rack: str, travel: float, wheelbase: float) -> float:
@@ -105,4 +139,4 @@ def ackermann(model: Model, inner: str, outer: str, rack: str, travel: float, wh
     return 100.0 * (d_i - d_o) / (d_i - d_ack)
 
 
-__all__ = ["ackermann", "roll_centre", "roll_gradients"]
+__all__ = ["ackermann", "roll_centre", "roll_gradients", "steering_ratio", "track_change"]

@@ -88,4 +88,71 @@ def named_points(model: Model) -> dict[str, list[float]]:
     return out
 
 
-__all__ = ["Snapshot", "joint_hardpoints", "named_points", "snapshot"]
+#: the groups of a suspension's hardpoint table, in the order a designer reads them
+HARDPOINT_GROUPS = ("chassis pickups", "upright points", "steering", "spring/damper", "wheel", "other")
+#: joint-name prefixes of a tie rod (a distance link to the wheel that steers it)
+TIE_ROD_NAMES = ("TR", "TIE", "TOE", "STEER")
+
+
+def hardpoint_table(model: Model) -> list[dict[str, object]]:
+    """A suspension's hardpoints in the usual order (OptimumK, Adams Car): chassis pickups (the
+    arms' pivots ``front``/``rear``, the chassis ends of links and struts), upright points (the
+    ball joints on the wheel body), steering (the rack, each tie rod's inner and outer end),
+    spring/damper (each element's two ends), wheel (``wheel_centre``, ``spin_axis``,
+    ``contact_patch``); then anything else. Rows ``{"group", "point", "x", "y", "z"}``, global,
+    the model's length unit; joint order within a group. Empty without a wheel body (named
+    points ``wheel_centre`` and ``spin_axis``)."""
+    mech = model.mechanism
+    wheels = {b.name for b in mech.bodies if {"wheel_centre", "spin_axis"} <= {n for n, _ in b.points}}
+    if not wheels:
+        return []
+    fixed = {b.name for b in mech.bodies if b.fixed}
+    racks = {j.body_j if j.body_i in fixed else j.body_i for j in mech.joints
+             if j.type == "translational" and (j.body_i in fixed) != (j.body_j in fixed)}  # fmt: skip
+    snap = snapshot(model)
+    points = named_points(model)
+    rows: list[tuple[str, str, list[float]]] = []
+
+    def add(group: str, name: str, p: list[float]) -> None:
+        rows.append((group, name, p))
+
+    for j in mech.joints:
+        f = snap.frames[j.name]
+        side = {j.body_i: _xyz(f.P_i), j.body_j: _xyz(f.P_j)}
+        ends = (j.body_i, j.body_j)
+        on_wheel = [b for b in ends if b in wheels]
+        other = [b for b in ends if b not in wheels]
+        steering = j.name.upper().startswith(TIE_ROD_NAMES) or any(b in racks for b in ends)
+        if on_wheel and other and steering:
+            add("steering", f"{j.name} inner", side[other[0]])
+            add("steering", f"{j.name} outer", side[on_wheel[0]])
+        elif any(b in racks for b in ends) and any(b in fixed for b in ends):
+            add("steering", j.name, side[j.body_i])
+        elif on_wheel and other and other[0] in fixed:  # a strut or link straight to the chassis
+            add("chassis pickups", j.name, side[other[0]])
+            add("upright points", j.name, side[on_wheel[0]])
+        elif on_wheel:
+            add("upright points", j.name, side[on_wheel[0]])
+        elif any(b in fixed for b in ends):
+            chassis = next(b for b in ends if b in fixed)
+            pivots = [k for k in points if k.startswith(f"{chassis}.{j.name}.")]
+            for k in pivots:
+                add("chassis pickups", f"{j.name} {k.rsplit('.', 1)[1]}", points[k])
+            if not pivots:
+                add("chassis pickups", j.name, side[chassis])
+        else:
+            add("other", j.name, side[j.body_i])
+    for e in model.elements:
+        for body, s_, end in ((e.body_i, e.s_i, "i"), (e.body_j, e.s_j, "j")):
+            p = snap.r[body] + snap.A[body] @ np.asarray(s_, dtype=float)
+            add("spring/damper", f"{e.name} {end}", _xyz(p))
+    for w in sorted(wheels, key=mech.body_names.index):
+        for n in ("wheel_centre", "spin_axis", "contact_patch"):
+            if f"{w}.{n}" in points:
+                add("wheel", f"{w}.{n}" if len(wheels) > 1 else n, points[f"{w}.{n}"])
+    order = {g: k for k, g in enumerate(HARDPOINT_GROUPS)}
+    rows.sort(key=lambda r: order[r[0]])  # stable: joint order within a group
+    return [{"group": g, "point": n, "x": p[0], "y": p[1], "z": p[2]} for g, n, p in rows]
+
+
+__all__ = ["HARDPOINT_GROUPS", "Snapshot", "hardpoint_table", "joint_hardpoints", "named_points", "snapshot"]

@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from kinprop.analysis.drives import DrivenOutputs, expand_driven, is_driven
 from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import expand_outputs, output_program, program_batch
 from kinprop.analysis.program import OutputProgram
@@ -227,7 +228,7 @@ def model_unit_scale(
     labels = column_labels(engine.layout)
     names = list(outputs) if outputs is not None else _default_outputs(model)
     qlabels = [lab for lab in labels if parse_address(lab).field == "q"]
-    cols = [*addresses, *qlabels, *(expand_outputs(model, names, engine) if names else [])]
+    cols = [*addresses, *qlabels, *(expand_driven(model, names, engine) if names else [])]
     scale = {c: derivative_scale(model, c, engine) for c in dict.fromkeys(cols)}
     return {k: v for k, v in scale.items() if v != 1.0}
 
@@ -290,6 +291,7 @@ def study_program(eng: Engine, spec: StudySpec) -> OutputProgram:
     points = [f"point:{b.name}.{p}" for b in model.mechanism.bodies for p, _ in b.points]
     names = spec.outputs if spec.outputs is not None else _default_outputs(model)
     taken = set(expand_outputs(model, points, eng)) if points else set()
+    names = [x for x in names if not is_driven(x)]  # outputs at a drive position: solved apart (evaluate_chunk)
     extra = [x for x in expand_outputs(model, names, eng) if x not in taken] if names else []
     return output_program(model, [*points, *extra], engine=eng)
 
@@ -346,6 +348,15 @@ def evaluate_chunk(eng: Engine, spec: StudySpec, values: Array, start: int, prog
     outs = program_batch(program, model, res.state, conv)
     for k, key in enumerate(program.names):
         rows[key] = outs[:, k] * spec.scale.get(key, 1.0)
+    driven = [x for x in expand_driven(model, spec.outputs or [], eng) if is_driven(x)]
+    if driven:  # every converged variant at each drive position: one batched engine solve each
+        done = np.flatnonzero(conv)
+        at = DrivenOutputs(model, driven, free=spec.free, tol=spec.tol, max_iter=spec.max_iter, engine=eng)
+        vals = at.values([model.with_state(*eng.unpack(res.state[i])) for i in done]) if done.size else {}
+        for key in driven:
+            rows[key] = np.full(n, np.nan)
+            if done.size:
+                rows[key][done] = vals[key] * spec.scale.get(key, 1.0)
     import pandas as pd
 
     return pd.DataFrame(rows)
@@ -511,7 +522,7 @@ def run_study(
         first.update({key: values[0, cols].reshape(3, 3) for key, cols in whole.items()})
         apply_changes(base, first, eng0)
     if outputs:  # unknown output names fail here, before any directory is created
-        expand_outputs(base, list(outputs), eng0)
+        expand_driven(base, list(outputs), eng0)
     if scale is None and model_units:
         scale = model_unit_scale(model, addrs, outputs, eng0)
     if not collect and output is None:

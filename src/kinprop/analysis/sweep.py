@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
+from kinprop.analysis.drives import ROLL, STEER, DrivenOutputs, augment, expand_driven, is_drive, is_driven, wheel_for
 from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs, output_function, program_batch
 from kinprop.analysis.units import derivative_scale, unit_of
@@ -83,9 +84,13 @@ class Drive:
     angle: bool = False
     #: coordinates the joint has (for the label)
     size: int = 1
+    #: the column's name when not the coordinate's (a drive of kinprop.analysis.drives: ``travel``)
+    name: str = ""
 
     @property
     def label(self) -> str:
+        if self.name:
+            return self.name
         return f"{self.joint}.q" if self.size == 1 else f"{self.joint}.q[{self.index}]"
 
     @property
@@ -171,9 +176,17 @@ def parse_drive(model: Model, text: str, engine: Engine | None = None) -> Drive:
     is ``START:STOP:STEPS``, a list ``v1,v2,...`` or a CSV column ``@FILE.csv[:COLUMN]``, in
     the model's units. Angles in a list or a CSV column are unwrapped along the sequence (a
     jump of more than half a turn between neighbours is taken the short way)."""
+    name, eq, spec = text.strip().partition("=")
+    if eq and is_drive(name.strip()):  # wheel travel or body roll (kinprop.analysis.drives)
+        if name.strip() != ROLL:
+            wheel_for(model, name.strip())
+        deg = name.strip().startswith((ROLL, STEER)) and model.units.get("angle") == "deg"
+        return Drive(name.strip(), 0, _drive_values(text, spec.strip()), deg, 1, name.strip())
     m = _DRIVE.match(text.strip())
     if not m:
-        raise AddressError(f"--drive {text!r}: expected JOINT=START:STOP:STEPS (e.g. O2=0:360:360)")
+        raise AddressError(
+            f"--drive {text!r}: expected JOINT=START:STOP:STEPS (e.g. O2=0:360:360), travel=, roll=, steer:WHEEL="
+        )
     joint = m.group("joint")
     size, angles = _coordinate_info(engine if engine is not None else compile_engine(model.mechanism), model, joint)
     index = int(m.group("index") or 0)
@@ -429,6 +442,17 @@ def sweep(
     dr = tuple(parse_drive(model, d, engine) if isinstance(d, str) else d for d in drives)
     if not dr:
         raise AddressError("a sweep needs at least one --drive")
+    by_output = [d.joint for d in dr if is_drive(d.joint)]
+    hidden: frozenset[str] = frozenset()
+    user, user_engine, drv = model, engine, None
+    if by_output:  # wheel travel, body roll: joints of their own, solved with the mechanism
+        drv = augment(model, by_output, engine)
+        released = {r.split(".")[0] for d in by_output for r in drv.released[d]}
+        both = [d.joint for d in dr if d.joint in released]
+        if both:
+            raise AddressError(f"--drive: {both[0]} moves the wheel that {by_output[0]} drives; drive one of them")
+        model, engine, free, hidden = drv.model, compile_engine(drv.model), drv.free(free, by_output), drv.joints
+        dr = tuple(e for d in dr for e in (_drive_joints(drv, d) if is_drive(d.joint) else [d]))
     n = {d.values.size for d in dr}
     if len(n) != 1:
         raise AddressError(f"--drive: all drives move together and need the same number of values, found {sorted(n)}")
@@ -440,8 +464,12 @@ def sweep(
         raise AddressError("--set: a driven coordinate cannot also be set")
     names = list(default_outputs(model) if outputs is None else outputs)
     changes = changes_to_internal(model, changes or {}, engine) if check_units(units) else dict(changes or {})
-    fout, expanded = output_function(model, names, engine=engine)
-    coord_cols = coordinate_columns(model, engine)
+    # outputs are evaluated on the user's model (without drive joints) at each step's state
+    driven = expand_driven(user, [n for n in names if is_driven(n)], user_engine)
+    names = [n for n in names if not is_driven(n)]
+    at = DrivenOutputs(user, driven, free=free, tol=tol, max_iter=max_iter, engine=user_engine) if driven else None
+    fout, expanded = output_function(user, names, engine=user_engine)
+    coord_cols = [c for c in coordinate_columns(model, engine) if c[1] not in hidden]
     drive_cols = [d.label for d in dr]
     # unit factors, once (kinprop.engine.units' conversions are linear): model -> solver for the drives,
     # solver -> model for the coordinate columns
@@ -452,7 +480,9 @@ def sweep(
     keep = [i for i, e in enumerate(expanded) if e not in taken]
     expanded = [expanded[i] for i in keep]
     out_scale = np.array([derivative_scale(model, e, engine) for e in expanded])  # metric angles: the angle unit
-    columns = list(dict.fromkeys(["step", *drive_cols, *META[1:], *(c for c, *_ in coord_cols), *expanded, "message"]))
+    driven_scale = {n: derivative_scale(model, n, engine) for n in driven}
+    columns = list(dict.fromkeys(["step", *drive_cols, *META[1:], *(c for c, *_ in coord_cols), *expanded, *driven,
+                                  "message"]))  # fmt: skip
     rows: list[dict[str, Any]] = []
     sink = (
         open_sink(output, columns, labels=header_labels(model, columns, engine))
@@ -469,7 +499,7 @@ def sweep(
     def outputs_of(states: State, ok: Array) -> Array | None:
         """Every step's outputs in one compiled call (None: one of them fails at some step)."""
         try:
-            return program_batch(program, model, states, ok)
+            return None if drv is not None else program_batch(program, model, states, ok)
         except Exception:  # one output that cannot be evaluated there: never blank the others
             return None
 
@@ -499,11 +529,20 @@ def sweep(
                     continue  # the driven value exactly as given (not degrees -> radians -> degrees)
                 val = float(state.Q[qcol[col]])
                 row[col] = val * to_model[col] if deg else val
+            # with a drive joint: the outputs of the user's model (no drive joints) at this state
+            view = engine.model_of(state, model) if drv is None else drv.base_of(engine, state)
             if values is not None:
                 row.update(zip(expanded, (float(values[i]) * s for i, s in zip(keep, out_scale, strict=True)),
                                strict=True))  # fmt: skip
             else:
-                row.update(_each_output(engine.model_of(state, model), names, expanded, out_scale, engine, message))
+                try:
+                    got = fout(view)
+                    row.update(zip(expanded, (float(got[i]) * s for i, s in zip(keep, out_scale, strict=True)),
+                                   strict=True))  # fmt: skip
+                except Exception:  # one output that cannot be evaluated here: never blank the others
+                    row.update(_each_output(view, names, expanded, out_scale, user_engine, message))
+            if at is not None:  # outputs at a drive position: from this step, one engine solve each
+                row.update({n: float(v[0]) * driven_scale[n] for n, v in at.values([view]).items()})
         rows.append(row)
         if sink is not None:
             sink.write(row)
@@ -553,8 +592,20 @@ def sweep(
     frame.attrs["column_units"] = {
         c: u for c in columns if c not in (*META, "message") and (u := unit_of(model, c, engine))
     }
-    good = engine.model_of(last[0], model) if last else model
-    return SweepResult(frame, dr, expanded, good)
+    good = user
+    if last:
+        good = engine.model_of(last[0], model) if drv is None else drv.base_of(engine, last[0])
+    return SweepResult(frame, dr, expanded + driven, good)
+
+
+def _drive_joints(drv, d: Drive) -> list[Drive]:
+    """A drive of :mod:`kinprop.analysis.drives` as the coordinates of its joints (``travel`` of
+    an axle: one per wheel, labelled ``travel:WHEEL``)."""
+    addrs = drv.addresses[d.joint]
+    if len(addrs) == 1:
+        return [Drive(addrs[0].split(".")[0], 0, d.values, d.angle, 1, d.name)]
+    wheels = [a.split(".")[0].removesuffix("_travel") for a in addrs]
+    return [Drive(a.split(".")[0], 0, d.values, d.angle, 1, f"travel:{w}") for a, w in zip(addrs, wheels, strict=True)]
 
 
 def _diagnosis(model: Model, sol: Solution, free: Sequence[str]) -> str:

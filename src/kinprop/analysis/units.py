@@ -22,12 +22,42 @@ def is_metric(name: str) -> bool:
     )
 
 
+def _driven(name: str) -> tuple[str, str, bool] | None:
+    """``(output, condition name, is a slope)`` of an output at a drive position
+    (:mod:`kinprop.analysis.drives`); the condition as a quantity: a travel is a length
+    (``wheel_centre_dz``), ``roll`` and ``steer:WHEEL`` angles (``roll``), a coordinate itself."""
+    if "@" not in name:
+        return None
+    body, _, conds = name.partition("@")
+    slope = body.startswith("slope:")
+    cond = conds.split("&")[0].partition("=")[0].strip()
+    if cond == "travel" or cond.startswith("travel:"):
+        cond = "wheel_centre_dz"
+    elif cond.startswith("steer:"):
+        cond = "roll"
+    elif cond != "roll" and "." not in cond and cond not in ("wheel_centre_dz", "wheel_travel"):
+        cond = f"{cond}.q"
+    return body[len("slope:") :] if slope else body, cond, slope
+
+
 def unit_of(model: Model, name: str, engine: Engine | None = None) -> str:
     """The unit, in the model's units, of an address, a column label or an output name:
     ``J01.q`` -> ``deg`` (a revolute in a degree model), ``J03.q`` -> ``m`` (a slide),
     ``J12.s_j[0]``, ``J12.length``, ``point:...``, ``hardpoint:...`` -> the length unit,
     ``J.C_i`` -> ``""`` (a rotation matrix), Euler parameters -> ``""``, ``metric:W.camber`` ->
-    the angle unit; a load output (``reaction:J.fz``) -> the force unit (force x length for a moment)."""
+    the angle unit; a load output (``reaction:J.fz``) -> the force unit (force x length for a moment);
+    an output at a drive position (``camber@travel=50``) -> the output's; a slope
+    (``slope:toe@travel=-50..50``) -> the output's per the condition's (``deg/mm``)."""
+    if name == "travel" or name.startswith("travel:"):  # a drive's column (kinprop.analysis.drives)
+        return model.units.get("length", "m")
+    if name == "roll" or name.startswith("steer:"):
+        return model.units.get("angle", "rad")
+    driven = _driven(name)
+    if driven is not None:
+        out, cond, slope = driven
+        u = unit_of(model, out, engine)
+        per = unit_of(model, cond, engine)
+        return f"{u or '1'}/{per or '1'}" if slope else u
     if is_load_output(name):
         return load_output_unit(model, name)
     if is_metric(name):
@@ -48,6 +78,15 @@ def derivative_scale(model: Model, name: str, engine: Engine | None = None) -> f
     A derivative d(out)/d(in) computed in solver units becomes
     ``d_model = d_solver * derivative_scale(out) / derivative_scale(in)``. ``engine``: one
     compiled from the model's mechanism (else one is compiled per call)."""
+    driven = _driven(name)
+    if driven is not None:
+        out, cond, slope = driven
+        scale = derivative_scale(model, out, engine)
+        if not slope:
+            return scale
+        per = 1.0 / RADIANS_PER[model.units.get("angle", "rad")] if cond == "roll" else \
+            derivative_scale(model, cond, engine)  # fmt: skip
+        return scale / per
     if is_metric(name):
         angle_metric = is_angle_valued(name.split(".")[-1])
         return RADIANS_PER["deg"] if (angle_metric and model.units.get("angle") != "deg") else 1.0

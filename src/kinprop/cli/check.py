@@ -51,15 +51,30 @@ def _tables(obj: dict[str, Any]) -> list[Table]:
             " ".join(lp["path_i"]) or "-",
             " ".join(lp["path_j"]) or "-",
         )
+    tables = [bodies, joints, loops]
     if not obj.get("couplings"):
-        return [bodies, joints, loops]
+        return tables
     couplings = Table(title="couplings (q_a - q_a0 = c0 + c1 (q_b - q_b0) + ... + c4 (q_b - q_b0)^4)",
                       title_justify="left")  # fmt: skip
     for c in ("coupling", "joint a (driven)", "joint b", "constraint rows"):
         couplings.add_column(c, overflow="fold")
     for c in obj["couplings"]:
         couplings.add_row(c["name"], c["joints"][0], c["joints"][1], " ".join(r.split(":", 1)[1] for r in c["rows"]))
-    return [bodies, joints, loops, couplings]
+    return [*tables, couplings]
+
+
+def hardpoints_table(obj: dict[str, Any]) -> Table:
+    """A suspension's hardpoints in the usual order (chassis pickups, upright points, steering,
+    spring/damper, wheel), the group named once."""
+    length = obj["units"].get("length", "m")
+    hp = Table(title=f"hardpoints (global, {length})", title_justify="left")
+    for c in ("group", "point", "x", "y", "z"):
+        hp.add_column(c, justify="right" if c in "xyz" else "left")
+    group = None
+    for r in obj["hardpoints"]:
+        hp.add_row("" if r["group"] == group else r["group"], r["point"], *(f"{r[c]:.6g}" for c in "xyz"))
+        group = r["group"]
+    return hp
 
 
 def print_report(obj: dict[str, Any], path: Path) -> None:
@@ -98,6 +113,8 @@ def print_report(obj: dict[str, Any], path: Path) -> None:
             style="yellow",
             soft_wrap=True,
         )
+    if obj.get("hardpoints"):
+        out.print(hardpoints_table(obj))
 
 
 @app.command(name="check")
@@ -116,7 +133,9 @@ def check_cmd(
     rank of the Jacobian, the mobility and the redundant rows are computed at the model's
     coordinates as given (or after --assemble); ||Phi|| there is reported. JSON keys: mobility,
     gruebler, n_coordinates, n_constraints, rank, tree_joints, cut_joints, loops, redundant,
-    residual, assembled, bodies, joints, couplings (one constraint row each).
+    residual, assembled, bodies, joints, couplings (one constraint row each), hardpoints (a
+    suspension's, in the usual order: chassis pickups, upright points, steering, spring/damper,
+    wheel; group, point, x, y, z).
     """
     m = load_model_cli(model)
     evaluated_at = "the model's coordinates as given"

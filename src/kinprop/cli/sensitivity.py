@@ -61,7 +61,8 @@ def sensitivity_cmd(
         typer.Option(
             "--of",
             metavar="NAME",
-            help="outputs: J.q[k], J.s_i[k], point:BODY.NAME[x], hardpoint:J.i[x], metric:W.camber",
+            help="outputs: J.q[k], J.s_i[k], point:BODY.NAME[x], hardpoint:J.i[x], metric:W.camber, at a drive "
+            "position camber@travel=50, a slope slope:toe@travel=-50..50",
         ),
     ] = None,
     free: FreeOption = None,

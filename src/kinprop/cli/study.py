@@ -70,7 +70,12 @@ def study_cmd(
     set_: Sets = None,
     out_names: Annotated[
         list[str] | None,
-        typer.Option("--output-name", "--out", metavar="NAME", help="extra outputs (point:, metric:, ...)"),
+        typer.Option(
+            "--output-name",
+            "--out",
+            metavar="NAME",
+            help="extra outputs (point:, metric:, camber@travel=50, slope:toe@travel=-50..50, ...)",
+        ),
     ] = None,
     tol: Annotated[float, typer.Option("--tol", help="stop when ||Phi||_2 < TOL")] = 1e-10,
     max_iter: Annotated[int, typer.Option("--max-iter")] = 50,

@@ -125,7 +125,9 @@ def sweep_cmd(
             "--drive",
             metavar="JOINT=START:STOP:STEPS",
             help="JOINT=START:STOP:STEPS (STEPS+1 values), JOINT=v1,v2,... or JOINT=@FILE.csv[:COL] (a CSV "
-            "column, by name or 0-based index); model units; repeat to drive together",
+            "column, by name or 0-based index); model units; repeat to drive together. JOINT may also be "
+            "travel (wheel travel: equal length steps), travel:WHEEL, roll (an axle's body roll) or steer:WHEEL "
+            "(a road-wheel steer angle)",
         ),
     ],
     set_: Annotated[

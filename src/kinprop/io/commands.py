@@ -12,8 +12,10 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from kinprop.analysis.drives import driven_sensitivity, expand_driven, is_driven
 from kinprop.analysis.mobility import MobilityReport, row_names
 from kinprop.analysis.outputs import expand_outputs
+from kinprop.analysis.points import hardpoint_table
 from kinprop.analysis.sensitivity import derivative_method, design_sensitivity, output_sensitivity_matrix
 from kinprop.analysis.sweep import Drive, coordinate_columns, default_outputs, parse_drive
 from kinprop.analysis.units import derivative_scale, unit_of
@@ -59,6 +61,7 @@ def check_json(model: Model, rep: MobilityReport, evaluated_at: str) -> dict[str
         "model": model.source,
         "name": mech.name,
         "units": dict(model.units),
+        "hardpoints": hardpoint_table(model),
         "bodies": [
             {
                 "name": b.name,
@@ -202,6 +205,16 @@ class Sensitivities(NamedTuple):
 def _solver_matrix(
     assembled: Model, wrt: Sequence[str], of: Sequence[str] | None, free: Sequence[str], weights: Any
 ) -> tuple[np.ndarray, list[str], list[str]]:
+    if of and any(is_driven(o) for o in of):  # outputs at a drive position (analysis/drives.py)
+        names = expand_driven(assembled, of)
+        plain = [o for o in names if not is_driven(o)]
+        Dd, rows_d, columns = driven_sensitivity(assembled, [o for o in names if is_driven(o)], wrt, free, weights)
+        parts = dict(zip(rows_d, Dd, strict=True))
+        if plain:
+            Dp, rows_p, cols_p, _ = output_sensitivity_matrix(assembled, plain, wrt, free, weights, units="solver")
+            at = [cols_p.index(c) for c in columns]
+            parts |= {r: np.asarray(Dp)[k, at] for k, r in enumerate(rows_p)}
+        return np.array([parts[o] for o in names]).reshape(len(names), len(columns)), names, list(columns)
     if of:
         matrix, rows, columns, _ = output_sensitivity_matrix(assembled, of, wrt, free, weights, units="solver")
         return np.asarray(matrix), list(rows), list(columns)
@@ -237,7 +250,9 @@ def sensitivities(
     matrix = matrix * so[:, None] / si[None, :]
     units_of = [unit_of(assembled, str(name), engine) for name in rows]
     units_wrt = [_per(assembled, str(name), engine) for name in columns]
-    methods = [derivative_method(assembled, str(name)) for name in rows] if of else None
+    # an output at a drive position is differentiated as its output is (analysis/drives.py)
+    methods = [derivative_method(assembled, str(n).partition("@")[0].removeprefix("slope:")) for n in rows] if of \
+        else None  # fmt: skip
     return Sensitivities(matrix, rows, columns, units_of, units_wrt, methods)
 
 

@@ -153,7 +153,7 @@ def elements_to_data(
 def vehicle_to_data(vehicle: Vehicle | None) -> dict[str, Any] | None:
     if vehicle is None:
         return None
-    return {k: getattr(vehicle, k) for k in VehicleSpec.model_fields}
+    return {k: getattr(vehicle, k) for k in VehicleSpec.model_fields if getattr(vehicle, k) is not None}
 
 
 __all__ = [

@@ -10,7 +10,15 @@ from kinprop.errors import ModelError, Problem
 from kinprop.imports import import_model
 from kinprop.imports.chrono import chrono_hardpoints
 from kinprop.io.hardpoints import model_from_hardpoints
-from kinprop.io.loader import STYLES, ModelFile, build_model, build_or_report, describe_found, parse_document
+from kinprop.io.loader import (
+    STYLES,
+    ModelFile,
+    build_model,
+    build_or_report,
+    describe_found,
+    parse_document,
+    read_text,
+)
 from kinprop.io.scales import warn_scales
 from kinprop.model import Model
 
@@ -22,13 +30,7 @@ def load_model(path: str | Path) -> Model:
     file = str(path)
     if path.suffix.lower() in (".xml", ".mjcf"):
         return import_model(path)[0]
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelError([Problem("file", f"cannot read: {exc.strerror or exc}", file)]) from None
-    except UnicodeDecodeError as exc:
-        raise ModelError([Problem("file", f"not UTF-8 text (byte {exc.start})", file)]) from None
-    data, dups = parse_document(text, file)
+    data, dups = parse_document(read_text(path), file)
     if file.endswith(".json") and isinstance(data, dict) and "Template" in data and "kinprop" not in data:
         model = model_from_hardpoints(chrono_hardpoints(data, file)[0], file)
         warn_scales(model, file, stacklevel=2)  # implausible sizes for the declared unit (io/scales.py)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import math
 from collections import Counter
+from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
@@ -120,6 +121,17 @@ def parse_document(text: str, file: str) -> tuple[Any, list[Problem]]:
     except RecursionError:
         raise ModelError([Problem("syntax", "nested too deeply", file)]) from None
     return data, [Problem(p.location, p.message, file) for p in dups]
+
+
+def read_text(path: Path) -> str:
+    """A file's text (UTF-8), or a :class:`ModelError` naming it (cannot read, not UTF-8)."""
+    file = str(path)
+    try:
+        return path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ModelError([Problem("file", f"cannot read: {exc.strerror or exc}", file)]) from None
+    except UnicodeDecodeError as exc:
+        raise ModelError([Problem("file", f"not UTF-8 text (byte {exc.start})", file)]) from None
 
 
 def parse_text(text: str, file: str = "<string>") -> Any:

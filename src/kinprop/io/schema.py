@@ -135,6 +135,25 @@ class VehicleSpec(Strict):
     drive: Literal["outboard", "inboard"] = "inboard"
     #: the axle of the model's corner
     axle: Literal["front", "rear"] = "front"
+    #: rack travel per turn (360 deg) of the steering wheel, the length unit: the steering ratio's input
+    rack_travel_per_turn: Positive | None = None
+
+
+class VehicleUnits(Strict):
+    length: Literal["m", "mm"]
+
+
+class VehicleFile(Strict):
+    """A vehicle file (:mod:`kinprop.io.vehicle`): two axle model files and the vehicle's
+    parameters, in the file's own units."""
+
+    kinprop: Literal[1]
+    name: str = "vehicle"
+    units: VehicleUnits
+    vehicle: VehicleSpec
+    #: the axle model files, relative to the vehicle file
+    front: str
+    rear: str
 
 
 class PointLoadSpec(Strict):

@@ -83,6 +83,8 @@ class Vehicle:
     brakes: Literal["outboard", "inboard"] = "outboard"
     drive: Literal["outboard", "inboard"] = "inboard"
     axle: Literal["front", "rear"] = "front"
+    #: rack travel per turn (360 deg) of the steering wheel (length unit), or None
+    rack_travel_per_turn: float | None = None
 
 
 def element_problems(
