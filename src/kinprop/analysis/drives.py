@@ -56,6 +56,7 @@ from kinprop.analysis.context import OutputContext, find_point
 from kinprop.analysis.metrics import is_first_order, wheel_bodies
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
 from kinprop.analysis.sensitivity import output_sensitivity_matrix
+from kinprop.analysis.statics import LOAD_PREFIXES
 from kinprop.analysis.targets import _number
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine, State
@@ -75,8 +76,16 @@ _ABOUT_MINUS_X = np.array([[0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
 
 
 def is_driven(name: str) -> bool:
-    """Whether an output name carries a drive position (``@``) or is a slope (``slope:``)."""
-    return "@" in name or name.startswith("slope:")
+    """Whether an output name carries a drive position (``@``) or is a slope (``slope:``).
+
+    A load output's ``@CASE`` (``force:TR@braking_1g``) names its load case, not a drive
+    position: it is driven only when its suffix is a condition (``NAME=VALUE``)."""
+    if name.startswith("slope:"):
+        return True
+    head, at, tail = name.partition("@")
+    if at and head.startswith(LOAD_PREFIXES) and "=" not in tail:
+        return False
+    return bool(at)
 
 
 def is_drive(name: str) -> bool:
