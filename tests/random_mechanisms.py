@@ -326,13 +326,22 @@ def assembled_set(count: int = 40) -> list[RandomMechanism]:
     """Seeds ``0 .. count-1``: five tree joints cycling through the tree types, two cut joints
     through the cut types and loop kinds, 0-2 couplings, assembled (the motion and statics
     tests' common set)."""
+    return cycled_set(count, couplings=True)
+
+
+def cycled_set(
+    count: int, base: int = 0, tree_joints: int = 5, cut_stride: int = 3, couplings: bool = False
+) -> list[RandomMechanism]:
+    """``count`` assembled mechanisms, seeds ``base + i``: ``tree_joints`` tree joints cycling
+    through the tree types from ``i``, two cut joints through the cut types (stride
+    ``cut_stride``) and the loop kinds, ``i % 3`` couplings when ``couplings``."""
     return [
         random_mechanism(
-            seed,
-            [TREE_TYPES[(seed + m) % len(TREE_TYPES)] for m in range(5)],
-            [(CUT_TYPES[(3 * seed + m) % len(CUT_TYPES)], LOOP_KINDS[(seed + m) % 3]) for m in range(2)],
+            base + i,
+            [TREE_TYPES[(i + m) % len(TREE_TYPES)] for m in range(tree_joints)],
+            [(CUT_TYPES[(cut_stride * i + m) % len(CUT_TYPES)], LOOP_KINDS[(i + m) % 3]) for m in range(2)],
             assembled=True,
-            couplings=seed % 3,
+            couplings=i % 3 if couplings else 0,
         )
-        for seed in range(count)
+        for i in range(count)
     ]

@@ -19,7 +19,7 @@ from scipy.spatial.transform import Rotation
 
 import kinprop as kp
 from kinprop.engine import compile
-from random_mechanisms import CUT_TYPES, LOOP_KINDS, TREE_TYPES, random_mechanism
+from random_mechanisms import cycled_set
 
 pytestmark = pytest.mark.filterwarnings("ignore::kinprop.SingularityWarning")
 
@@ -156,13 +156,7 @@ def test_mcpherson_free_orientations_closest_assembly(examples, free):
 
 
 def random_cases():
-    out = []
-    for seed in range(8):
-        tree = [TREE_TYPES[(seed + m) % len(TREE_TYPES)] for m in range(4)]
-        kinds = [LOOP_KINDS[(seed + m) % len(LOOP_KINDS)] for m in range(2)]
-        cuts = [(CUT_TYPES[(3 * seed + m) % len(CUT_TYPES)], kinds[m]) for m in range(2)]
-        out.append(random_mechanism(700 + seed, tree, cuts, assembled=True))
-    return out
+    return cycled_set(8, base=700, tree_joints=4)
 
 
 @pytest.mark.parametrize("rm", random_cases(), ids=lambda rm: f"seed{rm.seed}")

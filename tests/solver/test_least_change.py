@@ -22,7 +22,7 @@ from kinprop.cli import app
 from kinprop.engine import compile
 from kinprop.io.writer import dump_model
 from kinprop.model import Design, Model, as_coordinates
-from random_mechanisms import CUT_TYPES, LOOP_KINDS, TREE_TYPES, random_mechanism
+from random_mechanisms import cycled_set
 
 pytestmark = pytest.mark.filterwarnings("ignore::kinprop.SingularityWarning")
 
@@ -244,13 +244,7 @@ def test_mcpherson_m_and_mm_closest_assembly(examples, free, tmp_path, run_cli):
 
 # --- seeded random mechanisms ----------------------------------------------------------------------
 def random_cases():
-    out = []
-    for seed in range(12):
-        tree = [TREE_TYPES[(seed + m) % len(TREE_TYPES)] for m in range(5)]
-        kinds = [LOOP_KINDS[(seed + m) % len(LOOP_KINDS)] for m in range(2)]
-        cuts = [(CUT_TYPES[(5 * seed + m) % len(CUT_TYPES)], kinds[m]) for m in range(2)]
-        out.append(random_mechanism(900 + seed, tree, cuts, assembled=True))
-    return out
+    return cycled_set(12, base=900, cut_stride=5)
 
 
 @pytest.mark.parametrize("rm", random_cases(), ids=lambda rm: f"seed{rm.seed}")
