@@ -14,7 +14,6 @@ in a fresh process (imports and the kernel cache load included): CPU and wall se
 from __future__ import annotations
 
 import argparse
-import math
 import statistics
 import subprocess
 import sys
@@ -22,8 +21,7 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
+from kinprop.builders import closed_chain_yaml
 from kinprop.model import Body, Joint, Mechanism
 from kinprop.topology import build_topology
 
@@ -39,28 +37,6 @@ def ladder(n: int) -> Mechanism:
     return Mechanism(tuple(bodies), tuple(joints), "ladder")
 
 
-def chain_yaml(n: int) -> str:
-    """A planar arc of ``n`` revolute links closed to the ground by one distance joint (assembled)."""
-    L = 1.0 / n
-    q = [0.0] + [0.5 / n] * (n - 1)
-    lines = ["kinprop: 1", f"name: chain {n}", "units: {length: m, angle: rad}", "bodies:"]
-    lines.append("  ground: {fixed: true, position: [0, 0, 0]}")
-    lines += [f"  b{k}: {{}}" for k in range(n)]
-    lines.append("joints:")
-    theta = np.cumsum(q)
-    tip = np.array([L * np.cos(theta).sum(), L * np.sin(theta).sum()])
-    for k in range(n):
-        parent = "ground" if k == 0 else f"b{k - 1}"
-        lines.append(
-            f"  R{k}: {{type: revolute, bodies: [{parent}, b{k}], s_i: [{0 if k == 0 else L}, 0, 0], q: [{q[k]!r}]}}"
-        )
-    lines.append(
-        f"  D: {{type: distance, bodies: [b{n - 1}, ground], s_i: [{L}, 0, 0], s_j: [0.3, 0, 0],"
-        f" length: {math.dist(tip, (0.3, 0.0))!r}}}"
-    )
-    return "\n".join(lines) + "\n"
-
-
 def topology_cpu(n: int) -> float:
     mech = ladder(n)
     t0 = time.process_time()
@@ -74,7 +50,7 @@ def check_cpu(n: int) -> tuple[float, float]:
     """(CPU, wall) seconds of load + ``kinprop check --json`` in a fresh process."""
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "chain.yaml"
-        path.write_text(chain_yaml(n))
+        path.write_text(closed_chain_yaml(n))
         code = (
             "import sys, time\n"
             "from kinprop.cli import app\n"

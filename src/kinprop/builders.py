@@ -19,6 +19,8 @@ faster to re-assemble.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from kinprop.model import Body, Design, Joint, Mechanism, Model
@@ -203,7 +205,31 @@ def rssr(theta: float = 0.0, phi: float = 0.3, **geometry: object) -> Model:
     return Model(Mechanism(bodies, joints, name="spatial RSSR four-bar"), design, coords)
 
 
+def closed_chain_yaml(n: int) -> str:
+    """A planar chain of ``n`` revolute links (bent into an arc) closed to the ground by one
+    distance joint whose length is the actual tip distance: assembled, mobility n - 1."""
+    L = 1.0 / n
+    q = [0.0] + [0.5 / n] * (n - 1)  # a gentle arc, so the closing distance is not radial
+    lines = ["kinprop: 1", f"name: chain {n}", "units: {length: m, angle: rad}", "bodies:"]
+    lines.append("  ground: {fixed: true, position: [0, 0, 0]}")
+    lines += [f"  b{k}: {{}}" for k in range(n)]
+    lines.append("joints:")
+    theta = np.cumsum(q)
+    tip = np.array([L * np.cos(theta).sum(), L * np.sin(theta).sum()])
+    for k in range(n):
+        parent = "ground" if k == 0 else f"b{k - 1}"
+        lines.append(
+            f"  R{k}: {{type: revolute, bodies: [{parent}, b{k}], s_i: [{0 if k == 0 else L}, 0, 0], q: [{q[k]!r}]}}"
+        )
+    lines.append(
+        f"  D: {{type: distance, bodies: [b{n - 1}, ground], s_i: [{L}, 0, 0], s_j: [0.3, 0, 0],"
+        f" length: {math.dist(tip, (0.3, 0.0))!r}}}"
+    )
+    return "\n".join(lines) + "\n"
+
+
 __all__ = [
+    "closed_chain_yaml",
     "leg_addresses",
     "rssr",
     "rssr_crank_point",

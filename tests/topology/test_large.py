@@ -10,15 +10,14 @@ from __future__ import annotations
 
 import itertools
 import json
-import math
 import subprocess
 import sys
 from pathlib import Path
 
 import networkx as nx
-import numpy as np
 import pytest
 
+from kinprop.builders import closed_chain_yaml
 from kinprop.model import Body, Joint, Mechanism
 from kinprop.topology import WORLD, build_topology
 from random_mechanisms import suite_mechanisms
@@ -75,35 +74,12 @@ def test_deep_ladder_topology() -> None:
     assert (lp.junction, lp.path_i, lp.path_j, lp.case) == ("b14998", (), ("R14999", "R15000"), 2)
 
 
-def chain_yaml(n: int) -> str:
-    """A planar chain of ``n`` revolute links (bent into an arc) closed to the ground by one
-    distance joint whose length is the actual tip distance: assembled, mobility n - 1."""
-    L = 1.0 / n
-    q = [0.0] + [0.5 / n] * (n - 1)  # a gentle arc, so the closing distance is not radial
-    lines = ["kinprop: 1", f"name: chain {n}", "units: {length: m, angle: rad}", "bodies:"]
-    lines.append("  ground: {fixed: true, position: [0, 0, 0]}")
-    lines += [f"  b{k}: {{}}" for k in range(n)]
-    lines.append("joints:")
-    theta = np.cumsum(q)
-    tip = np.array([L * np.cos(theta).sum(), L * np.sin(theta).sum()])
-    for k in range(n):
-        parent = "ground" if k == 0 else f"b{k - 1}"
-        lines.append(
-            f"  R{k}: {{type: revolute, bodies: [{parent}, b{k}], s_i: [{0 if k == 0 else L}, 0, 0], q: [{q[k]!r}]}}"
-        )
-    lines.append(
-        f"  D: {{type: distance, bodies: [b{n - 1}, ground], s_i: [{L}, 0, 0], s_j: [0.3, 0, 0],"
-        f" length: {math.dist(tip, (0.3, 0.0))!r}}}"
-    )
-    return "\n".join(lines) + "\n"
-
-
 def test_check_of_a_long_chain(tmp_path: Path) -> None:
     """Load + ``kinprop check`` of a 2,000-body chain in a fresh process: one loop through every
     body, rank 1, mobility = the Gruebler count (20,000 bodies: benchmarks/large_models.py)."""
     n = 2_000
     path = tmp_path / "chain.yaml"
-    path.write_text(chain_yaml(n))
+    path.write_text(closed_chain_yaml(n))
     code = f"from kinprop.cli import app\napp(['check', {str(path)!r}, '--json'])\n"
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr[-2000:]
