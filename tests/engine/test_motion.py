@@ -336,3 +336,36 @@ def test_compiled_velocity_solve_agrees_with_the_svd_path() -> None:
         assert np.max(np.abs(fast.V - svd.V)) < 1e-10 * max(1.0, float(np.max(np.abs(svd.V))))
         assert fast.residual == pytest.approx(svd.residual, rel=1e-6, abs=1e-14)
     assert taken >= 20
+
+
+def test_gamma_of_a_length_rate_is_the_second_derivative_of_phi() -> None:
+    """Haug's ``gamma`` along a state rate that changes a distance joint's length (the RSSR's
+    coupler, ``coupler.length``) together with the coordinates and an attachment point: minus
+    the second derivative of ``Phi(retract(x, t xdot))`` (central differences of the kernel's
+    residual; revolute tree joints, so the straight line in q is the path). The distance row
+    carries ``2 ldot^2``; the polarisation in ``motion_derivatives`` cancels it, so only this
+    test sees it (removing the term misses by ``2 ldot^2 = 2``)."""
+    from kinprop.builders import rssr
+    from kinprop.engine.motion import _Frames, _gamma, _tree_bias, _tree_velocities
+
+    model = kp.assemble(rssr()).after
+    engine = kp.compile(model)
+    st = engine.state_of(model)
+    xdot = np.zeros(engine.n_columns)
+    xdot[: engine.n_coordinates] = engine.motion(st, {"crank.q": 0.7}).qdot
+    lcol = engine.target("coupler.length").start
+    xdot[lcol] = 1.0
+    xdot[engine.columns(["coupler.s_i"])] = [0.3, -0.2, 0.5]
+    fr = _Frames(engine, st, design=True)
+    V = _tree_velocities(engine, fr, xdot)
+    gamma = _gamma(engine, fr, xdot, V, _tree_bias(engine, fr, xdot, V))
+
+    def d2(h: float) -> np.ndarray:
+        phi = [engine.evaluate(engine.retract(st, t * xdot))[0] for t in (-h, 0.0, h)]
+        return (phi[0] - 2 * phi[1] + phi[2]) / h**2
+
+    truth = (4 * d2(5e-4) - d2(1e-3)) / 3  # Richardson
+    assert np.max(np.abs(gamma + truth)) < 1e-6 * max(1.0, float(np.max(np.abs(truth))))
+    (tr,) = [r for r, lab in enumerate(engine.row_labels) if lab.startswith("coupler:")]
+    without = gamma[tr] - 2.0 * xdot[lcol] ** 2  # the row without its length-rate term
+    assert abs(without + truth[tr]) > 1.0
