@@ -20,11 +20,15 @@ the axis' own direction). Centres at infinity are reported as NaN coordinates an
 swing-arm length; roll-centre height and the anti percentages stay finite (the lines
 through them are parallel to the axis).
 
-Design derivatives (:func:`first_order_derivatives`) are exact too: the velocity state's
+The formulas are compiled (:mod:`kinprop.engine.firstorder`, the one implementation): a
+:class:`FirstOrderProgram` holds one wheel's points, parameters and elements as its tables and
+evaluates them over a whole batch of states in one call (a sweep's steps, a study's variants).
+Design derivatives (:meth:`FirstOrderProgram.derivatives`) are exact too: the velocity state's
 derivatives along a state direction come from :func:`kinprop.engine.motion.motion_derivatives`
 (analytic second-order terms), the points move with their bodies (and with their own ``s'``
-when they are joint frames), and the formulas below, analytic in all of these, are
-differentiated in forward mode by a complex step (dual numbers; no subtractive difference).
+when they are joint frames, or an element's end when it is a design variable), and the
+formulas, analytic in all of these, are differentiated in forward mode by a complex step (dual
+numbers; no subtractive difference).
 """
 
 from __future__ import annotations
@@ -35,19 +39,16 @@ from typing import Any
 
 import numpy as np
 
-from kinprop.analysis.context import OutputContext
-from kinprop.analysis.motion import point_of
+from kinprop.analysis.program import ProgramBuilder
 from kinprop.engine import Engine, State
-from kinprop.engine.motion import MotionState, cross3, motion_derivatives
+from kinprop.engine import firstorder as compiled
+from kinprop.engine import outputs as compiled_outputs
+from kinprop.engine.motion import SOLVED, MotionState, _velocity_plan, cross3, motion_derivatives, motion_state
 from kinprop.errors import AddressError
-from kinprop.kinematics.tables import J_NQ, J_QCOL, K_JOINT
+from kinprop.kinematics.kernels import W_BODY_A, W_BODY_R, W_FRAME_P
+from kinprop.kinematics.tables import J_COL_S_I, J_NQ, J_QCOL, K_JOINT
 from kinprop.model import Model
 from kinprop.spatial import Array
-
-#: |n.u| below this: the screw axis is parallel to the view plane (the centre at infinity)
-PARALLEL_TOL = 1e-12
-#: relative |w| below which the wheel's relative motion is a pure translation
-TRANSLATION_RTOL = 1e-12
 
 GAIN_METRICS = ("camber_gain", "bump_steer", "caster_gain")
 CENTRE_METRICS = ("fvic_y", "fvic_z", "fvsa_length", "svic_x", "svic_z", "svsa_length", "roll_centre_height")
@@ -105,298 +106,182 @@ def travel_motion(
     return engine.motion(st, travel_rates(engine, model, travel_input, st))
 
 
-#: complex step of the exact derivatives (:func:`first_order_derivatives`): the metric
+#: complex step of the exact derivatives (:meth:`FirstOrderProgram.derivatives`): the metric
 #: formulas are analytic in their inputs, so ``Im f(x + i h dx) / h`` is ``f'(x) dx`` with a
 #: truncation error of order h^2 (1e-60 relative), far below round-off: forward-mode dual numbers
 COMPLEX_STEP = 1e-30
 
-
-class _Vec:
-    """A 3-vector of Python scalars, real or complex (the metric formulas' arithmetic: ten times
-    cheaper than numpy's on single vectors, and analytic, for the complex step)."""
-
-    __slots__ = ("x", "y", "z")
-
-    def __init__(self, x: Any, y: Any, z: Any) -> None:
-        self.x, self.y, self.z = x, y, z
-
-    @classmethod
-    def of(cls, a: Array) -> _Vec:
-        return cls(*a.tolist())
-
-    def __getitem__(self, i: int) -> Any:
-        return self.x if i == 0 else self.y if i == 1 else self.z
-
-    def __add__(self, o: _Vec) -> _Vec:
-        return _Vec(self.x + o.x, self.y + o.y, self.z + o.z)
-
-    def __sub__(self, o: _Vec) -> _Vec:
-        return _Vec(self.x - o.x, self.y - o.y, self.z - o.z)
-
-    def __mul__(self, k: Any) -> _Vec:
-        return _Vec(self.x * k, self.y * k, self.z * k)
-
-    __rmul__ = __mul__
-
-    def __truediv__(self, k: Any) -> _Vec:
-        return _Vec(self.x / k, self.y / k, self.z / k)
-
-    def __matmul__(self, o: _Vec) -> Any:
-        return self.x * o.x + self.y * o.y + self.z * o.z
-
-    def cross(self, o: _Vec) -> _Vec:
-        return _Vec(self.y * o.z - self.z * o.y, self.z * o.x - self.x * o.z, self.x * o.y - self.y * o.x)
-
-    def norm(self) -> Any:
-        return (self.x * self.x + self.y * self.y + self.z * self.z) ** 0.5
+#: the formulas' Python source: run on complex arrays for the complex step (module docstring)
+_FORMULAS = getattr(compiled.wheel_first_order, "py_func", compiled.wheel_first_order)
+_POSITIONS = getattr(compiled.point_positions, "py_func", compiled.point_positions)
 
 
-def _abs(x: Any) -> Any:
-    return -x if x.real < 0 else x
+class _Builder(ProgramBuilder):
+    """Point slots of a first-order program: the output program's (wheel points by the lookup
+    rules of :mod:`kinprop.analysis.metrics`), plus the elements' body-frame ends."""
 
-
-_EX, _EY, _EZ = _Vec(1.0, 0.0, 0.0), _Vec(0.0, 1.0, 0.0), _Vec(0.0, 0.0, 1.0)
-
-
-def _contact(centre: _Vec, axis: _Vec, radius: float, v_centre: _Vec, da: _Vec) -> tuple[_Vec, _Vec]:
-    """The contact point (lowest point of the wheel circle) and its rate."""
-    g = axis * axis.z - _EZ
-    ng = g.norm()
-    n = g / ng
-    dg = axis * da.z + da * axis.z
-    dn = (dg - n * (n @ dg)) / ng
-    return centre + n * radius, v_centre + dn * radius
-
-
-def _homogeneous(p: _Vec | None, u: _Vec, v: _Vec, normal: _Vec, E: _Vec) -> tuple[_Vec, Any]:
-    """``(H, s)`` of the axis' intersection with the plane through E (module docstring); a
-    pure translation (``p`` None) of velocity ``v``: the centre at infinity across ``v``."""
-    if p is None:
-        return normal.cross(v), 0.0
-    s = normal @ u
-    return p * s + u * (normal @ (E - p)), s
-
-
-def _centre(H: _Vec, s: Any, E: _Vec, plane: tuple[int, int]) -> tuple[Any, Any, Any]:
-    """In-plane coordinates of the centre and its distance from E (NaN, NaN, inf at infinity)."""
-    if abs(s) < PARALLEL_TOL:
-        return math.nan, math.nan, math.inf
-    X = H / s
-    d = X - E
-    return X[plane[0]], X[plane[1]], (d[plane[0]] ** 2 + d[plane[1]] ** 2) ** 0.5
-
-
-def _slope(w: _Vec, forward: float) -> Any:
-    """``tan(theta)`` of a side-view line of direction ``w`` rising towards ``forward * x``
-    (+1: the centre ahead, -1: behind); sign-free in ``w``; +-inf for a vertical line."""
-    wx, wz = w.x, w.z
-    if wx == 0.0:
-        return math.copysign(math.inf, wz.real * forward) if wz != 0.0 else math.nan
-    return (wz / wx) * forward
+    def element_point(self, element: str, side: str, body: str, xyz: Array) -> int:
+        b = self.engine.body_index[body]
+        return self._slot(("element", element, side), compiled_outputs.PK_BODY, b, 0, xyz)
 
 
 @dataclass(frozen=True)
-class _Inputs:
-    """What the metrics are computed from (real, or complex along one direction): the wheel's
-    body index, the named points ``(body, position)``, every body's twist, pose and the
-    reference contact point."""
+class FirstOrderProgram:
+    """One wheel's first-order metrics as the tables of :mod:`kinprop.engine.firstorder`,
+    evaluated over any number of states by its compiled kernel; :meth:`derivatives`: their exact
+    design derivatives at one state."""
 
-    wheel: int
-    points: dict[str, tuple[int, Array]]
-    V: Array
-    r: Array
-    A: Array
-    reference_contact: Array | None
-    #: per element: name, body indices, body-frame end points
-    elements: tuple[tuple[str, int, int, Array, Array], ...]
+    engine: Engine
+    model: Model
+    wheel: str
+    #: the metrics the wheel supports (:func:`first_order_names`) and their columns in a row
+    names: tuple[str, ...]
+    columns: Array
+    points: Array
+    xyz: Array
+    wheels: Array
+    params: Array
+    elements: Array
+    stiffness: Array
+    travel_input: str | None = None
 
+    def rates(self, state: State) -> dict[str, float]:
+        """The bump motion's driven rates at ``state`` (:func:`travel_rates`)."""
+        return travel_rates(self.engine, self.model, self.travel_input, state)
 
-def _metrics(model: Model, inp: _Inputs, radius: float | None) -> dict[str, Any]:
-    """The metric formulas (module docstring), analytic in every input (complex-step safe)."""
-    out: dict[str, Any] = {}
-    b, Vall = inp.wheel, inp.V
-    points = {k: (body, _Vec.of(x)) for k, (body, x) in inp.points.items()}
-    twist: dict[int, tuple[_Vec, _Vec]] = {}
+    def evaluate(self, states: State, ok: Array | None = None) -> Array:
+        """``(N, len(names))``: the metrics at each state of a batch (leading axis; one state:
+        ``(len(names),)``), NaN where not ``ok`` or where the bump motion is singular: one
+        compiled call (a state whose velocity blocks are not square and regular is answered by
+        the SVD path of :func:`kinprop.engine.motion.motion_state`)."""
+        st = states.writable()
+        single = st.Q.ndim == 1
+        if single:
+            st = State(st.Q[None], st.S[None], st.C[None], st.L[None])
+        n, eng = st.Q.shape[0], self.engine
+        mask = np.ones(n, dtype=np.bool_) if ok is None else np.ascontiguousarray(ok, dtype=np.bool_)
+        out = np.full((n, 1, compiled.N_FIRST + self.elements.shape[0]), np.nan)
+        status = np.full(n, -1, np.int64)
+        first = np.flatnonzero(mask)
+        if first.size:
+            rates = self.rates(st[int(first[0])])
+            cols, vals, plan, need, buf = _velocity_plan(eng, rates)
+            rate = np.zeros(eng.n_coordinates)
+            rate[cols] = vals
+            rows, pcols = eng.pattern
+            if buf is not None:
+                compiled.batch_first_order(eng.tables, plan, st.Q, st.S, st.C, st.L, mask, rate, need, rows, pcols,
+                                           eng.row_scale, self.points, self.xyz, self.wheels, self.params,
+                                           self.elements, self.stiffness, out, status)  # fmt: skip
+            for i in first[status[first] != SOLVED]:  # the SVD path decides (singular: NaN)
+                ms = motion_state(eng, st[int(i)], rates)
+                if ms.ok:
+                    pts, body_of = self._positions(ms)
+                    _FORMULAS(self.wheels[0], self.params[0], pts, body_of, ms.V, self.elements, self.stiffness,
+                              out[i, 0])  # fmt: skip
+        values = out[:, 0, self.columns]
+        return values[0] if single else values
 
-    def vel(body: int, x: _Vec) -> _Vec:
-        if body not in twist:
-            twist[body] = (_Vec.of(Vall[body, :3]), _Vec.of(Vall[body, 3:]))
-        v, w = twist[body]
-        return v + w.cross(x)
+    def values(self, state: State) -> dict[str, float]:
+        """``{metric: value}`` at one state."""
+        return dict(zip(self.names, (float(v) for v in self.evaluate(state)), strict=True))
 
-    centre = points["centre"][1]
-    axis = points["spin"][1] - centre
-    axis = axis / axis.norm()
-    side = 1 if axis.y.real >= 0 else -1
-    vc = vel(b, centre)
-    w = twist[b][1]
-    dz = vc.z
-    per = (lambda x: x / dz) if dz != 0.0 else (lambda x: math.nan)
-    deg = 180.0 / math.pi
-    da = w.cross(axis)
-    out["camber_gain"] = per(deg * (-da.z / (1.0 - axis.z**2) ** 0.5))
-    ay = axis.y * side
-    out["bump_steer"] = per(deg * ((ay * da.x - axis.x * side * da.y) / (axis.x**2 + axis.y**2)))
-    if "upper" in points:
-        (bu, xu), (bl, xl) = points["upper"], points["lower"]
-        k = xu - xl
-        dk = vel(bu, xu) - vel(bl, xl)
-        out["caster_gain"] = per(deg * ((-dk.x * k.z + k.x * dk.z) / (k.x**2 + k.z**2)))
-    for n, bi, bj, s_i, s_j in inp.elements:
-        pi = _Vec.of(inp.r[bi] + inp.A[bi] @ s_i)
-        pj = _Vec.of(inp.r[bj] + inp.A[bj] @ s_j)
-        d = pj - pi
-        dl = (d @ (vel(bj, pj) - vel(bi, pi))) / d.norm()
-        out[f"{MOTION_RATIO}:{n}"] = _abs(per(dl))
-    springs = [e for e in model.elements if e.has_spring]
-    if springs:
-        out["wheel_rate"] = sum(float(e.stiffness or 0.0) * out[f"{MOTION_RATIO}:{e.name}"] ** 2 for e in springs)
-    if radius is None:
-        return out
-    E, vE = _contact(centre, axis, radius, vc, da)
-    if inp.reference_contact is not None:
-        ref = _Vec.of(np.asarray(inp.reference_contact))
-        out["half_track_change"] = side * (E.y - ref.y)
-        out["contact_patch_dx"] = E.x - ref.x
-    out["half_track_gain"] = per(side * vE.y)
-    out["contact_patch_dx_gain"] = per(vE.x)
-    # screw axis of the wheel relative to the fixed body (the fixed body's twist is zero)
-    v_O = twist[b][0]
-    nw, nv = w.norm(), vc.norm()
-    scale = max(1.0, abs(centre.norm()))
-    p: _Vec | None
-    if abs(nw) * scale <= TRANSLATION_RTOL * abs(nv) or nw == 0.0:
-        p, u = None, _Vec(0.0, 0.0, 0.0)
-    else:
-        u = w / nw
-        p = w.cross(v_O) / nw**2
-    Hf, sf = _homogeneous(p, u, vE, _EX, E)  # front view: the plane x = x_E
-    out["fvic_y"], out["fvic_z"], out["fvsa_length"] = _centre(Hf, sf, E, (1, 2))
-    wf = Hf - E * sf
-    out["roll_centre_height"] = -E.y * wf.z / wf.y if wf.y != 0.0 else math.nan
-    Hs, ss = _homogeneous(p, u, vE, _EY, E)  # side view: the plane y = y_E
-    out["svic_x"], out["svic_z"], out["svsa_length"] = _centre(Hs, ss, E, (0, 2))
-    veh = model.vehicle
-    if veh is not None:
-        lever = veh.wheelbase / veh.cg_height * 100.0
-        wE, wC = Hs - E * ss, Hs - centre * ss  # lines from the contact patch / the wheel centre
-        front = veh.axle == "front"
-        brake_line = wE if veh.brakes == "outboard" else wC
-        drive_line = wE if veh.drive == "outboard" else wC
-        toward = -1.0 if front else 1.0  # the centre behind a front wheel, ahead of a rear wheel
-        if front:
-            out["anti_dive"] = veh.brake_front * _slope(brake_line, toward) * lever
-            out["anti_lift"] = veh.drive_front * _slope(drive_line, toward) * lever
-        else:
-            out["anti_lift"] = (1.0 - veh.brake_front) * _slope(brake_line, toward) * lever
-            out["anti_squat"] = (1.0 - veh.drive_front) * _slope(drive_line, toward) * lever
-    return out
+    def _positions(self, ms: MotionState) -> tuple[Array, Array]:
+        ws: list[Any] = [None] * (max(W_BODY_R, W_BODY_A, W_FRAME_P) + 1)
+        ws[W_BODY_R], ws[W_BODY_A], ws[W_FRAME_P] = ms.r, ms.A, ms.P
+        pts, body_of = np.zeros((self.points.shape[0], 3)), np.zeros(self.points.shape[0], np.int64)
+        _POSITIONS(self.engine.tables, ws, self.points, self.xyz, pts, body_of)
+        return pts, body_of
 
-
-#: a point of the analysis: ``(body index, global position)``, optionally with the joint frame
-#: ``(joint, side)`` it is (its ``s'`` a design variable: the point moves with it)
-PointRef = tuple[int, Array] | tuple[int, Array, tuple[str, str] | None]
-
-
-def _inputs(
-    model: Model, engine: Engine, wheel: str, points: dict[str, PointRef], ms: MotionState, ref: Array | None
-) -> _Inputs:
-    elements = tuple(
-        (
-            e.name,
-            engine.body_index[e.body_i],
-            engine.body_index[e.body_j],
-            np.asarray(e.s_i, float),
-            np.asarray(e.s_j, float),
-        )
-        for e in model.elements
-    )
-    pts = {k: (int(v[0]), v[1]) for k, v in points.items()}
-    return _Inputs(engine.body_index[wheel], pts, ms.V, ms.r, ms.A, ref, elements)
-
-
-def _reference(reference_contact: Array | PointRef | None) -> tuple[Array | None, PointRef | None]:
-    """``(position, point)``: a reference given as a point of a body moves with it."""
-    if reference_contact is None or not isinstance(reference_contact, tuple):
-        return reference_contact, None
-    return reference_contact[1], reference_contact
-
-
-def first_order_metrics(
-    ctx: OutputContext,
-    engine: Engine,
-    wheel: str,
-    points: dict[str, PointRef],
-    radius: float | None,
-    reference_contact: Array | PointRef | None,
-    travel_input: str | None = None,
-) -> dict[str, float]:
-    """Every first-order metric the wheel supports (module docstring). ``points``: ``centre``,
-    ``spin``, optionally ``upper``/``lower`` (the steering axis); ``radius``: the loaded radius
-    (None: no contact patch); ``reference_contact``: the contact point's reference, a position
-    or a body's point (None: no half-track / contact-patch changes)."""
-    model = ctx.model
-    ms = travel_motion(engine, model, travel_input, ctx.state if ctx.engine is engine else None)
-    ref, _ = _reference(reference_contact)
-    if not ms.ok:
-        names = first_order_names(model, radius is not None, "upper" in points, ref is not None)
-        return dict.fromkeys(names, math.nan)
-    return _metrics(model, _inputs(model, engine, wheel, points, ms, ref), radius)
-
-
-def first_order_derivatives(
-    ctx: OutputContext,
-    engine: Engine,
-    wheel: str,
-    points: dict[str, PointRef],
-    radius: float | None,
-    reference_contact: Array | PointRef | None,
-    directions: Array,
-    travel_input: str | None = None,
-) -> dict[str, Array]:
-    """Exact derivatives of :func:`first_order_metrics` along each column ``dx`` of
-    ``directions`` (``(n_columns, k)``, solver units; the state moves along ``retract(x, eps
-    dx)``, the wheel's travel rate held): the velocity state's derivatives from
-    :func:`kinprop.engine.motion.motion_derivatives` (analytic), the points' from the bodies'
-    pose changes (and their own ``s'`` when they are joint frames), and the metric formulas
-    differentiated in forward mode by a complex step (:data:`COMPLEX_STEP`). NaN where a
-    metric is undefined or infinite."""
-    model = ctx.model
-    st = ctx.state if ctx.engine is engine and ctx.state is not None else engine.state_of(model)
-    md = motion_derivatives(engine, st, travel_rates(engine, model, travel_input, st), directions)
-    ms, X = md.motion, np.asarray(directions, dtype=float).reshape(engine.n_columns, -1)
-    ref, ref_point = _reference(reference_contact)
-    base = _metrics(model, _inputs(model, engine, wheel, points, ms, ref), radius) if ms.ok else {}
-    names = list(base) or first_order_names(model, radius is not None, "upper" in points, ref is not None)
-    out = {n: np.full(X.shape[1], np.nan) for n in names}
-    if not ms.ok:
-        return out
-    h = COMPLEX_STEP
-
-    def moved(p: PointRef, i: int) -> Array:
-        body, x = int(p[0]), np.asarray(p[1], dtype=float)
-        P = md.pose[i, body]
-        dx = P[:3] + cross3(P[3:], x)
-        source = p[2] if len(p) > 2 else None  # type: ignore[misc]
-        if source is not None:
-            key = f"{source[0]}.s_{source[1]}"
-            if key in engine.layout:
-                dx = dx + ms.A[body] @ X[engine.columns([key]), i]
-        return x + 1j * h * dx
-
-    for i in range(X.shape[1]):
-        P = md.pose[i]
-        pts = {k: (int(v[0]), moved(v, i)) for k, v in points.items()}
-        r = ms.r + 1j * h * (P[:, :3] + np.cross(P[:, 3:], ms.r))
-        A = ms.A + 1j * h * np.cross(P[:, 3:, None], ms.A, axis=1)
-        rc = ref if ref_point is None else moved(ref_point, i)
-        inp = _inputs(model, engine, wheel, pts, ms, rc)
-        inp = _Inputs(inp.wheel, inp.points, ms.V + 1j * h * md.V[i], r, A, rc, inp.elements)
-        values = _metrics(model, inp, radius)
-        for n, v in values.items():
-            if n in out:
+    def derivatives(self, state: State, directions: Array, elements: Array | None = None) -> dict[str, Array]:
+        """Exact derivatives of the metrics along each column ``dx`` of ``directions``
+        (``(n_columns, k)``, solver units; the state moves along ``retract(x, eps dx)``, the
+        wheel's travel rate held): the velocity state's derivatives from
+        :func:`kinprop.engine.motion.motion_derivatives` (analytic), the points' from the bodies'
+        pose changes (and a joint frame's own ``s'``), and the formulas in forward mode by a
+        complex step (:data:`COMPLEX_STEP`). ``elements`` (ne, 2, 3, k): the body-frame moves of
+        the elements' ends along each direction (element points as design variables). NaN
+        where a metric is undefined or infinite."""
+        eng = self.engine
+        X = np.asarray(directions, dtype=float).reshape(eng.n_columns, -1)
+        md = motion_derivatives(eng, state, self.rates(state), X)
+        ms, k = md.motion, X.shape[1]
+        out = {n: np.full(k, np.nan) for n in self.names}
+        if not ms.ok:
+            return out
+        pts, body_of = self._positions(ms)
+        tb, h = eng.tables, COMPLEX_STEP
+        frame_cols: dict[int, Array] = {}  # a joint frame slot: the columns of its own s'
+        for slot in range(self.points.shape[0]):
+            kind, a, side = (int(x) for x in self.points[slot])
+            if kind == compiled_outputs.PK_FRAME and tb.joint[a, J_COL_S_I + side] >= 0:
+                c0 = int(tb.joint[a, J_COL_S_I + side])
+                frame_cols[slot] = np.arange(c0, c0 + 3)
+        ends = {int(self.elements[e, s]): (e, s) for e in range(self.elements.shape[0]) for s in (0, 1)}
+        row = np.zeros(compiled.N_FIRST + self.elements.shape[0], dtype=complex)
+        for i in range(k):
+            P = md.pose[i]
+            d = np.zeros_like(pts)
+            for slot in range(pts.shape[0]):
+                b = int(body_of[slot])
+                if b < 0:
+                    continue
+                d[slot] = P[b, :3] + cross3(P[b, 3:], pts[slot])
+                if slot in frame_cols:
+                    d[slot] += ms.A[b] @ X[frame_cols[slot], i]
+                if elements is not None and slot in ends:
+                    e, s = ends[slot]
+                    d[slot] += ms.A[b] @ elements[e, s, :, i]
+            _FORMULAS(self.wheels[0], self.params[0], pts + 1j * h * d, body_of, ms.V + 1j * h * md.V[i],
+                      self.elements, self.stiffness, row)  # fmt: skip
+            for n, c in zip(self.names, self.columns, strict=True):
+                v = row[c]
                 out[n][i] = np.imag(v) / h if np.isfinite(np.real(v)) else math.nan
-    return out
+        return out
+
+
+def first_order_program(
+    model: Model,
+    engine: Engine,
+    wheel: str,
+    radius: float | None,
+    reference_contact: Array | tuple[str, str] | None,
+    *,
+    reference: Model | None = None,
+    wheels: Any = None,
+    travel_input: str | None = None,
+) -> FirstOrderProgram:
+    """The :class:`FirstOrderProgram` of ``wheel``: its points by the lookup rules of
+    :mod:`kinprop.analysis.metrics` (``reference``, ``wheels`` as there), ``radius`` the loaded
+    radius (None: no contact patch), ``reference_contact`` a global position or a fixed body's
+    named point ``(body, name)`` (None: no half-track / contact-patch changes)."""
+    b = _Builder(model, engine, reference, wheels)
+    row, _ = b.wheel(wheel)
+    w = b._wheels[row]
+    ref = -1
+    if isinstance(reference_contact, tuple):
+        ref = b.body_point(*reference_contact)
+    elif reference_contact is not None:
+        ref = b.constant(f"contact:{wheel}", reference_contact)
+    veh = model.vehicle
+    axle = compiled.AXLE_NONE if veh is None else compiled.AXLE_FRONT if veh.axle == "front" else compiled.AXLE_REAR
+    inboard = 0 if veh is None else (veh.brakes == "inboard") + 2 * (veh.drive == "inboard")
+    wheels_t = np.array([[engine.body_index[wheel], w[compiled_outputs.WH_CENTRE], w[compiled_outputs.WH_SPIN],
+                          w[compiled_outputs.WH_UPPER], w[compiled_outputs.WH_LOWER], w[compiled_outputs.WH_ORDER],
+                          ref, axle, inboard]], dtype=np.int64)  # fmt: skip
+    lever = math.nan if veh is None else veh.wheelbase / veh.cg_height * 100.0
+    params = np.array([[math.nan if radius is None else radius, lever, math.nan if veh is None else veh.brake_front,
+                        math.nan if veh is None else veh.drive_front]])  # fmt: skip
+    ends = [[b.element_point(e.name, s, body, np.asarray(x, float)) for s, body, x in
+             (("i", e.body_i, e.s_i), ("j", e.body_j, e.s_j))] for e in model.elements]  # fmt: skip
+    stiffness = np.array([float(e.stiffness or 0.0) if e.has_spring else math.nan for e in model.elements])
+    names = first_order_names(model, radius is not None, w[compiled_outputs.WH_UPPER] >= 0, ref >= 0)
+    codes = {c: k for k, c in enumerate(compiled.FIRST_CODES)}
+    codes |= {f"{MOTION_RATIO}:{e.name}": compiled.N_FIRST + k for k, e in enumerate(model.elements)}
+    prog = b.build()
+    return FirstOrderProgram(engine, model, wheel, tuple(names), np.array([codes[n] for n in names], np.int64),
+                             prog.points, prog.xyz, wheels_t, params, np.array(ends, np.int64).reshape(-1, 2),
+                             stiffness.reshape(-1), travel_input)  # fmt: skip
 
 
 def first_order_names(model: Model, contact: bool, steer: bool, reference: bool) -> list[str]:
@@ -436,12 +321,10 @@ def first_order_unit(metric: str, units: dict[str, str] | None = None) -> str:
 __all__ = [
     "COMPLEX_STEP",
     "FIRST_ORDER",
-    "PointRef",
-    "first_order_derivatives",
-    "first_order_metrics",
+    "FirstOrderProgram",
     "first_order_names",
+    "first_order_program",
     "first_order_unit",
-    "point_of",
     "travel_motion",
     "travel_rates",
 ]

@@ -50,13 +50,11 @@ from kinprop.analysis.firstorder import (
     FIRST_ORDER,
     GAIN_METRICS,
     MOTION_RATIO,
-    PointRef,
-    first_order_derivatives,
-    first_order_metrics,
+    FirstOrderProgram,
     first_order_names,
+    first_order_program,
     first_order_unit,
 )
-from kinprop.analysis.motion import point_of
 from kinprop.analysis.program import ProgramBuilder
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
@@ -277,55 +275,52 @@ def _contact_of(ctx: OutputContext, wheel: str, radius: float) -> Array:
     return contact_point(centre, ctx.body_point(wheel, "spin_axis") - centre, radius)
 
 
-def _first_order_inputs(
-    ctx: OutputContext, wheel: str, spec: WheelSpec | None
-) -> tuple[Engine, dict[str, PointRef], float | None, Any, str | None]:
-    """``(engine, points, radius, reference contact, travel input)`` of the wheel's first-order
-    analysis (:func:`kinprop.analysis.firstorder.first_order_metrics`)."""
-    model = ctx.model
-    spec = spec if spec is not None else ctx.wheels.get(wheel) if ctx.wheels else None
-    engine = ctx.engine or compile_engine(model.mechanism)
-    b = engine.body_index[wheel]
-    points: dict[str, PointRef] = {
-        "centre": (b, ctx.body_point(wheel, "wheel_centre"), ctx.point_source(wheel, "wheel_centre")),
-        "spin": (b, ctx.body_point(wheel, "spin_axis"), ctx.point_source(wheel, "spin_axis")),
-    }
-    if spec is not None and spec.steering_axis is not None:
-        for key, s in zip(("upper", "lower"), spec.steering_axis, strict=True):
-            points[key] = (*point_of(ctx, engine, s), ctx.spec_source(s))
-    else:
-        found = steering_bodies(ctx, wheel)
-        if found is not None:
-            for key, (body, p, source) in zip(("upper", "lower"), found, strict=True):
-                points[key] = (engine.body_index[body], p, source)
+def wheel_first_order_program(
+    model: Model,
+    engine: Engine,
+    wheel: str,
+    reference: Model | None = None,
+    wheels: Any = None,
+) -> FirstOrderProgram:
+    """The wheel's first-order program (:func:`kinprop.analysis.firstorder.first_order_program`)
+    by this module's lookup rules: the loaded radius, the reference contact point (of the
+    ``reference`` model, else the fixed point ``contact_patch_ref``), the travel input of its
+    :class:`WheelSpec` (``wheels``)."""
+    spec = wheels.get(wheel) if wheels else None
     radius = _radius(model, wheel)
     ref: Any = None
     if radius is not None:
-        if ctx.reference is not None:
-            ref = _contact_of(OutputContext.of(ctx.reference, engine=engine), wheel, radius)
+        if reference is not None:
+            ref = _contact_of(OutputContext.of(reference, engine=engine), wheel, radius)
         else:
-            found_ref = find_point(model, wheel, "contact_patch_ref", on_wheel=False)
-            if found_ref is not None:
-                body, name = found_ref
-                ref = (engine.body_index[body], ctx.body_point(body, name), ctx.point_source(body, name))
+            ref = find_point(model, wheel, "contact_patch_ref", on_wheel=False)
     travel = spec.travel_input if spec is not None else None
-    return engine, points, radius, ref, travel
+    return first_order_program(model, engine, wheel, radius, ref, reference=reference, wheels=wheels,
+                               travel_input=travel)  # fmt: skip
+
+
+def _program_of(ctx: OutputContext, wheel: str, spec: WheelSpec | None) -> tuple[FirstOrderProgram, Any]:
+    engine = ctx.engine or compile_engine(ctx.model.mechanism)
+    wheels = {wheel: spec} if spec is not None else ctx.wheels
+    st = ctx.state if ctx.state is not None and ctx.engine is engine else engine.state_of(ctx.model)
+    return wheel_first_order_program(ctx.model, engine, wheel, ctx.reference, wheels), st
 
 
 def wheel_first_order(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:
     """Every first-order metric the wheel supports at the context's state
     (:mod:`kinprop.analysis.firstorder`; gains in degrees per length unit)."""
-    engine, points, radius, ref, travel = _first_order_inputs(ctx, wheel, spec)
-    return first_order_metrics(ctx, engine, wheel, points, radius, ref, travel)
+    program, st = _program_of(ctx, wheel, spec)
+    return program.values(st)
 
 
 def wheel_first_order_derivatives(
-    ctx: OutputContext, wheel: str, directions: Array, spec: WheelSpec | None = None
+    ctx: OutputContext, wheel: str, directions: Array, spec: WheelSpec | None = None, elements: Array | None = None
 ) -> dict[str, Array]:
     """Exact derivatives of :func:`wheel_first_order` along each column of ``directions``
-    (state directions, solver units; :func:`kinprop.analysis.firstorder.first_order_derivatives`)."""
-    engine, points, radius, ref, travel = _first_order_inputs(ctx, wheel, spec)
-    return first_order_derivatives(ctx, engine, wheel, points, radius, ref, directions, travel)
+    (state directions, solver units; ``elements``: the elements' end moves,
+    :meth:`kinprop.analysis.firstorder.FirstOrderProgram.derivatives`)."""
+    program, st = _program_of(ctx, wheel, spec)
+    return program.derivatives(st, directions, elements)
 
 
 def wheel_metrics(ctx: OutputContext, wheel: str, spec: WheelSpec | None = None) -> dict[str, float]:
@@ -393,5 +388,6 @@ __all__ = [
     "wheel_bodies",
     "wheel_first_order",
     "wheel_first_order_derivatives",
+    "wheel_first_order_program",
     "wheel_metrics",
 ]

@@ -39,6 +39,7 @@ from kinprop.analysis.metrics import (
     resolve_metric,
     wheel_first_order,
     wheel_first_order_derivatives,
+    wheel_first_order_program,
 )
 from kinprop.analysis.program import OutputProgram, ProgramBuilder
 from kinprop.analysis.statics import is_load_output, load_value
@@ -245,8 +246,23 @@ def program_batch(
     structure of the states)."""
     values = program.evaluate(states, ok)
     others = np.flatnonzero(~program.compiled)
+    eng = program.engine
+    first: dict[str, list[tuple[int, str]]] = {}  # per wheel: (output, metric), one compiled batch each
+    for k in others:
+        found = first_order_of(model, program.names[k])
+        if found is not None:
+            first.setdefault(found[0], []).append((int(k), found[1]))
+    for wheel, outs in first.items():
+        fo = wheel_first_order_program(model, eng, wheel, reference, wheels)
+        got = fo.evaluate(states, ok)
+        for k, metric in outs:
+            if metric not in fo.names:
+                needs = METRIC_NEEDS.get(metric, "more named points").replace("WHEEL", wheel)
+                raise AddressError(f"output {program.names[k]!r}: metric {metric!r} of wheel {wheel!r} needs "
+                                   f"{needs}; this model gives: {', '.join(fo.names)}")  # fmt: skip
+            values[:, k] = got[:, fo.names.index(metric)]
+    others = np.array([k for k in others if first_order_of(model, program.names[k]) is None], dtype=np.int64)
     if others.size:
-        eng = program.engine
         for i in range(values.shape[0]) if ok is None else np.flatnonzero(ok):
             ctx = OutputContext.of(eng.model_of(states[i], model), reference, wheels, eng)
             cache: dict[str, dict[str, float]] = {}
