@@ -274,6 +274,14 @@ def _change(model: kp.Model, column: str, h: float) -> dict[str, object]:
 
     from kinprop.analysis.points import joint_hardpoints
 
+    if column.startswith("element:"):  # a global component of an element's end
+        from kinprop.propagation.element_points import element_point
+
+        engine = kp.compile(model)
+        key = column[: column.index("[")]
+        p = element_point(model, engine, engine.state_of(model), key)
+        p["xyz".index(column[-2])] += h
+        return {key: p}
     if column.startswith("hardpoint:"):
         key = column[len("hardpoint:") : column.index("[")]
         p = np.array(joint_hardpoints(model)[key], dtype=float)
@@ -317,6 +325,21 @@ def test_exact_sensitivities_of_first_order_metrics_match_re_solved_models() -> 
     wrt = ["LBJ.s_i[2]", "UBJ.s_j[0]", "TR.s_i[1]", "UCA.C_i[0]", "TR.length", "hardpoint:UBJ.i[z]"]
     outs = [*FIRST_ORDER_OUTPUTS, "half_track_change", "contact_patch_dx"]
     _check_exact_sensitivities(base, outs, wrt, 0.05, 1e-6)
+
+
+def test_exact_sensitivities_with_respect_to_element_points() -> None:
+    """Motion ratios and the wheel rate with respect to the spring's and the damper's global end
+    points (``element:E.point_i|j[c]``: no body moves), exact, against central differences of
+    models re-solved with the element point moved (``kp.propagate`` with ``element:`` changes);
+    the kinematic metrics do not depend on them (0)."""
+    base = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
+    wrt = ["element:spring.point_i", "element:spring.point_j[z]", "element:shock.point_j[x]", "hardpoint:UBJ.i[z]"]
+    _check_exact_sensitivities(base, ["motion_ratio:spring", "motion_ratio:shock", "wheel_rate", "camber_gain"],
+                               wrt, 0.05, 1e-6)  # fmt: skip
+    D = kp.output_sensitivity(base, ["camber_gain"], wrt[:3])
+    assert list(D.columns) == [*(f"element:spring.point_i[{c}]" for c in "xyz"), "element:spring.point_j[z]",
+                               "element:shock.point_j[x]"]  # fmt: skip
+    assert (D.to_numpy() == 0.0).all()
 
 
 def test_exact_sensitivities_of_a_rear_corner_anti_squat() -> None:

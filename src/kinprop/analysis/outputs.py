@@ -290,11 +290,13 @@ def first_order_derivatives(
     reference: Model | None = None,
     wheels: Mapping[str, WheelSpec] | None = None,
     engine: Engine | None = None,
+    elements: Array | None = None,
 ) -> dict[int, Array]:
     """Exact derivatives of the first-order metrics among the expanded outputs ``names`` along
     each column of ``directions`` (state directions, solver units), keyed by their index in
     ``names`` (values as :func:`evaluate_outputs` with ``units="solver"`` gives them):
-    :func:`kinprop.analysis.metrics.wheel_first_order_derivatives`, once per wheel."""
+    :func:`kinprop.analysis.metrics.wheel_first_order_derivatives`, once per wheel;
+    ``elements`` (ne, 2, 3, k): the element ends' body-frame moves along each column."""
     eng = engine if engine is not None else compile_engine(model.mechanism)
     ctx = OutputContext.of(model, reference, wheels, eng)
     per_wheel: dict[str, dict[str, Array]] = {}
@@ -305,7 +307,7 @@ def first_order_derivatives(
             continue
         wheel, metric = found
         if wheel not in per_wheel:
-            per_wheel[wheel] = wheel_first_order_derivatives(ctx, wheel, directions)
+            per_wheel[wheel] = wheel_first_order_derivatives(ctx, wheel, directions, elements=elements)
         out[i] = per_wheel[wheel][metric]
     return out
 

@@ -31,9 +31,16 @@ from kinprop.analysis.metrics import WheelSpec
 from kinprop.analysis.outputs import first_order_derivatives, first_order_of, output_function
 from kinprop.analysis.statics import is_load_output, load_derivatives
 from kinprop.analysis.units import derivative_scale
-from kinprop.engine import Engine
+from kinprop.engine import Engine, State
 from kinprop.engine.units import check_units
 from kinprop.model import Model
+from kinprop.propagation.element_points import (
+    apply_element_changes,
+    element_directions,
+    element_labels,
+    element_point,
+    is_element_address,
+)
 from kinprop.propagation.hardpoints import free_addresses, free_weights, global_columns, is_global
 from kinprop.propagation.propagate import engine_for
 from kinprop.propagation.sensitivity import Sensitivity, design_sensitivity, weight_vector
@@ -96,11 +103,41 @@ def output_sensitivity_matrix(
             RuntimeWarning,
             stacklevel=3,
         )
+    asked = list(wrt)
+    wrt = [w for w in asked if not is_element_address(w)]
+    element_wrt = [w for w in asked if is_element_address(w)]
+    _, names = output_function(model, of, reference=reference, wheels=wheels, engine=engine)
+    D, columns = np.zeros((len(names), 0)), []
+    if wrt:
+        D, columns = _design_rows(model, engine, state, names, wrt, free, weights, reference, wheels)
+    if element_wrt:
+        labels, E = _element_sensitivity(model, engine, state, names, element_wrt, reference, wheels)
+        D, columns = _in_asked_order(model, asked, np.column_stack([D, E]), columns + labels)
+    if model_units and D.size:
+        so = np.array([derivative_scale(model, n, engine) for n in names])
+        si = np.array([derivative_scale(model, c, engine) for c in columns])
+        D = D * so[:, None] / si[None, :]
+    return D, list(names), columns, residual
+
+
+def _design_rows(
+    model: Model,
+    engine: Engine,
+    state: State,
+    names: list[str],
+    wrt: Sequence[str],
+    free: Sequence[str],
+    weights: Mapping[str, float] | None,
+    reference: Model | None,
+    wheels: Mapping[str, WheelSpec] | None,
+) -> tuple[Array, list[str]]:
+    """``(D, columns)`` with respect to the design addresses ``wrt`` (solver units, layout
+    order): the implicit-function tangent, exact rows where there are, central differences of
+    the output map along it for the rest (module docstring)."""
     # global hardpoints: wrt their s' columns, then each global component combines them (exact)
     design, combos = global_columns(engine, state, wrt)
     free, weights = free_addresses(engine, free), free_weights(engine, weights)
     sens = design_sensitivity(model, design, free, weights, engine=engine, units="solver")
-    _, names = output_function(model, of, reference=reference, wheels=wheels, engine=engine)
     directions = np.zeros((engine.n_columns, sens.wrt_columns.size))
     directions[sens.wrt_columns, np.arange(sens.wrt_columns.size)] = 1.0
     directions[sens.free_columns] = sens.matrix
@@ -130,12 +167,55 @@ def output_sensitivity_matrix(
             sum(coef * D[:, index[c]] for c, coef in combos[label].items()) for label in combos
         ]
         D, columns = (np.column_stack(cols) if cols else np.zeros((len(names), 0))), keep + list(combos)
-    D, columns = _as_asked(engine, wrt, D, columns)
-    if model_units and D.size:
-        so = np.array([derivative_scale(model, n, engine) for n in names])
-        si = np.array([derivative_scale(model, c, engine) for c in columns])
-        D = D * so[:, None] / si[None, :]
-    return D, list(names), columns, residual
+    return _as_asked(engine, wrt, D, columns)
+
+
+def _element_sensitivity(
+    model: Model,
+    engine: Engine,
+    state: State,
+    names: list[str],
+    wrt: Sequence[str],
+    reference: Model | None,
+    wheels: Mapping[str, WheelSpec] | None,
+) -> tuple[list[str], Array]:
+    """``(labels, D)``: derivatives of the outputs ``names`` with respect to element points
+    (:mod:`kinprop.propagation.element_points`, per global length unit): no body moves, so the
+    first-order metrics (motion ratios, wheel rate) are exact along the elements' end moves
+    alone (:func:`kinprop.analysis.outputs.first_order_derivatives` with ``elements``); every
+    other output (a load's element force) by a central difference of the output map of the
+    model with the element point moved; the kinematic outputs do not depend on them (0)."""
+    labels, moves = element_directions(model, engine, state, wrt)
+    k = len(labels)
+    none = np.zeros((engine.n_columns, k))
+    exact = first_order_derivatives(model, names, none, reference=reference, wheels=wheels, engine=engine,
+                                    elements=moves)  # fmt: skip
+    D = np.zeros((len(names), k))
+    for i, row in exact.items():
+        D[i] = row
+    loads = [i for i, n in enumerate(names) if is_load_output(n)]
+    if loads:
+        f, _ = output_function(model, [names[i] for i in loads], reference=reference, wheels=wheels, engine=engine)
+        h = FD_STEP * max(1.0, engine.length_scale or 1.0)
+        for c, lab in enumerate(labels):
+            p = element_point(model, engine, state, lab)
+            plus, _ = apply_element_changes(model, engine, state, {lab: p + h})
+            minus, _ = apply_element_changes(model, engine, state, {lab: p - h})
+            D[loads, c] = (f(plus) - f(minus)) / (2.0 * h)
+    return labels, D
+
+
+def _in_asked_order(model: Model, asked: Sequence[str], D: Array, columns: list[str]) -> tuple[Array, list[str]]:
+    """Element-point columns placed where ``asked`` names them among the others."""
+    rank: dict[str, int] = {}
+    for k, w in enumerate(asked):
+        base = w.split("[")[0]
+        mine = element_labels(model, w) if is_element_address(w) else [
+            c for c in columns if c == w or c.startswith(f"{base}[") or c.startswith(f"{base}.")]  # fmt: skip
+        for c in mine:
+            rank.setdefault(c, k)
+    order = sorted(range(len(columns)), key=lambda i: (rank.get(columns[i], len(asked)), i))
+    return D[:, order], [columns[i] for i in order]
 
 
 def _as_asked(engine: Engine, wrt: Sequence[str], D: Array, columns: list[str]) -> tuple[Array, list[str]]:

@@ -67,6 +67,7 @@ from kinprop.engine.units import METRES_PER, RADIANS_PER, changes_to_internal, c
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.design import parse_address
+from kinprop.propagation.element_points import apply_element_changes, is_element_address
 from kinprop.propagation.hardpoints import body_rotation, free_addresses, free_weights, resolve_changes
 from kinprop.propagation.point_jacobians import PointJacobians, PointSpec
 from kinprop.propagation.poses import joint_values
@@ -551,7 +552,15 @@ def propagate_targets(
     output map for every output; :mod:`kinprop.engine.targets`).
     """
     eng = engine_for(model, engine)
+    loose = [f for f in free if str(f).startswith("element:")]
+    if loose:
+        raise AddressError(
+            f"--free {loose[0]}: element points are not target variables (targets move the "
+            "mechanism's design columns); use --set element:... or sensitivity --wrt element:..."
+        )
     start = eng.state_of(model)
+    if changes and any(is_element_address(a) for a in changes):  # element points: the model's, no body moves
+        model, changes = apply_element_changes(model, eng, start, changes)
     changes = changes_to_internal(model, changes or {}, eng) if check_units(units) else dict(changes or {})
     st, _, _ = eng.apply(start, resolve_changes(eng, start, changes))
     specs = tuple(t if isinstance(t, TargetSpec) else parse_target(model, t, eng) for t in targets)

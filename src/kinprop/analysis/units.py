@@ -52,6 +52,8 @@ def unit_of(model: Model, name: str, engine: Engine | None = None) -> str:
         return model.units.get("length", "m")
     if name == "roll" or name.startswith("steer:"):
         return model.units.get("angle", "rad")
+    if name.startswith("element:"):  # an element's end (kinprop.propagation.element_points)
+        return model.units.get("length", "m")
     driven = _driven(name)
     if driven is not None:
         out, cond, slope = driven

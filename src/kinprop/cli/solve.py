@@ -36,7 +36,7 @@ from kinprop.cli.targets import run_targets
 from kinprop.engine import compile as compile_engine
 from kinprop.engine.units import changes_to_internal
 from kinprop.io.arguments import parse_assignments, parse_weights
-from kinprop.io.commands import comparison_csv
+from kinprop.io.commands import comparison_csv, with_element_sets
 from kinprop.io.results import propagation_json, variable_rows
 from kinprop.io.writer import atomic_write, dump_model_like
 from kinprop.model import Model
@@ -234,6 +234,7 @@ def propagate_cmd(
         raise ValueError("--hold with --target: hold joints by declaring them in the model's inputs: instead")
     m = held = load_model_cli(model)
     m = hold_joints(m, hold or [])  # held like declared inputs, for this run only
+    m, given = with_element_sets(m, given)  # element points: the model's, no body moves
     changes = changes_to_internal(m, {k: v for k, v in given.items() if not is_global(k)})
     changes |= {k: v for k, v in given.items() if is_global(k)}
     if target:

@@ -36,6 +36,7 @@ from kinprop.cli.checks import (
 )
 from kinprop.errors import AddressError
 from kinprop.io.arguments import parse_assignments
+from kinprop.io.commands import with_element_sets
 
 Free = Annotated[
     list[str] | None,
@@ -125,9 +126,13 @@ def study_cmd(
         seen[f.address] = text
         if f.address in given:
             raise AddressError(f"--vary {text!r}: {f.address} is also given by --set")
+        if f.address.startswith("element:"):
+            raise AddressError(f"--vary {text!r}: element points are not study factors (a study varies the "
+                               "mechanism's design columns); use --set element:... per study, or sensitivity "
+                               "--wrt element:...")  # fmt: skip
     if method == "grid":
         sample_plan(parsed, method, samples, seed)  # refuses a huge grid up front, with its count
-    m = load_model_cli(model)
+    m, given = with_element_sets(load_model_cli(model), given)  # element points: the model's
     sets = _to_internal(m, given)
     factors = parsed  # in the model's units, as given; stored as given (scale below)
     # global hardpoints (hardpoint:J.i[z]=LOW:HIGH, --set hardpoint:J=x,y,z): exact s' columns
@@ -208,7 +213,7 @@ def tolerance_cmd(
         if vals.size != 1 or not vals[0] > 0:
             raise AddressError(f"--tolerance {addr}: expected one positive standard deviation")
         tols[addr] = float(vals[0])
-    m = load_model_cli(model)
+    m, given = with_element_sets(load_model_cli(model), given)  # element points: the model's
     sets = _to_internal(m, given)
     freeset = tuple(free or ["q"])
     if sets:

@@ -38,7 +38,7 @@ from kinprop.cli.checks import (
 )
 from kinprop.engine.units import changes_to_internal
 from kinprop.io.arguments import parse_assignments
-from kinprop.io.commands import check_x, label_units, sweep_json
+from kinprop.io.commands import check_x, label_units, sweep_json, with_element_sets
 from kinprop.propagation.propagate import hold, shown
 
 #: show a progress bar from this many steps on
@@ -186,6 +186,7 @@ def sweep_cmd(
     if plot is not None:
         require("matplotlib")
     m = hold(load_model_cli(model), hold_ or [])  # held like declared inputs
+    m, given = with_element_sets(m, given)  # element points: the model's, no body moves
     drives = [parse_drive(m, d) for d in drive]
     changes = changes_to_internal(m, given)
     if x is not None:

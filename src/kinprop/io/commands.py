@@ -22,12 +22,14 @@ from kinprop.analysis.units import derivative_scale, unit_of
 from kinprop.engine import Engine, Solution
 from kinprop.engine import compile as compile_engine
 from kinprop.engine.units import changes_to_internal
+from kinprop.errors import AddressError
 from kinprop.io.arguments import parse_assignments
 from kinprop.io.results import comparison_rows, coordinates_json, design_json, point_rows, propagation_json
 from kinprop.io.writer import csv_text
 from kinprop.model import Model
 from kinprop.propagation import Propagation
 from kinprop.propagation.continuation import ContinuationResult, continuation_of
+from kinprop.propagation.element_points import apply_element_changes, is_element_address
 from kinprop.propagation.hardpoints import free_weights, global_columns, is_global
 from kinprop.propagation.propagate import propagation_of, solve_changes
 
@@ -189,6 +191,16 @@ def _per(model, name: str, engine=None) -> str:
     return unit_of(model, name, engine)
 
 
+def with_element_sets(model: Model, given: Mapping[str, Any]) -> tuple[Model, dict[str, Any]]:
+    """``--set element:E.point_i=x,y,z`` (:mod:`kinprop.propagation.element_points`): the model
+    with those element points moved (global, at its assembly; no body moves), and the other
+    changes."""
+    if not any(is_element_address(a) for a in given):
+        return model, dict(given)
+    engine = compile_engine(model)
+    return apply_element_changes(model, engine, engine.reference, given)
+
+
 class Sensitivities(NamedTuple):
     """d(rows)/d(columns) in the model's units, with the unit of every row and column."""
 
@@ -205,6 +217,10 @@ class Sensitivities(NamedTuple):
 def _solver_matrix(
     assembled: Model, wrt: Sequence[str], of: Sequence[str] | None, free: Sequence[str], weights: Any
 ) -> tuple[np.ndarray, list[str], list[str]]:
+    if any(is_element_address(w) for w in wrt) and not (of and not any(is_driven(o) for o in of)):
+        raise AddressError("--wrt element:...: an element point moves no body (the free variables do not respond "
+                           "to it); name outputs with --of (motion_ratio:E, wheel_rate, force:E), none at a drive "
+                           "position")  # fmt: skip
     if of and any(is_driven(o) for o in of):  # outputs at a drive position (analysis/drives.py)
         names = expand_driven(assembled, of)
         plain = [o for o in names if not is_driven(o)]
@@ -237,8 +253,11 @@ def sensitivities(
     matrix, rows, columns = _solver_matrix(assembled, design, of, free, free_weights(engine, weights))
     if combos:
         index = {c: k for k, c in enumerate(columns)}
-        plain = {engine.column_labels[int(c)] for c in engine.columns([w for w in wrt if not is_global(w)])}
-        keep = [c for c in columns if c in plain]
+        plain = {
+            engine.column_labels[int(c)]
+            for c in engine.columns([w for w in wrt if not is_global(w) and not is_element_address(w)])
+        }
+        keep = [c for c in columns if c in plain or is_element_address(c)]
         extra = list(combos)
         cols = [matrix[:, index[c]] for c in keep] + [
             sum(coef * matrix[:, index[c]] for c, coef in combos[label].items()) for label in extra

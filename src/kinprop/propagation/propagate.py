@@ -35,6 +35,7 @@ from kinprop.engine.units import (
 from kinprop.errors import AddressError, SingularityWarning
 from kinprop.model.model import Model
 from kinprop.propagation.conditioning import SINGULAR_RTOL, conditioning
+from kinprop.propagation.element_points import apply_element_changes, is_element_address
 from kinprop.propagation.hardpoints import free_addresses, free_weights, pivot_updates, resolve_changes
 from kinprop.propagation.poses import body_poses, joint_values
 from kinprop.spatial import Array, log_so3
@@ -371,7 +372,9 @@ def propagate(
     ``free`` holds groups (``q``, ``s``, ``C``, ``l``) and/or addresses (``J.s_i``, ``J.q``,
     ``J.s_i[2]``, and ``hardpoint:J[.i|.j]`` / ``axis:J[.i|.j]`` for those design variables).
     ``changes`` may use global addresses ``hardpoint:J.i=x,y,z``, ``hardpoint:J``, ``axis:J``
-    (:mod:`kinprop.propagation.hardpoints`), converted exactly at the model's current assembly.
+    (:mod:`kinprop.propagation.hardpoints`), converted exactly at the model's current assembly,
+    and element points ``element:E.point_i=x,y,z`` (:mod:`kinprop.propagation.element_points`:
+    the model's element moves, no body does).
     ``weights`` maps addresses or groups to positive weights of a weighted
     minimum-norm step (a larger weight lets a variable move more). When the free set leaves
     freedom the result is the assembly closest to the changed start, changes measured in metres
@@ -379,9 +382,14 @@ def propagate(
     point of the paper's generalized-inverse iteration (with ``tol=1e-3``, its tables).
     """
     eng = engine_for(model, engine)
+    changed = model
+    if changes and any(is_element_address(a) for a in changes):  # element points: the model's, no body moves
+        changed, changes = apply_element_changes(model, eng, eng.state_of(model), changes)
     sol = solve_changes(eng, model, changes, free, tol=tol, max_iter=max_iter, weights=weights, branch=branch,
                         units=units, method=method)  # fmt: skip
     prop = propagation_of(eng, model, sol, free)
+    if changed is not model:
+        prop = replace(prop, after=replace(prop.after, elements=changed.elements))
     moved_pivots = pivot_updates(eng, changes or {})
     if moved_pivots:  # the result carries its moved pivots (fixed-body points, not variables)
         prop = replace(prop, after=with_points(prop.after, moved_pivots))
