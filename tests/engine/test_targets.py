@@ -313,7 +313,8 @@ def test_analytic_output_jacobians_match_central_differences_of_the_output_map()
     st = eng.state_of(moved)
     names = ["metric:upright.camber", "metric:upright.toe", "metric:upright.wheel_centre_dz",
              "point:upright.wheel_centre[y]", "hardpoint:UBJ.j[z]", "hardpoint:TR.i[x]", "hardpoint:LBJ.j[x]",
-             "distance:upright.wheel_centre,hardpoint:TR.i", "UCA.q", "TR.length", "TR.s_j[1]"]  # fmt: skip
+             "distance:upright.wheel_centre,hardpoint:TR.i", "UCA.q", "TR.length", "TR.s_j[1]",
+             "metric:upright.caster", "metric:upright.kpi"]  # fmt: skip
     cols = np.arange(eng.n_columns)
     G = _config_jacobian(model, eng, names)(st, cols)
     F = output_jacobian(eng, _config_outputs(model, eng, names), st, cols)
@@ -332,3 +333,32 @@ def test_analytic_and_difference_jacobians_give_the_same_design():
     # an underdetermined Newton's end point depends (weakly) on the step directions taken
     for key in a.design_change:
         np.testing.assert_allclose(a.design_change[key], f.design_change[key], atol=1e-5)
+
+
+@pytest.mark.parametrize(("output", "column"), [("toe", "TR.s_i[2]"), ("caster", "UBJ.s_j[0]")])
+def test_a_slope_targets_row_is_its_exact_derivative(output: str, column: str) -> None:
+    """A slope target's row in the target solver, reduced to the free design column with both
+    travel conditions held (``T_p - T_u pinv(H_u) H_p``, the difference of its two
+    configurations' exact rows: toe from the spin axis, caster from the steering axis), against
+    central differences (Richardson) of re-solved models' slopes at the converged design."""
+    from kinprop import propagate
+    from kinprop.analysis.drives import outputs_at
+
+    model = solved("double_wishbone.yaml")
+    name = f"slope:{output}@travel=-30..30"
+    key, k = column.split("[")[0], int(column[-2])
+    s0 = outputs_at(model, [name])[name]
+    tp = propagate_targets(model, [f"{name}={s0 + 1e-5}"], [column])
+    assert tp.targets_status == "met"
+    H, T, nu = tp.result.row_jacobians
+    row = T[:, nu:] - T[:, :nu] @ np.linalg.pinv(H[:, :nu]) @ H[:, nu:]
+    at = tp.propagation.after
+
+    def slope(dp: float) -> float:
+        v = np.array(at.design[key], dtype=float)
+        v[k] += dp
+        return outputs_at(propagate(at, {key: v}, ["q"], tol=1e-13).after, [name])[name]
+
+    h = 0.2
+    d1, d2 = (slope(h) - slope(-h)) / (2 * h), (slope(h / 2) - slope(-h / 2)) / h
+    assert float(row[0, 0]) == pytest.approx((4 * d2 - d1) / 3, rel=1e-6)

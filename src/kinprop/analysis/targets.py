@@ -25,11 +25,12 @@ A target spec (CLI ``--target``, Python ``propagate_targets(model, [...])``)::
 :func:`propagate_targets` solves by :func:`kinprop.engine.targets.solve_targets` (the
 minimum-(weighted-)norm change of the ``free`` design variables: ``hardpoint:J[.i|.j]``,
 ``axis:J``, ``J.s_i``, ``J.length``, groups ``s C l``). Output Jacobians are analytic for
-points, hardpoints, distances, coordinates, design variables and the camber, toe and
-wheel-centre metrics (:func:`_config_jacobian`); the first-order metrics (gains, centres,
+points, hardpoints, distances, coordinates, design variables and the camber, toe, caster, KPI
+and wheel-centre metrics (:func:`_config_jacobian`); the first-order metrics (gains, centres,
 roll-centre height, anti, motion ratios, wheel rate) are exact
-(:func:`kinprop.analysis.outputs.first_order_derivatives`); caster, KPI, scrub radius, trail,
-slopes and joint values use central differences of the output map.
+(:func:`kinprop.analysis.outputs.first_order_derivatives`); a slope's row is the difference of
+its two configurations' rows (exact when they are); scrub radius, trail and joint values use
+central differences of the output map.
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from kinprop.analysis.context import HARD, POINT, pivot_point
+from kinprop.analysis.context import HARD, POINT, find_point, pivot_point
 from kinprop.analysis.firstorder import GAIN_METRICS
 from kinprop.analysis.metrics import (
     ANGLE_METRICS,
@@ -67,6 +68,7 @@ from kinprop.engine.units import METRES_PER, RADIANS_PER, changes_to_internal, c
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.design import parse_address
+from kinprop.model.joint_points import steering_joints
 from kinprop.propagation.element_points import apply_element_changes, is_element_address
 from kinprop.propagation.hardpoints import body_rotation, free_addresses, free_weights, resolve_changes
 from kinprop.propagation.point_jacobians import PointJacobians, PointSpec
@@ -285,6 +287,20 @@ def _point_spec(model: Model, engine: Engine, spec: str) -> PointSpec:
     return PointSpec(j.body_i if side == 0 else j.body_j, joint=j.name, side=side)
 
 
+def _steering_specs(model: Model, engine: Engine, wheel: str) -> tuple[PointSpec, PointSpec, bool] | None:
+    """``(upper, lower, by height)``: the wheel's steering-axis points by the lookup rule of
+    :class:`kinprop.analysis.program.ProgramBuilder` (declared ``kingpin_upper``/``kingpin_lower``,
+    else the steering joints, the higher one upper at each state), or None."""
+    found = [find_point(model, wheel, n) for n in ("kingpin_upper", "kingpin_lower")]
+    if found[0] is not None and found[1] is not None:
+        return (*(_point_spec(model, engine, f"point:{b}.{n}") for b, n in found), False)  # type: ignore[misc, return-value]
+    pair = steering_joints(model.mechanism, wheel)
+    if pair is None:
+        return None
+    a, b = (_point_spec(model, engine, f"hardpoint:{j}.{side}") for j, side in pair)
+    return a, b, True
+
+
 def _analytic_rows(model: Model, engine: Engine, names: list[str]) -> tuple[list[PointSpec], dict[str, Callable]]:
     """Point specs and, per output name with an analytic derivative, ``row(P, G, cols) -> dy/dx``
     from the points ``P`` (n, 3) and their Jacobians ``G`` (n, 3, ncols)."""
@@ -334,6 +350,19 @@ def _analytic_rows(model: Model, engine: Engine, names: list[str]) -> tuple[list
                     return _DEG * (abs(a[1]) * da[0] - a[0] * sy * da[1]) / (a[0] ** 2 + a[1] ** 2)
 
                 rows[name] = toe
+            elif metric in ("caster", "kpi") and (axis := _steering_specs(model, engine, wheel)) is not None:
+                up, lo = (idx(a) for a in axis[:2])
+
+                def steer(P, G, cols, c=centre, s=spin, up=up, lo=lo, order=axis[2], kpi=metric == "kpi"):
+                    if order and P[up][2] < P[lo][2]:  # the higher joint is the upper one (ProgramBuilder)
+                        up, lo = lo, up
+                    k, dk = P[up] - P[lo], G[up] - G[lo]
+                    if not kpi:  # atan2(-k_x, k_z)
+                        return _DEG * (k[0] * dk[2] - k[2] * dk[0]) / (k[0] ** 2 + k[2] ** 2)
+                    side = 1.0 if P[s][1] - P[c][1] >= 0 else -1.0  # atan2(-side k_y, k_z)
+                    return _DEG * side * (k[1] * dk[2] - k[2] * dk[1]) / (k[1] ** 2 + k[2] ** 2)
+
+                rows[name] = steer
             elif metric in ("wheel_centre_dx", "wheel_centre_dy", "wheel_centre_dz"):
                 k = "xyz".index(metric[-1])
                 rows[name] = lambda P, G, cols, c=centre, k=k: G[c, k]

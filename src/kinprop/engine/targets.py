@@ -27,7 +27,7 @@ or the residual grows tenfold.
 
 A configuration's output rows use its ``jacobian`` when given — :mod:`kinprop.analysis.targets`
 gives analytic ones for points, hardpoints, distances, coordinates, design variables and the
-camber, toe and wheel-centre metrics (:mod:`kinprop.propagation.point_jacobians`: the kernel's
+camber, toe, caster, KPI and wheel-centre metrics (:mod:`kinprop.propagation.point_jacobians`: the kernel's
 own partials, chained through the metric formula) — and otherwise a **central difference of the
 output map only** (forward kinematics, no re-solve) along each state column on the manifold, as
 :mod:`kinprop.analysis.sensitivity` does. Either way every iterate is an exact assembly and the
@@ -122,6 +122,9 @@ class TargetResult:
     met: bool = False
     #: the engine's solution of each configuration at the end (``after``'s states)
     solutions: tuple[Solution, ...] = ()
+    #: the hard and the target rows' Jacobians over the outer unknowns ``z = [u_1 .. u_K, p]``
+    #: at the end (each configuration's coordinates eliminated), and the number of ``u`` columns
+    row_jacobians: tuple[Array, Array, int] | None = None
 
     @property
     def converged(self) -> bool:
@@ -358,8 +361,10 @@ def solve_targets(
     va = _row_values(rows, outs)
     hard_res = float(np.linalg.norm(np.concatenate([engine.residual(s) for s in after] + [h])))
     conflicts: list[tuple[tuple[str, float], ...]] = []
+    final = None
     if t.size:
         Hj, Tj = jacobians(after, True)
+        final = (Hj, Tj, int(uoffs[-1]))
         sw = np.sqrt(np.concatenate([np.ones(int(uoffs[-1])), wfull[pcols]]))
         Hy, Ty = Hj * sw, Tj * sw
         TN = Ty @ (np.eye(sw.size) - _pinv(Hy, RCOND_HARD) @ Hy)
@@ -385,7 +390,7 @@ def solve_targets(
     return TargetResult(Status.CONVERGED if ok else Status.NOT_CONVERGED, msg, it0 + it, tuple(rows),
                         tuple(configurations), tuple(before), tuple(after), vb, va, hard_res,
                         _design_change(engine, before[0], after[0], pcols), tuple(conflicts), tuple(hist), pcols, met,
-                        tuple(after_sols))  # fmt: skip
+                        tuple(after_sols), final)  # fmt: skip
 
 
 __all__ = ["Configuration", "OutputMap", "Row", "TargetResult", "output_jacobian", "solve_targets"]
