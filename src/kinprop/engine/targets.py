@@ -36,8 +36,12 @@ direction (O(h^2)).
 
 Bounds (``Row.bound``: ``<=`` or ``>=``): a bound's residual is its violation only, zero while
 it holds (its row then drops out of the step); a violated bound is driven onto its limit like an
-equality. A bound is met when it holds at the end, in conflict when the compromise leaves it
-violated.
+equality; with bounds, a design step is halved whenever it makes the residual larger (the
+violation is not smooth where a bound starts or stops holding, and full Gauss-Newton steps
+can cycle there); when no halved step lowers it (the conditions holding), the iteration ends
+at that compromise, and also when the residual norm stops decreasing (relative ``STALL``). A
+bound is met when it holds at the end, in conflict when the compromise
+leaves it violated.
 
 Conflicts: at the solution, the left singular vectors of ``T_y N`` (targets restricted to the
 motions that keep every condition) whose singular value is (numerically) zero span the target
@@ -64,6 +68,8 @@ FD_STEP = 1e-6
 RCOND_HARD, RCOND_TARGET = 1e-10, 1e-9
 #: a Newton step is halved when it makes a residual norm this many times larger
 BLOWUP = 10.0
+#: relative decrease of the residual norm below which an iteration with bounds has stalled
+STALL = 1e-9
 #: a left singular vector component at least this large names a target in a conflict
 CONFLICT_WEIGHT = 0.1
 
@@ -263,6 +269,7 @@ def solve_targets(
         wfull[engine.columns([sel])] = float(w)
     hard = [r for r in rows if r.hard]
     soft = [r for r in rows if not r.hard]
+    bounded = any(r.bound for r in soft)
     floor = max(tol, engine.roundoff_floor(start))
     solve_tol = min(tol, 1e-10)
     uoffs = np.cumsum([0] + [d.size for d in driven])
@@ -344,7 +351,11 @@ def solve_targets(
             dz = sw * _step(Hj * sw, h, Tj * sw, t)
             hn = float(np.linalg.norm(h))
             small = float(np.linalg.norm(dz)) <= 1e-10 * max(1.0, engine.length_scale or 1.0)
-            if hn < floor and (small or t.size == 0 or float(np.max(np.abs(t), initial=0.0)) < target_tol * 1e-3):
+            # with bounds the compromise is approached linearly: stalled (relative 1e-9) is done
+            stalled = bounded and with_design and it > 0 and hist[-2] - hist[-1] <= STALL * hist[-1]
+            if hn < floor and (
+                small or stalled or t.size == 0 or float(np.max(np.abs(t), initial=0.0)) < target_tol * 1e-3
+            ):
                 return sols, it, True, hist
             if it == max_iter or not np.all(np.isfinite(dz)):
                 break
@@ -356,11 +367,15 @@ def solve_targets(
                 if all(s.converged for s in trial):
                     h2, t2, _ = residuals([s.state for s in trial], with_design)
                     h2n, t2n = float(np.linalg.norm(h2)), float(np.linalg.norm(t2))
-                    grew = np.hypot(h2n, t2n) > BLOWUP * np.hypot(hn, tn) + np.sqrt(floor)
+                    # with bounds (a non-smooth residual) a step must not make it larger
+                    grow = 1.0 if bounded and with_design else BLOWUP
+                    grew = np.hypot(h2n, t2n) > grow * np.hypot(hn, tn) + np.sqrt(floor)
                     if np.isfinite(h2n + t2n) and not grew:
                         break
                 lam *= 0.5
             else:
+                if bounded and with_design and hn < floor:  # no step lowers the residual: a compromise
+                    return sols, it, True, hist
                 break
             sols, h, t = trial, h2, t2
         return sols, max_iter, False, hist
