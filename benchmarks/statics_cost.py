@@ -2,7 +2,10 @@
 kinetostatics (reactions, member and element forces, input effort), the same with their exact
 design derivatives with respect to 20 hardpoint coordinates (the state response included) and
 the exact reduced stiffness, against one compiled position re-solve; CPU time of the calling
-process (the machine is shared), the median of several repeats after a warm-up.
+process (the machine is shared), the median of several repeats after a warm-up. Then a 51-point
+wheel-travel sweep (the lower arm over -6..6 deg) with every force of the ``bump_3g`` case as
+outputs (every joint's reaction magnitude, the tie rod's tension, the springs' forces, the
+input effort) against the same sweep with the positions only (the hardpoints' z).
 
     python benchmarks/statics_cost.py [--repeats 7]
 """
@@ -66,6 +69,19 @@ def main() -> None:
     base = times["position re-solve (compiled)"]
     for name, t in times.items():
         print(f"{name:32s} {t * 1e3:8.3f} ms CPU {t / base:6.1f} x re-solve")
+    joints = model.mechanism.joint_names
+    positions = [f"hardpoint:{j}.j[z]" for j in joints]
+    forces = [f"reaction:{j}.f@bump_3g" for j in joints] + ["force:TR@bump_3g", "force:spring", "effort:LCA@bump_3g"]
+    sweeps = {
+        "sweep 51 points, positions": lambda: kp.sweep(model, ["LCA=-6:6:50"], outputs=positions),
+        "sweep 51 points, all forces": lambda: kp.sweep(model, ["LCA=-6:6:50"], outputs=positions + forces),
+    }
+    st_times = {
+        name: statistics.median(_time(f, 2) for _ in range(max(1, args.repeats // 2))) for name, f in sweeps.items()
+    }
+    pos = st_times["sweep 51 points, positions"]
+    for name, t in st_times.items():
+        print(f"{name:32s} {t * 1e3:8.1f} ms CPU {t / pos:6.1f} x positions-only sweep")
 
 
 if __name__ == "__main__":

@@ -669,3 +669,36 @@ def test_double_wishbone_equilibrium_design_derivatives() -> None:
         fd = (4 * (at(h / 2) - at(-h / 2)) / h - (at(h) - at(-h)) / (2 * h)) / 3
         assert D[0, k] == pytest.approx(fd, rel=1e-6, abs=1e-9), (c, D[0, k], fd)
     assert abs(D[0, columns.index("LBJ.s_i[2]")]) > 1e-3  # a real dependence (deg per mm)
+
+
+def test_planar_double_wishbone_free_bodies_by_hand() -> None:
+    """The four-bar as a planar double wishbone (crank = lower arm held at O2, coupler =
+    upright, rocker = upper arm) under a force on the upright, solved by hand from free-body
+    diagrams: the unloaded upper arm is a two-force member (its force on the upright at B
+    along O4->B, tension T); moments about A on the upright give T; the upright's force balance
+    the force at A; the lower arm's moments about O2 the holding torque; the pivots the rest."""
+    model = _assembled(EXAMPLES / "fourbar.yaml")
+    F = np.array([30.0, -45.0, 0.0])
+    s = kp.statics(model, LoadCase("push", forces=(PointLoad("coupler", "P", force=tuple(F)),)))
+    assert s.ok
+    kin = kp.compile(model).kinematics(model.design, model.coordinates)
+    fr = kin.frames
+    O2, A, B, O4 = fr["O2"].P_i, fr["A"].P_i, fr["B"].P_i, fr["O4"].P_i
+    P = kin.r["coupler"] + kin.A["coupler"] @ np.array(dict(model.mechanism.body("coupler").points)["P"])
+
+    def cz(a: np.ndarray, b: np.ndarray) -> float:
+        return float(a[0] * b[1] - a[1] * b[0])
+
+    u = (B - O4) / np.linalg.norm(B - O4)
+    T = cz(P - A, F) / cz(B - A, u)  # sum of moments about A on the upright: -T (B-A) x u + (P-A) x F = 0
+    on_upright_B = -T * u  # the upper arm pulls the upright towards O4 when in tension
+    on_upright_A = -F - on_upright_B
+    tau = cz(A - O2, on_upright_A)  # moments about O2 on the lower arm (pushed with -on_upright_A at A)
+    plane = slice(0, 2)
+    atol = 1e-9 * np.linalg.norm(F)
+    assert np.allclose(s.reactions["B"].force[0][plane], on_upright_B[plane], atol=atol)  # B: [coupler, rocker]
+    assert np.allclose(s.reactions["A"].force[1][plane], on_upright_A[plane], atol=atol)  # A: [crank, coupler]
+    # the lower arm: -on_upright_A at A, so its pivot carries on_upright_A
+    assert np.allclose(s.reactions["O2"].force[1][plane], on_upright_A[plane], atol=atol)
+    assert np.allclose(s.reactions["O4"].force[1][plane], on_upright_B[plane], atol=atol)  # the rocker's pivot
+    assert s.efforts["O2.q"] == pytest.approx(tau, rel=1e-9)

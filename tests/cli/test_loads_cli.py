@@ -73,7 +73,7 @@ def test_plot_draws_the_reported_forces(tmp_path: Path) -> None:
     contact point, each joint's force on its body j at its point (the tie rod coloured by the
     sign of its tension), the spring's force on its body-j end along the spring."""
     from kinprop.analysis.metrics import contact_point
-    from kinprop.plot.forces import force_arrows
+    from kinprop.plot.forces import FORCE_STYLE, force_arrows
 
     out = tmp_path / "loads.png"
     p = invoke_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--load-case", "braking_1g", "--plot", out)
@@ -101,6 +101,17 @@ def test_plot_draws_the_reported_forces(tmp_path: Path) -> None:
     radius = np.linalg.norm(np.array(pts["contact_patch"]) - np.array(pts["wheel_centre"]))
     assert np.allclose(load.origin, contact_point(centre, axis, radius))
     assert np.allclose(load.force, case.wheels["upright"])
+    html = tmp_path / "plot.html"  # kinprop plot --load-case: the same arrows, in an HTML figure
+    from kinprop.io.writer import dump_model_like
+
+    dump_model_like(model, tmp_path / "dw.yaml", EXAMPLES / "double_wishbone.yaml")  # assembled
+    p = invoke_kinprop("plot", tmp_path / "dw.yaml", "-o", html, "--load-case", "braking_1g")
+    assert p.returncode == 0, p.stderr
+    text = html.read_text()
+    for kind in {a.kind for a in arrows.values()}:  # one trace per kind, named by its legend text
+        assert f'"name":"{FORCE_STYLE[kind][1]}"' in text
+    assert '"name":"tension (rod, element)"' not in text  # no member in tension in this case
+    assert f"TR: {np.linalg.norm(tr.force):.4g} N" in text and "force arrows: 1 mm per" in text
     bad = invoke_kinprop("loads", EXAMPLES / "double_wishbone.yaml", "--plot", tmp_path / "loads.svg")
     assert bad.returncode == 2 and "--plot" in one_error_line(bad)
 

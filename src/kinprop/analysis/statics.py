@@ -614,7 +614,7 @@ def load_output_unit(model: Model, name: str) -> str:
 def load_value(
     model: Model,
     name: str,
-    cache: dict[str, dict[str, float]],
+    cache: dict[str, dict[str, Any]],
     engine: Engine | None = None,
     reference: Model | None = None,
 ) -> float:
@@ -622,13 +622,16 @@ def load_value(
     ``loads:``; without it the elements only); ``cache`` keeps one statics per case and state."""
     base, _, case = name.partition("@")
     key = f"\x00statics@{case}"
-    if key not in cache:
-        s = statics(model, case or None, engine=engine, reference=reference)
-        cache[key] = {n: s.value(n) for n in s.names(local=True)}
+    if not case and key not in cache and base.startswith("force:"):
+        # an element's force depends on the pose only: any load case's statics at this state has it
+        known = next((v for k, v in cache.items() if k.startswith("\x00statics@")), None)
+        if known is not None and base[len("force:") :] in known[""].element_forces:
+            return known[""].element_forces[base[len("force:") :]]
+    if key not in cache:  # one statics per case and state; each value read from it when asked
+        cache[key] = {"": statics(model, case or None, engine=engine, reference=reference)}
     values = cache[key]
     if base not in values:
-        s = statics(model, case or None, engine=engine, reference=reference)
-        return s.value(base)  # raises AddressError naming what is known
+        values[base] = values[""].value(base)  # raises AddressError naming what is known
     return values[base]
 
 

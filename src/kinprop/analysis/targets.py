@@ -21,6 +21,16 @@ A target spec (CLI ``--target``, Python ``propagate_targets(model, [...])``)::
   and joint angles in its angle unit, lengths in its length unit).
 * ``WEIGHT`` (default 1) multiplies the target's residual in the least-squares compromise when
   targets conflict (a miss of 1/WEIGHT units counts as one).
+* ``OUTPUT<=VALUE`` / ``OUTPUT>=VALUE``: a bound, not a value: met while it holds (it does not
+  pull the design then), driven onto its limit when violated, reported ``met`` or in conflict.
+* Loads (``reaction:UBJ.f``, ``force:TR``, ``effort:LCA``, :mod:`kinprop.analysis.statics`)
+  name their load case after ``@`` (``reaction:UBJ.f@braking_1g<=8kN``; ``@*``: one target per
+  load case of the model, e.g. "the upper ball joint's force at most 8 kN over the load
+  cases"); further ``@``-conditions put them in a configuration as any other output. Values in
+  the model's force unit, or ``N``/``kN``/``lbf`` when the model's force unit is one of those;
+  their derivatives are exact (the differentiated equilibrium along the configuration's
+  tangent, :func:`kinprop.analysis.statics.load_derivatives`), preloads at the starting model's
+  pose.
 
 :func:`propagate_targets` solves by :func:`kinprop.engine.targets.solve_targets` (the
 minimum-(weighted-)norm change of the ``free`` design variables: ``hardpoint:J[.i|.j]``,
@@ -30,7 +40,8 @@ and wheel-centre metrics (:func:`_config_jacobian`); the first-order metrics (ga
 roll-centre height, anti, motion ratios, wheel rate) are exact
 (:func:`kinprop.analysis.outputs.first_order_derivatives`); a slope's row is the difference of
 its two configurations' rows (exact when they are); scrub radius, trail and joint values use
-central differences of the output map.
+central differences of the output map; a configuration with a load output takes every row's
+rate along its tangent (:attr:`Configuration.rates`).
 """
 
 from __future__ import annotations
@@ -38,7 +49,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from html import escape
 from typing import Any
@@ -62,6 +73,7 @@ from kinprop.analysis.outputs import (
     first_order_of,
     output_function,
 )
+from kinprop.analysis.statics import is_load_output, load_derivatives, load_output_unit, load_value
 from kinprop.engine import Engine, State, Status
 from kinprop.engine.targets import Configuration, Row, TargetResult, output_jacobian, solve_targets
 from kinprop.engine.units import METRES_PER, RADIANS_PER, changes_to_internal, check_units
@@ -76,6 +88,8 @@ from kinprop.propagation.poses import joint_values
 from kinprop.propagation.propagate import Propagation, engine_for, propagation_of
 from kinprop.spatial import Array
 
+#: force units a load target's value may be written in (when the model's force unit is one of them)
+NEWTONS_PER = {"N": 1.0, "kN": 1000.0, "lbf": 4.4482216152605}
 _NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/]*)\s*$")
 _JOINT_OUT = re.compile(r"^joint:(?P<joint>[^.\s]+)\.(?P<name>[a-z_0-9]+)(\[(?P<k>\d)\])?$")
 
@@ -99,11 +113,17 @@ class TargetSpec:
     slope: tuple[tuple[Condition, ...], tuple[Condition, ...], float] | None = None
     weight: float = 1.0
     unit: str = ""
+    #: ``""`` a value; ``"<="`` / ``">="`` a bound
+    bound: str = ""
 
 
 def _kind(model: Model, output: str) -> str:
     """``deg`` (metric angle, degrees), ``rad`` (coordinate/joint angle, radians), ``length``,
-    ``gain`` (a first-order angle gain, degrees per length unit), ``none``."""
+    ``gain`` (a first-order angle gain, degrees per length unit), ``force``, ``moment`` (a load
+    output in force x length), ``none``."""
+    if is_load_output(output):
+        F = model.units.get("force", "force")
+        return "force" if load_output_unit(model, output) == F else "moment"
     if output.startswith("joint:"):
         m = _JOINT_OUT.match(output)
         name = m["name"] if m else ""
@@ -136,6 +156,9 @@ def _unit_factor(model: Model, kind: str, unit: str, where: str) -> float:
         return METRES_PER[unit] / METRES_PER[length_unit] if unit else 1.0
     if kind not in ("deg", "rad", "gain", "length") and not unit:
         return 1.0
+    force = model.units.get("force", "")
+    if kind == "force" and (unit == force or (unit in NEWTONS_PER and force in NEWTONS_PER)):
+        return NEWTONS_PER[unit] / NEWTONS_PER[force] if unit != force else 1.0
     raise AddressError(f"{where}: unit {unit!r} does not fit this output ({kind}; model length unit {length_unit})")
 
 
@@ -185,6 +208,8 @@ def parse_target(model: Model, text: str, engine: Engine | None = None) -> Targe
     """Parse one target spec (module docstring); raises :class:`AddressError` with the spec."""
     where = f"--target {text!r}"
     body, sep, value = text.rpartition("=")
+    bound = body[-1] + "=" if body.endswith(("<", ">")) else ""
+    body = body[:-1] if bound else body
     if not sep or not body:
         raise AddressError(f"{where}: expected OUTPUT[@CONDITION]=VALUE (e.g. metric:camber@travel=50mm=-1.5deg)")
     weight = 1.0
@@ -201,7 +226,16 @@ def parse_target(model: Model, text: str, engine: Engine | None = None) -> Targe
     out = out[len("slope:") :] if is_slope else out
     out = out.strip()
     out = _travel(model, where) if out == "travel" else _metric_name(model, out)
-    if not out.startswith("joint:"):
+    if is_load_output(out) and conds:  # a load output's first @ names its load case
+        case, _, conds = conds.partition("&") if "=" not in conds.partition("&")[0] else ("", "", conds)
+        if case.strip():
+            case = case.strip()
+            cases = model.loads.cases if model.loads is not None else {}
+            if case != "*" and case not in cases:
+                raise AddressError(f"{where}: unknown load case {case!r}; load cases: {', '.join(cases) or 'none'}"
+                                   " (or * for every one)")  # fmt: skip
+            out = f"{out}@{case}"
+    if not out.startswith("joint:") and not out.endswith("@*"):
         names = expand_outputs(model, [out], engine)
         if names != [out]:
             raise AddressError(f"{where}: {out!r} is not a scalar output; name a component, e.g. {names[0]}")
@@ -226,9 +260,21 @@ def parse_target(model: Model, text: str, engine: Engine | None = None) -> Targe
         num_unit, _, den_unit = unit.partition("/")
         v *= _unit_factor(model, kind, num_unit, where)
         v /= _unit_factor(model, _kind(model, ca.output), den_unit, where)
-        return TargetSpec(text, out, v, (), ((ca,), (cb,), cb.value - ca.value), weight=weight)
+        return TargetSpec(text, out, v, (), ((ca,), (cb,), cb.value - ca.value), weight=weight, bound=bound)
     v *= _unit_factor(model, kind, unit, where)
-    return TargetSpec(text, out, v, tuple(_condition(model, c, where) for c in parts), weight=weight)
+    return TargetSpec(text, out, v, tuple(_condition(model, c, where) for c in parts), weight=weight, bound=bound)
+
+
+def _every_case(model: Model, spec: TargetSpec) -> list[TargetSpec]:
+    """A load target over ``@*`` as one target per load case of the model (its text naming the
+    case); any other target as it is."""
+    if not spec.output.endswith("@*"):
+        return [spec]
+    cases = list(model.loads.cases) if model.loads is not None else []
+    if not cases:
+        raise AddressError(f"--target {spec.text!r}: @* means every load case, and this model has none")
+    base = spec.output[:-2]
+    return [replace(spec, text=spec.text.replace("@*", f"@{c}", 1), output=f"{base}@{c}") for c in cases]
 
 
 def _joint_output(engine: Engine, name: str) -> Callable[[State], float]:
@@ -251,15 +297,19 @@ def _joint_output(engine: Engine, name: str) -> Callable[[State], float]:
 
 
 def _config_outputs(model: Model, engine: Engine, names: list[str]) -> Callable[[State], Array]:
-    """One configuration's output map ``state -> values`` of ``names``."""
-    std = [n for n in names if not n.startswith("joint:")]
+    """One configuration's output map ``state -> values`` of ``names`` (loads with their
+    preloads at ``model``'s pose)."""
+    std = [n for n in names if not n.startswith("joint:") and not is_load_output(n)]
     jf = {n: _joint_output(engine, n) for n in names if n.startswith("joint:")}
     f, _ = output_function(model, std, engine=engine) if std else (None, [])
     pos = {n: i for i, n in enumerate(std)}
 
     def outputs(st: State) -> Array:
-        vals = f(engine.model_of(st, model)) if f is not None else np.zeros(0)
-        return np.array([vals[pos[n]] if n in pos else jf[n](st) for n in names])
+        at = engine.model_of(st, model)
+        vals = f(at) if f is not None else np.zeros(0)
+        cache: dict[str, dict[str, float]] = {}
+        return np.array([vals[pos[n]] if n in pos else load_value(at, n, cache, engine, model) if is_load_output(n)
+                         else jf[n](st) for n in names])  # fmt: skip
 
     return outputs
 
@@ -408,6 +458,33 @@ def _config_jacobian(model: Model, engine: Engine, names: list[str]) -> Callable
     return jacobian
 
 
+def _config_rates(model: Model, engine: Engine, names: list[str]) -> Callable[[State, Array], Array]:
+    """``(state, X) -> (len(names), K)``: every output's rate along the tangent directions ``X``
+    (K, n_columns): the load outputs' exact ones (the differentiated equilibrium,
+    :func:`~kinprop.analysis.statics.load_derivatives`, preloads at ``model``'s pose), the
+    others' :func:`_config_jacobian` rows over the columns ``X`` moves."""
+    loads = [n for n in names if is_load_output(n)]
+    rest = [n for n in names if not is_load_output(n)]
+    jac = _config_jacobian(model, engine, rest) if rest else None
+
+    def rates(st: State, X: Array) -> Array:
+        out = np.zeros((len(names), X.shape[0]))
+        if not X.shape[0]:
+            return out
+        at = engine.model_of(st, model)
+        D = load_derivatives(at, loads, X, engine=engine, reference=model)
+        for i, n in enumerate(loads):
+            out[names.index(n)] = D[i]
+        if jac is not None:
+            cols = np.flatnonzero(np.any(X != 0.0, axis=0))
+            G = jac(st, cols) @ X[:, cols].T
+            for i, n in enumerate(rest):
+                out[names.index(n)] = G[i]
+        return out
+
+    return rates
+
+
 @dataclass(frozen=True)
 class TargetPropagation:
     """The outcome of :func:`propagate_targets`: the solver's :class:`TargetResult`, the specs,
@@ -462,7 +539,9 @@ class TargetPropagation:
         """The display unit of a target's values (a slope: per model length unit)."""
         length = self.model.units.get("length", "")
         angle = self.model.units.get("angle", "rad")
-        names = {"deg": angle, "rad": angle, "length": length, "none": "", "gain": f"{angle}/{length}"}
+        force = self.model.units.get("force", "")
+        names = {"deg": angle, "rad": angle, "length": length, "none": "", "gain": f"{angle}/{length}",
+                 "force": force, "moment": f"{force} {length}"}  # fmt: skip
         u = names[_kind(self.model, spec.output)]
         metric = spec.output.startswith("metric:") or "." not in spec.output
         if _kind(self.model, spec.output) == "none" and spec.slope is None and metric:
@@ -592,7 +671,8 @@ def propagate_targets(
         model, changes = apply_element_changes(model, eng, start, changes)
     changes = changes_to_internal(model, changes or {}, eng) if check_units(units) else dict(changes or {})
     st, _, _ = eng.apply(start, resolve_changes(eng, start, changes))
-    specs = tuple(t if isinstance(t, TargetSpec) else parse_target(model, t, eng) for t in targets)
+    specs = tuple(e for t in targets for e in _every_case(model, t if isinstance(t, TargetSpec) else
+                                                           parse_target(model, t, eng)))  # fmt: skip
     if not specs:
         raise AddressError("no targets given")
     # configurations keyed by their conditions
@@ -627,19 +707,20 @@ def propagate_targets(
     for s in specs:
         if s.slope is None:
             k = config(s.conditions)
-            rows.append(Row(s.text, s.value, ((k, slot(k, s.output), 1.0),), scale=1.0 / s.weight))
+            rows.append(Row(s.text, s.value, ((k, slot(k, s.output), 1.0),), scale=1.0 / s.weight, bound=s.bound))
         else:
             ka, kb = config(s.slope[0]), config(s.slope[1])
             span = s.slope[2]
             terms = ((ka, slot(ka, s.output), -1.0 / span), (kb, slot(kb, s.output), 1.0 / span))
-            rows.append(Row(s.text, s.value, terms, scale=1.0 / s.weight))
+            rows.append(Row(s.text, s.value, terms, scale=1.0 / s.weight, bound=s.bound))
     names = tuple(" & ".join(f"{c.output}={c.value:g}" for c in cs) or "base" for cs in conds)
     configurations = [
         Configuration(
             names[k],
             _config_outputs(model, eng, outs[k]),
             {c.output: [c.value] for c in cs if c.held},
-            _config_jacobian(model, eng, outs[k]) if analytic else None,
+            _config_jacobian(model, eng, outs[k]) if analytic and not any(map(is_load_output, outs[k])) else None,
+            _config_rates(model, eng, outs[k]) if analytic and any(map(is_load_output, outs[k])) else None,
         )
         for k, cs in enumerate(conds)
     ]

@@ -21,6 +21,7 @@ from kinprop.cli.app import (
     load_model_cli,
     out,
     print_json,
+    require_plot,
 )
 from kinprop.cli.checks import check_outputs, check_suffix
 from kinprop.engine.units import from_solver_units
@@ -138,7 +139,9 @@ def loads(
     ] = False,
     plot: Annotated[
         Path | None,
-        typer.Option("--plot", help="draw the forces as arrows on the mechanism (.png; red tension, blue compression)"),
+        typer.Option(
+            "--plot", help="draw the forces as arrows on the mechanism (.png or .html; red tension, blue compression)"
+        ),
     ] = None,
 ) -> None:
     """Joint reactions, member forces (tension positive), spring and damper forces (positive
@@ -148,8 +151,10 @@ def loads(
     A redundant mechanism's undetermined reaction components are named and shown as nan.
     """
     check_suffix("--csv", csv, (".csv",))
-    check_suffix("--plot", plot, (".png",))
+    check_suffix("--plot", plot, (".png", ".html"))
     check_outputs([model], [("--csv", csv), ("--plot", plot)])
+    if plot is not None:
+        require_plot(plot)
     m = load_model_cli(model)
     case = build_case(m, load_case, wheel, force, moment, gravity)
     asm = assemble(m, tol=tol)
@@ -167,12 +172,11 @@ def loads(
     if csv is not None and s.ok:
         atomic_write(csv, statics_csv(s))
     if plot is not None and s.ok:
-        from kinprop.plot import layers
+        from kinprop.plot import render
         from kinprop.plot.forces import force_arrows
-        from kinprop.plot.static import render_png
 
         title = f"{at.mechanism.name}: load case {s.case or '(elements only)'}"
-        atomic_write(plot, render_png(layers(at), title, arrows=force_arrows(s, case), force_unit=s.units["force"]))
+        atomic_write(plot, render(plot, at, title=title, arrows=force_arrows(s, case), force_unit=s.units["force"]))
     rate = _wheel_rate(at, input_) if equilibrium_ else None
     if json_out:
         data = statics_json(s)

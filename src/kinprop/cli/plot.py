@@ -8,7 +8,8 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from kinprop.cli.app import app, err, handles_user_errors, load_model_cli, out, require_plot
+from kinprop.analysis.statics import statics
+from kinprop.cli.app import EXIT_NOT_CONVERGED, app, err, fail, handles_user_errors, load_model_cli, out, require_plot
 from kinprop.cli.checks import check_outputs, check_suffix
 from kinprop.engine import compile as compile_engine
 from kinprop.model import Model
@@ -49,6 +50,14 @@ def plot_cmd(
     ] = None,
     title: Annotated[str | None, typer.Option("--title", help="figure title (default: the model's name)")] = None,
     view: View = "20,-60",
+    load_case: Annotated[
+        str | None,
+        typer.Option(
+            "--load-case",
+            help="draw the forces of this load case of the model as arrows "
+            "(red tension, blue compression, magenta applied, grey reactions)",
+        ),
+    ] = None,
 ) -> None:
     """Draw a 3D stick figure of a model (PNG or interactive HTML).
 
@@ -57,6 +66,9 @@ def plot_cmd(
 
     With --compare OTHER, OTHER is drawn faded as 'before' and MODEL solid as 'after' (the
     paper's Figs. 5 and 6).
+
+    With --load-case NAME, the statics of that load case at MODEL's pose (kinprop loads) drawn
+    as force arrows on MODEL; the model must be assembled.
     """
     cam = parse_view(view)
     check_suffix("-o", output, (".png", ".html"))
@@ -70,6 +82,19 @@ def plot_cmd(
     if compare is not None:
         before = load_model_cli(compare)
         note_if_unassembled(before, compare)
+    arrows, force_unit = (), ""
+    if load_case is not None:
+        from kinprop.plot.forces import force_arrows
+
+        cases = m.loads.cases if m.loads is not None else {}
+        if load_case not in cases:
+            raise ValueError(f"--load-case {load_case!r}: not a load case of {model}; load cases: "
+                             f"{', '.join(cases) or 'none'}")  # fmt: skip
+        s = statics(m, load_case)
+        if not s.ok:
+            fail(f"{model}: no forces to draw: {s.message}", EXIT_NOT_CONVERGED)
+        arrows, force_unit = force_arrows(s, cases[load_case]), s.units["force"]
+        title = title or f"{m.mechanism.name}: load case {load_case}"
     save_plot(
         output,
         m,
@@ -78,5 +103,7 @@ def plot_cmd(
         before_label=f"before: {compare.name}" if compare is not None else "before",
         title=title,
         view=cam,
+        arrows=arrows,
+        force_unit=force_unit,
     )
     out.print(f"wrote {output}")

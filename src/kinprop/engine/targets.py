@@ -34,6 +34,15 @@ output map only** (forward kinematics, no re-solve) along each state column on t
 rows are evaluated exactly, so the converged design is exact; a difference only perturbs the step
 direction (O(h^2)).
 
+Bounds (``Row.bound``: ``<=`` or ``>=``): a bound's residual is its violation only, zero while
+it holds (its row then drops out of the step); a violated bound is driven onto its limit like an
+equality; with bounds, a design step is halved whenever it makes the residual larger (the
+violation is not smooth where a bound starts or stops holding, and full Gauss-Newton steps
+can cycle there); when no halved step lowers it (the conditions holding), the iteration ends
+at that compromise, and also when the residual norm stops decreasing (relative ``STALL``). A
+bound is met when it holds at the end, in conflict when the compromise
+leaves it violated.
+
 Conflicts: at the solution, the left singular vectors of ``T_y N`` (targets restricted to the
 motions that keep every condition) whose singular value is (numerically) zero span the target
 combinations no free design variable can change; the targets weighted in such a vector that
@@ -59,6 +68,8 @@ FD_STEP = 1e-6
 RCOND_HARD, RCOND_TARGET = 1e-10, 1e-9
 #: a Newton step is halved when it makes a residual norm this many times larger
 BLOWUP = 10.0
+#: relative decrease of the residual norm below which an iteration with bounds has stalled
+STALL = 1e-9
 #: a left singular vector component at least this large names a target in a conflict
 CONFLICT_WEIGHT = 0.1
 
@@ -75,6 +86,11 @@ class Configuration:
     held: Mapping[str, Any] = field(default_factory=dict)
     #: ``(state, columns) -> d outputs / d x`` (analytic); None: central differences of ``outputs``
     jacobian: Callable[[State, Array], Array] | None = None
+    #: ``(state, X) -> (n_outputs, K)``: exact rates of every output along ``K`` state
+    #: directions ``X`` (K, n_columns) tangent to the constraints (loads: the differentiated
+    #: equilibrium, which has no partials off the constraint manifold); when given, it is used
+    #: instead of ``jacobian``
+    rates: Callable[[State, Array], Array] | None = None
 
 
 @dataclass(frozen=True)
@@ -88,6 +104,14 @@ class Row:
     terms: tuple[tuple[int, int, float], ...]
     hard: bool = False
     scale: float = 1.0
+    #: ``""`` an equality; ``"<="`` / ``">="`` a bound: the row's residual is its violation only
+    #: (zero while ``value`` is not exceeded), so a met bound does not pull the design
+    bound: str = ""
+
+    def residual(self, v: float) -> float:
+        """The row's residual at the value ``v`` (a bound's violation, 0 when it holds)."""
+        r = v - self.value
+        return max(r, 0.0) if self.bound == "<=" else min(r, 0.0) if self.bound == ">=" else r
 
 
 @dataclass(frozen=True)
@@ -144,7 +168,8 @@ class TargetResult:
                 "value": r.value,
                 "before": float(b),
                 "achieved": float(a),
-                "residual": float(a - r.value),
+                "residual": r.residual(float(a)),
+                "bound": r.bound,
             }
             for r, b, a in zip(self.rows, self.values_before, self.values_after, strict=True)
             if not r.hard
@@ -247,6 +272,7 @@ def solve_targets(
         wfull[engine.columns([sel])] = float(w)
     hard = [r for r in rows if r.hard]
     soft = [r for r in rows if not r.hard]
+    bounded = any(r.bound for r in soft)
     floor = max(tol, engine.roundoff_floor(start))
     solve_tol = min(tol, 1e-10)
     uoffs = np.cumsum([0] + [d.size for d in driven])
@@ -260,14 +286,15 @@ def solve_targets(
     def residuals(sts: Sequence[State], with_design: bool) -> tuple[Array, Array, list[Array]]:
         outs = [np.asarray(configurations[k].outputs(st), float) for k, st in enumerate(sts)]
         hv = np.array([(v - r.value) / r.scale for r, v in zip(hard, _row_values(hard, outs), strict=True)])
-        tv = (np.array([(v - r.value) / r.scale for r, v in zip(soft, _row_values(soft, outs), strict=True)])
+        tv = (np.array([r.residual(v) / r.scale for r, v in zip(soft, _row_values(soft, outs), strict=True)])
               if with_design else np.zeros(0))  # fmt: skip
         return hv, tv, outs
 
-    def jacobians(sts: Sequence[State], with_design: bool) -> tuple[Array, Array]:
+    def jacobians(sts: Sequence[State], with_design: bool, t: Array | None = None) -> tuple[Array, Array]:
         """The hard and target rows' Jacobians over the outer unknowns ``z = [u_1 .. u_K, p]``,
         each configuration's coordinates eliminated by the implicit-function theorem:
-        ``dq/dz = -Phi_q^+ Phi_z`` at its assembly."""
+        ``dq/dz = -Phi_q^+ Phi_z`` at its assembly; ``t`` the target residuals there (a bound
+        row with zero residual holds: its row is zero)."""
         npc = pcols.size if with_design else 0
         n = int(uoffs[-1]) + npc
         reduced = []
@@ -277,12 +304,20 @@ def solve_targets(
             dq = -np.linalg.lstsq(J[:, inner[k]], J[:, zc], rcond=None)[0] if zc.size else np.zeros((inner[k].size, 0))
             cols = np.concatenate([inner[k], zc])
             cfg = configurations[k]
+            if cfg.rates is not None:  # along the tangent directions e_z + dq/dz
+                X = np.zeros((zc.size, engine.n_columns))
+                X[np.arange(zc.size), zc] = 1.0
+                X[:, inner[k]] = dq.T
+                reduced.append(np.asarray(cfg.rates(st, X), float))
+                continue
             G = cfg.jacobian(st, cols) if cfg.jacobian is not None else output_jacobian(engine, cfg.outputs, st, cols)
             reduced.append(G[:, : inner[k].size] @ dq + G[:, inner[k].size :])
 
-        def lin(rs: list[Row]) -> Array:
+        def lin(rs: list[Row], res: Array | None = None) -> Array:
             jac = np.zeros((len(rs), n))
             for r_, row in enumerate(rs):
+                if res is not None and row.bound and res[r_] == 0.0:
+                    continue  # a bound that holds: no row (its violation is flat there)
                 for k, i, c in row.terms:
                     nu = driven[k].size
                     jac[r_, uoffs[k] : uoffs[k + 1]] += c * reduced[k][i, :nu]
@@ -291,7 +326,7 @@ def solve_targets(
                 jac[r_] /= row.scale
             return jac
 
-        return lin(hard), lin(soft) if with_design else np.zeros((0, n))
+        return lin(hard), lin(soft, t) if with_design else np.zeros((0, n))
 
     def moved(sts: Sequence[State], dz: Array, with_design: bool) -> list[State]:
         """The goal of each configuration after the outer step ``dz``: its driven inputs and
@@ -315,11 +350,15 @@ def solve_targets(
         for it in range(max_iter + 1):
             hist.append(float(np.sqrt(h @ h + t @ t)))
             sts = [s.state for s in sols]
-            Hj, Tj = jacobians(sts, with_design)
+            Hj, Tj = jacobians(sts, with_design, t)
             dz = sw * _step(Hj * sw, h, Tj * sw, t)
             hn = float(np.linalg.norm(h))
             small = float(np.linalg.norm(dz)) <= 1e-10 * max(1.0, engine.length_scale or 1.0)
-            if hn < floor and (small or t.size == 0 or float(np.max(np.abs(t), initial=0.0)) < target_tol * 1e-3):
+            # with bounds the compromise is approached linearly: stalled (relative 1e-9) is done
+            stalled = bounded and with_design and it > 0 and hist[-2] - hist[-1] <= STALL * hist[-1]
+            if hn < floor and (
+                small or stalled or t.size == 0 or float(np.max(np.abs(t), initial=0.0)) < target_tol * 1e-3
+            ):
                 return sols, it, True, hist
             if it == max_iter or not np.all(np.isfinite(dz)):
                 break
@@ -331,11 +370,15 @@ def solve_targets(
                 if all(s.converged for s in trial):
                     h2, t2, _ = residuals([s.state for s in trial], with_design)
                     h2n, t2n = float(np.linalg.norm(h2)), float(np.linalg.norm(t2))
-                    grew = np.hypot(h2n, t2n) > BLOWUP * np.hypot(hn, tn) + np.sqrt(floor)
+                    # with bounds (a non-smooth residual) a step must not make it larger
+                    grow = 1.0 if bounded and with_design else BLOWUP
+                    grew = np.hypot(h2n, t2n) > grow * np.hypot(hn, tn) + np.sqrt(floor)
                     if np.isfinite(h2n + t2n) and not grew:
                         break
                 lam *= 0.5
             else:
+                if bounded and with_design and hn < floor:  # no step lowers the residual: a compromise
+                    return sols, it, True, hist
                 break
             sols, h, t = trial, h2, t2
         return sols, max_iter, False, hist
@@ -363,7 +406,7 @@ def solve_targets(
     conflicts: list[tuple[tuple[str, float], ...]] = []
     final = None
     if t.size:
-        Hj, Tj = jacobians(after, True)
+        Hj, Tj = jacobians(after, True, t)
         final = (Hj, Tj, int(uoffs[-1]))
         sw = np.sqrt(np.concatenate([np.ones(int(uoffs[-1])), wfull[pcols]]))
         Hy, Ty = Hj * sw, Tj * sw

@@ -7,10 +7,12 @@ re-assembled). matplotlib and plotly are imported only when a plot is drawn.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 from kinprop.io.writer import atomic_write
 from kinprop.model import Model
+from kinprop.plot.forces import ForceArrow
 from kinprop.plot.interactive import render_html
 from kinprop.plot.scene import Scene, build_scene
 from kinprop.plot.static import render_png
@@ -36,16 +38,19 @@ def render(
     before_label: str = "before",
     title: str | None = None,
     view: tuple[float, float] = (20.0, -60.0),
+    arrows: Sequence[ForceArrow] = (),
+    force_unit: str = "",
 ) -> bytes | str:
-    """The figure for ``path``'s format: PNG bytes or an HTML page."""
+    """The figure for ``path``'s format: PNG bytes or an HTML page; ``arrows``: forces drawn on
+    ``model`` (:func:`kinprop.plot.forces.force_arrows`)."""
     suffix = Path(path).suffix.lower()
     if suffix not in FORMATS:
         found = suffix or "no suffix"
         raise ValueError(f"plot file {str(path)!r}: expected a name ending in .png or .html, found {found!r}")
     ls = layers(model, before, label, before_label)
     if suffix == ".png":
-        return render_png(ls, title or "", view)
-    return render_html(ls, title or "")
+        return render_png(ls, title or "", view, arrows=arrows, force_unit=force_unit)
+    return render_html(ls, title or "", arrows, force_unit)
 
 
 def save_plot(
@@ -57,9 +62,13 @@ def save_plot(
     before_label: str = "before",
     title: str | None = None,
     view: tuple[float, float] = (20.0, -60.0),
+    arrows: Sequence[ForceArrow] = (),
+    force_unit: str = "",
 ) -> Path:
-    """Draw ``model`` (and ``before`` faded) to ``path`` (.png or .html), written atomically."""
-    data = render(path, model, before, label=label, before_label=before_label, title=title, view=view)
+    """Draw ``model`` (and ``before`` faded) to ``path`` (.png or .html), written atomically;
+    ``arrows``: forces drawn on ``model``."""
+    data = render(path, model, before, label=label, before_label=before_label, title=title, view=view,
+                  arrows=arrows, force_unit=force_unit)  # fmt: skip
     atomic_write(path, data)
     return Path(path)
 

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from kinprop.plot.forces import FORCE_STYLE, ForceArrow, arrow_scale
 from kinprop.plot.scene import Scene, bounds, scale
 from kinprop.plot.style import AXIS, AXIS_LABEL, FADED_ALPHA, MARKERS, POINT, SEGMENTS, Layer, segment_colour
 
@@ -148,9 +149,37 @@ def _layer_traces(ly: Layer, L: float, group: str, show_labels: bool) -> list[An
     return traces
 
 
-def render_html(layers: Sequence[Layer], title: str = "") -> str:
+def _arrow_traces(arrows: Sequence[ForceArrow], per: float, force_unit: str) -> list[Any]:
+    """Force arrows (:mod:`kinprop.plot.forces`) as one shaft polyline and one set of cone heads
+    per kind, hover text naming each force and its magnitude."""
+    import plotly.graph_objects as go
+
+    traces: list[Any] = []
+    for kind, (colour, text) in FORCE_STYLE.items():
+        mine = [a for a in arrows if a.kind == kind]
+        if not mine:
+            continue
+        tips = [a.origin + a.force * per for a in mine]
+        xs, ys, zs = _polyline([(a.origin, t) for a, t in zip(mine, tips, strict=True)])
+        hover = [f"{a.label}: {float(np.linalg.norm(a.force)):.4g} {force_unit}" for a in mine]
+        traces.append(go.Scatter3d(x=xs, y=ys, z=zs, mode="lines", name=text, legendgroup=f"force {kind}",
+                                   line={"color": colour, "width": 5}, hoverinfo="skip"))  # fmt: skip
+        d = np.array([a.force * per for a in mine])
+        T = np.array(tips)
+        traces.append(go.Cone(x=T[:, 0], y=T[:, 1], z=T[:, 2], u=d[:, 0], v=d[:, 1], w=d[:, 2], anchor="tip",
+                              sizemode="absolute", sizeref=0.15 * float(np.max(np.linalg.norm(d, axis=1))) or 1.0,
+                              colorscale=[[0, colour], [1, colour]], showscale=False, legendgroup=f"force {kind}",
+                              showlegend=False, hovertext=hover, hoverinfo="text", name=text))  # fmt: skip
+    return traces
+
+
+def render_html(
+    layers: Sequence[Layer], title: str = "", arrows: Sequence[ForceArrow] = (), force_unit: str = ""
+) -> str:
     """The layers (faded ones first) as one interactive 3D figure: a self-contained HTML page
-    with plotly.js inlined (no network needed to view it)."""
+    with plotly.js inlined (no network needed to view it); ``arrows``: forces drawn over the top
+    layer (:mod:`kinprop.plot.forces`: red tension, blue compression, magenta applied, grey
+    reactions), scaled as in the PNG (the scale in the title)."""
     import plotly.graph_objects as go
 
     scenes = [ly.scene for ly in layers]
@@ -163,6 +192,11 @@ def render_html(layers: Sequence[Layer], title: str = "") -> str:
             fig.add_trace(tr)
     lo, hi = bounds(scenes)
     unit = top.scene.unit
+    per = arrow_scale(arrows, float(np.max(hi - lo)))
+    if arrows and per > 0:
+        for tr in _arrow_traces(arrows, per, force_unit):
+            fig.add_trace(tr)
+        title = f"{title or top.scene.name}\nforce arrows: 1 {unit} per {1.0 / per:.4g} {force_unit}".strip()
     ranges = hi - lo
     aspect = ranges / ranges.max()
     fig.update_layout(
