@@ -125,7 +125,8 @@ def study_cmd(
         if f.address in seen:
             raise AddressError(f"--vary {text!r}: {f.address} is already varied by --vary {seen[f.address]!r}")
         seen[f.address] = text
-        if f.address in given:
+        point = f.address.partition("[")[0] if is_element_address(f.address) else None
+        if f.address in given or any(a.strip() == point for a in given):  # a whole element point set
             raise AddressError(f"--vary {text!r}: {f.address} is also given by --set")
     if method == "grid":
         sample_plan(parsed, method, samples, seed)  # refuses a huge grid up front, with its count

@@ -113,7 +113,8 @@ def apply_element_changes(
         v = np.atleast_1d(np.asarray(value, dtype=float)).ravel()
         if v.size != len(comps):
             raise AddressError(f"{address}: expected {len(comps)} number(s), found {v.size}")
-        r, A, s = _pose(model, engine, state, k, side)
+        r, A, _ = _pose(model, engine, state, k, side)
+        s = np.asarray(elements[k].s_i if side == 0 else elements[k].s_j, dtype=float)  # earlier changes kept
         p = r + A @ s
         p[comps] = v
         new = tuple(float(x) for x in A.T @ (p - r))
