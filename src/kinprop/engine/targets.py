@@ -401,7 +401,10 @@ def solve_targets(
             Hj, Tj = jacobians(sts, with_design, e, t)
             dz = sw * _step(Hj * sw, h, Tj * sw, t)
             hn = float(np.linalg.norm(h))
-            small = float(np.linalg.norm(dz)) <= 1e-10 * max(1.0, engine.length_scale or 1.0)
+            # a small step is done unless it still changes the targets (a miss closed by a step
+            # of a rotation column, radians, is a tiny dz too)
+            small = float(np.linalg.norm(dz)) <= 1e-10 * max(1.0, engine.length_scale or 1.0) and (
+                not t.size or float(np.max(np.abs(Tj @ dz), initial=0.0)) < target_tol * 1e-3)  # fmt: skip
             # with bounds the compromise is approached linearly: stalled (relative 1e-9) is done
             stalled = bounded and with_design and it > 0 and hist[-2] - hist[-1] <= STALL * hist[-1]
             if hn < floor and (
