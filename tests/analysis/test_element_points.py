@@ -23,6 +23,7 @@ from test_firstorder import C as CENTRE
 
 import kinprop as kp
 from kinprop.analysis.context import OutputContext
+from kinprop.analysis.drives import outputs_at
 from kinprop.analysis.outputs import evaluate_outputs
 from kinprop.analysis.study import Factor, run_study
 from kinprop.errors import AddressError
@@ -141,3 +142,16 @@ def test_a_target_closed_by_a_rotation_is_met_not_a_compromise() -> None:
     tp = kp.propagate_targets(model, ["anti_dive=60"], ["axis:UCA"])
     assert tp.met, tp.result.message
     assert evaluate_outputs(tp.after, ["anti_dive"])["anti_dive"] == pytest.approx(60.0, abs=1e-9)
+
+
+def test_study_element_points_in_loads_and_at_a_drive_position() -> None:
+    """An element factor reaches the per-variant outputs too: the spring's force under a load
+    case and its motion ratio at +30 mm of travel, each equal to a direct propagation's."""
+    model = kp.assemble(kp.load_model(EXAMPLES / "double_wishbone.yaml")).after
+    outs = ["motion_ratio:spring@travel=30", "force:spring@braking_1g"]
+    df = run_study(model, [Factor("element:spring.point_j[y]", 530.0, 580.0)], method="grid", samples=2, outputs=outs)
+    assert df[outs[0]].nunique() == 2 and df[outs[1]].nunique() == 2
+    for _, row in df.iterrows():
+        after = kp.propagate(model, {"element:spring.point_j[y]": row["element:spring.point_j[y]"]}).after
+        assert row[outs[0]] == pytest.approx(outputs_at(after, outs[:1])[outs[0]], rel=1e-10)
+        assert row[outs[1]] == pytest.approx(evaluate_outputs(after, outs[1:])[outs[1]], rel=1e-10)
