@@ -66,6 +66,7 @@ from kinprop.errors import AddressError, ConvergenceError
 from kinprop.model import Design, Model
 from kinprop.model.design import as_coordinates, parse_address
 from kinprop.model.mechanism import Body, Joint, Mechanism
+from kinprop.propagation.element_points import element_ends, with_element_ends
 from kinprop.spatial import Array
 
 TRAVEL, ROLL, STEER = "travel", "roll", "steer"
@@ -523,6 +524,8 @@ class _Positions:
             vals = {o: np.full(n, np.nan) for o in names}
             for i in np.flatnonzero(ok[c]):
                 m = self.driven.base_of(self.engine, states[c][i])
+                if models[i].elements != m.elements:  # a study variant's own element points
+                    m = with_element_ends(m, element_ends(models[i]))
                 got = evaluate_outputs(m, names, units="solver", engine=self.base_engine)
                 for o in names:
                     vals[o][i] = got[o]

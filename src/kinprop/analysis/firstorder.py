@@ -149,16 +149,34 @@ class FirstOrderProgram:
         """The bump motion's driven rates at ``state`` (:func:`travel_rates`)."""
         return travel_rates(self.engine, self.model, self.travel_input, state)
 
-    def evaluate(self, states: State, ok: Array | None = None) -> Array:
+    def point_xyz(self, ends: Array | None = None) -> Array:
+        """``(M, np, 3)``: the point table's coordinates, with the elements' body-frame ends
+        ``ends`` (M, ne, 2, 3) of each of M states written into their slots (None: the model's,
+        M = 1)."""
+        if ends is None:
+            return self.xyz[None]
+        ends = np.asarray(ends, dtype=float).reshape(-1, self.elements.shape[0], 2, 3)
+        xyz = np.repeat(self.xyz[None], ends.shape[0], axis=0)
+        for e in range(self.elements.shape[0]):
+            for side in (0, 1):
+                xyz[:, self.elements[e, side]] = ends[:, e, side]
+        return xyz
+
+    def evaluate(self, states: State, ok: Array | None = None, ends: Array | None = None) -> Array:
         """``(N, len(names))``: the metrics at each state of a batch (leading axis; one state:
         ``(len(names),)``), NaN where not ``ok`` or where the bump motion is singular: one
         compiled call (a state whose velocity blocks are not square and regular is answered by
-        the SVD path of :func:`kinprop.engine.motion.motion_state`)."""
+        the SVD path of :func:`kinprop.engine.motion.motion_state`). ``ends`` (N, ne, 2, 3):
+        each state's own element ends in their bodies' frames (element points varied by a
+        study; no body moves with them), else the model's."""
         st = states.writable()
         single = st.Q.ndim == 1
         if single:
             st = State(st.Q[None], st.S[None], st.C[None], st.L[None])
         n, eng = st.Q.shape[0], self.engine
+        xyz = self.point_xyz(ends)
+        if xyz.shape[0] not in (1, n):
+            raise ValueError(f"ends for {xyz.shape[0]} states, given {n} states")
         mask = np.ones(n, dtype=np.bool_) if ok is None else np.ascontiguousarray(ok, dtype=np.bool_)
         out = np.full((n, 1, compiled.N_FIRST + self.elements.shape[0]), np.nan)
         status = np.full(n, -1, np.int64)
@@ -171,12 +189,12 @@ class FirstOrderProgram:
             rows, pcols = eng.pattern
             if buf is not None:
                 compiled.batch_first_order(eng.tables, plan, st.Q, st.S, st.C, st.L, mask, rate, need, rows, pcols,
-                                           eng.row_scale, self.points, self.xyz, self.wheels, self.params,
+                                           eng.row_scale, self.points, xyz, self.wheels, self.params,
                                            self.elements, self.stiffness, out, status)  # fmt: skip
             for i in first[status[first] != SOLVED]:  # the SVD path decides (singular: NaN)
                 ms = motion_state(eng, st[int(i)], rates)
                 if ms.ok:
-                    pts, body_of = self._positions(ms)
+                    pts, body_of = self._positions(ms, xyz[int(i) if xyz.shape[0] > 1 else 0])
                     _FORMULAS(self.wheels[0], self.params[0], pts, body_of, ms.V, self.elements, self.stiffness,
                               out[i, 0])  # fmt: skip
         values = out[:, 0, self.columns]
@@ -186,11 +204,11 @@ class FirstOrderProgram:
         """``{metric: value}`` at one state."""
         return dict(zip(self.names, (float(v) for v in self.evaluate(state)), strict=True))
 
-    def _positions(self, ms: MotionState) -> tuple[Array, Array]:
+    def _positions(self, ms: MotionState, xyz: Array | None = None) -> tuple[Array, Array]:
         ws: list[Any] = [None] * (max(W_BODY_R, W_BODY_A, W_FRAME_P) + 1)
         ws[W_BODY_R], ws[W_BODY_A], ws[W_FRAME_P] = ms.r, ms.A, ms.P
         pts, body_of = np.zeros((self.points.shape[0], 3)), np.zeros(self.points.shape[0], np.int64)
-        _POSITIONS(self.engine.tables, ws, self.points, self.xyz, pts, body_of)
+        _POSITIONS(self.engine.tables, ws, self.points, self.xyz if xyz is None else xyz, pts, body_of)
         return pts, body_of
 
     def derivatives(self, state: State, directions: Array, elements: Array | None = None) -> dict[str, Array]:

@@ -50,6 +50,7 @@ from kinprop.engine.units import check_units
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.design import Address, parse_address
+from kinprop.propagation.element_points import with_element_ends
 from kinprop.spatial import Array
 
 AXES = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
@@ -240,10 +241,12 @@ def program_batch(
     ok: Array | None = None,
     reference: Model | None = None,
     wheels: Mapping[str, WheelSpec] | None = None,
+    ends: Array | None = None,
 ) -> Array:
     """Every output of ``program`` at each state of a batch (N, no; solver units; NaN where not
     ``ok``): the compiled ones in one kernel call, the others per state (``model``: units and
-    structure of the states)."""
+    structure of the states). ``ends`` (N, ne, 2, 3): each state's own element ends in their
+    bodies' frames (a study's element-point factors), else the model's."""
     values = program.evaluate(states, ok)
     others = np.flatnonzero(~program.compiled)
     eng = program.engine
@@ -254,7 +257,7 @@ def program_batch(
             first.setdefault(found[0], []).append((int(k), found[1]))
     for wheel, outs in first.items():
         fo = wheel_first_order_program(model, eng, wheel, reference, wheels)
-        got = fo.evaluate(states, ok)
+        got = fo.evaluate(states, ok, ends)
         for k, metric in outs:
             if metric not in fo.names:
                 needs = METRIC_NEEDS.get(metric, "more named points").replace("WHEEL", wheel)
@@ -264,7 +267,8 @@ def program_batch(
     others = np.array([k for k in others if first_order_of(model, program.names[k]) is None], dtype=np.int64)
     if others.size:
         for i in range(values.shape[0]) if ok is None else np.flatnonzero(ok):
-            ctx = OutputContext.of(eng.model_of(states[i], model), reference, wheels, eng)
+            at = eng.model_of(states[i], model)
+            ctx = OutputContext.of(at if ends is None else with_element_ends(at, ends[i]), reference, wheels, eng)
             cache: dict[str, dict[str, float]] = {}
             for k in others:
                 values[i, k] = _other(ctx, program.names[k], cache)

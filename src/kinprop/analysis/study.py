@@ -56,6 +56,13 @@ from kinprop.errors import AddressError
 from kinprop.kinematics.layout import column_labels
 from kinprop.model import Design, Model
 from kinprop.model.design import as_coordinates, parse_address
+from kinprop.propagation.element_points import (
+    apply_element_changes,
+    element_factors,
+    factor_ends,
+    is_element_address,
+    with_element_ends,
+)
 from kinprop.propagation.propagate import apply_changes
 from kinprop.spatial import Array
 
@@ -152,6 +159,10 @@ class StudySpec:
     #: the factors as the user gave them when ``addresses`` were derived from them (global
     #: hardpoints ``hardpoint:J.i[z]`` -> the ``s'`` components they set); stored as columns too
     factors: list[str] | None = None
+    #: element-point factors (``element:spring.point_i[z]``): ``{address: [element, side, d, p_c]}``
+    #: (:func:`kinprop.propagation.element_points.element_factors`, at the model's assembly); they
+    #: move no body, only the element-dependent outputs (motion ratios, wheel rate, loads)
+    elements: dict[str, list[float]] = field(default_factory=dict)
 
 
 # --- model transport (Design holds read-only mapping proxies, which do not pickle) ---------------
@@ -281,7 +292,8 @@ def _with_given(frame: pd.DataFrame, given: tuple[Sequence[str], Array] | None) 
     if len(vals) != len(frame):
         vals = vals[frame["variant"].to_numpy()]
     for k, name in enumerate(given[0]):
-        frame.insert(1 + k, name, vals[:, k])
+        if name not in frame:  # an element point is a factor of the plan itself
+            frame.insert(1 + k, name, vals[:, k])
 
 
 def study_program(eng: Engine, spec: StudySpec) -> OutputProgram:
@@ -322,7 +334,7 @@ def evaluate_chunk(eng: Engine, spec: StudySpec, values: Array, start: int, prog
     whole_c = _whole_rotations(eng, spec.addresses)
     in_c = {k for cols in whole_c.values() for k in cols}
     for k, a in enumerate(spec.addresses):
-        if k not in in_c:
+        if k not in in_c and a not in spec.elements:
             ok &= eng.set_batch(st, a, solver_values[:, k])
     for key, cols in whole_c.items():
         for i in np.flatnonzero(ok):
@@ -330,7 +342,8 @@ def evaluate_chunk(eng: Engine, spec: StudySpec, values: Array, start: int, prog
                 eng.set(st[i], key, solver_values[i, cols].reshape(3, 3))
             except AddressError:
                 ok[i] = False
-    changed = {parse_address(a).key for a in spec.addresses} | {parse_address(a).key for a in spec.sets}
+    changed = {parse_address(a).key for a in spec.addresses if a not in spec.elements}
+    changed |= {parse_address(a).key for a in spec.sets}
     res = eng.solve_batch(st, tuple(spec.free), exclude=changed, tol=spec.tol, max_iter=spec.max_iter,
                           threads=threads)  # fmt: skip
     conv = res.converged & ok
@@ -345,14 +358,19 @@ def evaluate_chunk(eng: Engine, spec: StudySpec, values: Array, start: int, prog
     for c in range(nq):
         if labels[c] not in rows:
             rows[labels[c]] = Q[:, c] * spec.scale.get(labels[c], 1.0)
-    outs = program_batch(program, model, res.state, conv)
+    # element points: each variant's own element ends (no body moves; the solve ignores them)
+    ends = factor_ends(model, spec.elements, spec.addresses, solver_values) if spec.elements else None
+    outs = program_batch(program, model, res.state, conv, ends=ends)
     for k, key in enumerate(program.names):
         rows[key] = outs[:, k] * spec.scale.get(key, 1.0)
     driven = [x for x in expand_driven(model, spec.outputs or [], eng) if is_driven(x)]
     if driven:  # every converged variant at each drive position: one batched engine solve each
         done = np.flatnonzero(conv)
         at = DrivenOutputs(model, driven, free=spec.free, tol=spec.tol, max_iter=spec.max_iter, engine=eng)
-        vals = at.values([model.with_state(*eng.unpack(res.state[i])) for i in done]) if done.size else {}
+        variants = [model.with_state(*eng.unpack(res.state[i])) for i in done]
+        if ends is not None:
+            variants = [with_element_ends(m, ends[i]) for m, i in zip(variants, done, strict=True)]
+        vals = at.values(variants) if done.size else {}
         for key in driven:
             rows[key] = np.full(n, np.nan)
             if done.size:
@@ -434,6 +452,8 @@ def _whole_rotations(eng: Engine, addresses: Sequence[str]) -> dict[str, list[in
     are all in ``addresses`` (a global pivot factor's plan, :func:`kinprop.propagation.hardpoints.global_plan`)."""
     found: dict[str, dict[int, int]] = {}
     for k, a in enumerate(addresses):
+        if is_element_address(a):
+            continue
         addr = parse_address(a)
         if addr.index is not None and addr.key in eng.layout and eng.layout[addr.key].group == "C":
             found.setdefault(addr.key, {})[addr.index] = k
@@ -490,6 +510,9 @@ def run_study(
     """
     model_units = check_units(units)
     eng0 = compiled.rebased(model) if compiled is not None else compile_engine(model)
+    if sets and any(is_element_address(a) for a in sets):  # the model's element points, no body moves
+        model, sets = apply_element_changes(model, eng0, eng0.state_of(model), sets)
+        eng0 = eng0.rebased(model)
     if model_units:
         sets = changes_to_internal(model, sets or {}, eng0)
     if plan is None:
@@ -509,7 +532,14 @@ def run_study(
         raise AddressError(f"engine {engine!r}: expected auto, fast or reference")
     # validate every address once (component, group, existence) with the reference code path
     lay = eng0.layout
+    try:
+        elements = element_factors(model, eng0, eng0.state_of(model), [a for a in addrs if is_element_address(a)])
+    except AddressError as exc:
+        raise AddressError(f"--vary {exc}") from None
+    addrs = [a.strip() if is_element_address(a) else a for a in addrs]
     for a in addrs:
+        if a in elements:
+            continue
         addr = parse_address(a)
         if addr.key in lay and lay[addr.key].group == "C" and addr.key not in _whole_rotations(eng0, addrs):
             raise AddressError(f"--vary {a!r}: orientations cannot be varied component by component")
@@ -518,7 +548,8 @@ def run_study(
     base, _, _ = apply_changes(model, dict(sets or {}), eng0)
     if len(values):
         whole = _whole_rotations(eng0, addrs)
-        first = {a: values[0, k] for k, a in enumerate(addrs) if parse_address(a).key not in whole}
+        first = {a: values[0, k] for k, a in enumerate(addrs)
+                 if a not in elements and parse_address(a).key not in whole}  # fmt: skip
         first.update({key: values[0, cols].reshape(3, 3) for key, cols in whole.items()})
         apply_changes(base, first, eng0)
     if outputs:  # unknown output names fail here, before any directory is created
@@ -547,6 +578,7 @@ def run_study(
             engine=engine,
             scale=dict(scale or {}),
             factors=list(given[0]) if given is not None else None,
+            elements=elements,
         )
         n_chunks = -(-len(values) // chunk_size)
         done: set[int] = set()

@@ -75,13 +75,29 @@ from kinprop.analysis.outputs import (
 )
 from kinprop.analysis.statics import is_load_output, load_derivatives, load_output_unit, load_value
 from kinprop.engine import Engine, State, Status
-from kinprop.engine.targets import Configuration, Row, TargetResult, output_jacobian, solve_targets
+from kinprop.engine.targets import (
+    FD_STEP,
+    Configuration,
+    ExternalDesign,
+    Row,
+    TargetResult,
+    output_jacobian,
+    solve_targets,
+)
 from kinprop.engine.units import METRES_PER, RADIANS_PER, changes_to_internal, check_units
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.design import parse_address
 from kinprop.model.joint_points import steering_joints
-from kinprop.propagation.element_points import apply_element_changes, is_element_address
+from kinprop.propagation.element_points import (
+    apply_element_changes,
+    element_directions,
+    element_ends,
+    element_labels,
+    element_point,
+    is_element_address,
+    with_element_ends,
+)
 from kinprop.propagation.hardpoints import body_rotation, free_addresses, free_weights, resolve_changes
 from kinprop.propagation.point_jacobians import PointJacobians, PointSpec
 from kinprop.propagation.poses import joint_values
@@ -497,6 +513,8 @@ class TargetPropagation:
     result: TargetResult
     engine: Engine = field(repr=False)
     configuration_names: tuple[str, ...] = ()
+    #: the model with the element points the targets moved (``--free element:...``; None: none)
+    designed: Model | None = field(default=None, repr=False)
 
     @property
     def converged(self) -> bool:
@@ -520,7 +538,7 @@ class TargetPropagation:
         return self.engine.model_of(self.result.before[k], self.model)
 
     def after_model(self, k: int = 0) -> Model:
-        return self.engine.model_of(self.result.after[k], self.model)
+        return self.engine.model_of(self.result.after[k], self.designed or self.model)
 
     @cached_property
     def propagation(self) -> Propagation:
@@ -528,7 +546,10 @@ class TargetPropagation:
         (only coordinates free), with body poses and joint values."""
         orig, new = self.engine.state_of(self.model), self.result.after[0]
         sol = self.engine.solve(State(orig.Q.copy(), new.S.copy(), new.C.copy(), new.L.copy()), ("q",))
-        return propagation_of(self.engine, self.model, sol, ("q",))
+        prop = propagation_of(self.engine, self.model, sol, ("q",))
+        if self.designed is None:
+            return prop
+        return replace(prop, after=with_element_ends(prop.after, element_ends(self.designed)))
 
     @property
     def after(self) -> Model:
@@ -657,18 +678,27 @@ def propagate_targets(
     units (``units="solver"``: radians). Target values carry their own unit (module docstring).
     ``weights``: ``{address or group: w}``, a larger weight lets a variable move more.
     ``analytic``: analytic output Jacobians where available (False: central differences of the
-    output map for every output; :mod:`kinprop.engine.targets`).
+    output map for every output; :mod:`kinprop.engine.targets`). ``free`` may name element points
+    (``element:E.point_i``, ``element:E.point_i[z]``: global, at the model's assembly,
+    :mod:`kinprop.propagation.element_points`): they move no body, only the element-dependent
+    outputs (motion ratios, wheel rate: exact derivatives; element forces: central
+    differences), and the result's :attr:`TargetPropagation.after` carries them.
     """
     eng = engine_for(model, engine)
-    loose = [f for f in free if str(f).startswith("element:")]
-    if loose:
-        raise AddressError(
-            f"--free {loose[0]}: element points are not target variables (targets move the "
-            "mechanism's design columns); use --set element:... or sensitivity --wrt element:..."
-        )
     start = eng.state_of(model)
+    loose = [str(f) for f in free if is_element_address(str(f))]
+    free = [f for f in free if not is_element_address(str(f))]
+    try:
+        labels, moves = element_directions(model, eng, start, loose) if loose else ([], None)
+    except AddressError as exc:
+        raise AddressError(f"--free {exc}") from None
+    for a in changes or {}:
+        if is_element_address(a) and set(element_labels(model, a)) & set(labels):
+            raise AddressError(f"--set {a}: the element point is also free (--free element:...)")
     if changes and any(is_element_address(a) for a in changes):  # element points: the model's, no body moves
         model, changes = apply_element_changes(model, eng, start, changes)
+    ext_weights = {k: float(v) for k, v in (weights or {}).items() if is_element_address(k)}
+    weights = {k: v for k, v in (weights or {}).items() if not is_element_address(k)}
     changes = changes_to_internal(model, changes or {}, eng) if check_units(units) else dict(changes or {})
     st, _, _ = eng.apply(start, resolve_changes(eng, start, changes))
     specs = tuple(e for t in targets for e in _every_case(model, t if isinstance(t, TargetSpec) else
@@ -714,20 +744,78 @@ def propagate_targets(
             terms = ((ka, slot(ka, s.output), -1.0 / span), (kb, slot(kb, s.output), 1.0 / span))
             rows.append(Row(s.text, s.value, terms, scale=1.0 / s.weight, bound=s.bound))
     names = tuple(" & ".join(f"{c.output}={c.value:g}" for c in cs) or "base" for cs in conds)
-    configurations = [
-        Configuration(
-            names[k],
-            _config_outputs(model, eng, outs[k]),
-            {c.output: [c.value] for c in cs if c.held},
-            _config_jacobian(model, eng, outs[k]) if analytic and not any(map(is_load_output, outs[k])) else None,
-            _config_rates(model, eng, outs[k]) if analytic and any(map(is_load_output, outs[k])) else None,
-        )
-        for k, cs in enumerate(conds)
-    ]
+
+    def build(m: Model) -> list[Configuration]:
+        return [
+            Configuration(
+                names[k],
+                _config_outputs(m, eng, outs[k]),
+                {c.output: [c.value] for c in cs if c.held},
+                _config_jacobian(m, eng, outs[k]) if analytic and not any(map(is_load_output, outs[k])) else None,
+                _config_rates(m, eng, outs[k]) if analytic and any(map(is_load_output, outs[k])) else None,
+            )
+            for k, cs in enumerate(conds)
+        ]
+
+    external = _element_design(model, eng, start, labels, moves, outs, build, ext_weights) if labels else None
     opts = {"tol": tol, "target_tol": target_tol, "max_iter": max_iter}
-    res = solve_targets(eng, st, configurations, rows, free_addresses(eng, free), coordinates=coordinates,
-                        weights=free_weights(eng, weights), **opts)  # fmt: skip
-    return TargetPropagation(model, specs, res, eng, names)
+    res = solve_targets(eng, st, build(model) if external is None else [], rows, free_addresses(eng, free),
+                        coordinates=coordinates, weights=free_weights(eng, weights), external=external,
+                        **opts)  # fmt: skip
+    designed = None
+    if external is not None and res.external is not None:
+        designed = _element_model(model, eng, start, labels, res.external)
+    return TargetPropagation(model, specs, res, eng, names, designed)
+
+
+def _element_model(model: Model, engine: Engine, start: State, labels: Sequence[str], values: Array) -> Model:
+    """``model`` with the element-point components ``labels`` at ``values`` (global, at ``start``)."""
+    return apply_element_changes(model, engine, start, dict(zip(labels, np.asarray(values, float), strict=True)))[0]
+
+
+def _element_design(
+    model: Model,
+    engine: Engine,
+    start: State,
+    labels: list[str],
+    moves: Array,
+    outs: list[list[str]],
+    build: Callable[[Model], list[Configuration]],
+    weights: Mapping[str, float],
+) -> ExternalDesign:
+    """Element points as free target variables (:class:`kinprop.engine.targets.ExternalDesign`):
+    one global component each (``labels``, at ``start``'s assembly, body-frame moves ``moves``);
+    the first-order metrics' partials exact (:func:`first_order_derivatives` along the ends'
+    moves alone), a load output's by a central difference of its configuration's output map with
+    the point moved; every other output does not depend on them (0)."""
+    e0 = np.array([float(element_point(model, engine, start, lab)[0]) for lab in labels])
+    h = FD_STEP * max(1.0, engine.length_scale or 1.0)
+    none = np.zeros((engine.n_columns, len(labels)))
+
+    def partials(k: int, st: State, e: Array) -> Array:
+        m, names = _element_model(model, engine, start, labels, e), outs[k]
+        D = np.zeros((len(names), len(labels)))
+        first = [i for i, n in enumerate(names) if not n.startswith("joint:") and first_order_of(m, n) is not None]
+        if first:
+            exact = first_order_derivatives(engine.model_of(st, m), [names[i] for i in first], none, engine=engine,
+                                            elements=moves)  # fmt: skip
+            for j, i in enumerate(first):
+                D[i] = exact[j]
+        loads = [i for i, n in enumerate(names) if is_load_output(n)]
+        for c in range(len(labels)) if loads else ():
+            step = np.zeros(len(labels))
+            step[c] = h
+            f = [_config_outputs(_element_model(model, engine, start, labels, e + s), engine,
+                                 [names[i] for i in loads])(st) for s in (step, -step)]  # fmt: skip
+            D[loads, c] = (f[0] - f[1]) / (2.0 * h)
+        return D
+
+    def weight(lab: str) -> float:  # an address's weight covers its components
+        return next((float(v) for a, v in weights.items() if lab in (a, *element_labels(model, a))), 1.0)
+
+    w = np.array([weight(lab) for lab in labels])
+    return ExternalDesign(tuple(labels), e0, lambda e: build(_element_model(model, engine, start, labels, e)),
+                          partials, w)  # fmt: skip
 
 
 __all__ = ["TargetPropagation", "TargetSpec", "parse_target", "propagate_targets"]

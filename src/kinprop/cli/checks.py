@@ -51,8 +51,14 @@ def check_int(option: str, value: int, low: int, high: int) -> None:
 
 def check_set_not_free(changes: Iterable[str], free: Sequence[str] | None, option: str = "--set") -> None:
     """A changed variable is never free: naming it in --free too is a contradiction."""
+    changes = list(changes)
     changed = {_key(a)[0]: a for a in changes}
     for f in free or []:
+        base, _, comp = f.strip().partition("[")
+        for a in changes if base.startswith("element:") else ():  # an element point or one component
+            b, _, c = a.strip().partition("[")
+            if b == base and (not c or not comp or c == comp):
+                raise AddressError(f"--free {f!r}: {a} is also given by {option}; a changed variable is never free")
         if "." in f and _key(f)[0] in changed:
             raise AddressError(
                 f"--free {f!r}: {changed[_key(f)[0]]} is also given by {option}; a changed variable is never free"

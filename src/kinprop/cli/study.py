@@ -37,6 +37,7 @@ from kinprop.cli.checks import (
 from kinprop.errors import AddressError
 from kinprop.io.arguments import parse_assignments
 from kinprop.io.commands import with_element_sets
+from kinprop.propagation.element_points import is_element_address
 
 Free = Annotated[
     list[str] | None,
@@ -124,12 +125,9 @@ def study_cmd(
         if f.address in seen:
             raise AddressError(f"--vary {text!r}: {f.address} is already varied by --vary {seen[f.address]!r}")
         seen[f.address] = text
-        if f.address in given:
+        point = f.address.partition("[")[0] if is_element_address(f.address) else None
+        if f.address in given or any(a.strip() == point for a in given):  # a whole element point set
             raise AddressError(f"--vary {text!r}: {f.address} is also given by --set")
-        if f.address.startswith("element:"):
-            raise AddressError(f"--vary {text!r}: element points are not study factors (a study varies the "
-                               "mechanism's design columns); use --set element:... per study, or sensitivity "
-                               "--wrt element:...")  # fmt: skip
     if method == "grid":
         sample_plan(parsed, method, samples, seed)  # refuses a huge grid up front, with its count
     m, given = with_element_sets(load_model_cli(model), given)  # element points: the model's
@@ -141,7 +139,12 @@ def study_cmd(
     plan = addresses = None
     if any(is_global(f.address.split("[")[0]) for f in factors):
         values = sample_plan(factors, method, samples, seed)
-        addresses, plan = global_plan(compiled, compiled.reference, [f.address for f in factors], values)
+        # element points (element:E.point_i[z]) stay factors of their own: they move no body
+        el = [k for k, f in enumerate(factors) if is_element_address(f.address)]
+        rest = [k for k in range(len(factors)) if k not in el]
+        addresses, plan = global_plan(compiled, compiled.reference, [factors[k].address for k in rest], values[:, rest])
+        addresses += [factors[k].address for k in el]
+        plan = np.column_stack([plan, values[:, el]])
     try:
         totals = run_study(
             m, factors, method=method, samples=samples, seed=seed, free=tuple(free or ["q"]), sets=sets,

@@ -217,7 +217,9 @@ def batch_first_order(tb, plan, Q, S, C, L, ok, rates, need, rows, cols, row_sca
     """Every wheel's first-order metrics (:func:`wheel_first_order`) at every state of a batch
     (leading axis) where ``ok``, into ``out`` (N, nw, :data:`N_FIRST` + ne): the bump motion's
     velocities by :func:`kinprop.engine.motion.velocity_solve` on ``plan`` (``rates``: the
-    driven coordinates' rates, ``need``, ``rows``, ``cols``, ``row_scale`` as there). ``status``
+    driven coordinates' rates, ``need``, ``rows``, ``cols``, ``row_scale`` as there); ``xyz``
+    (M, np, 3): the point table's coordinates, one set for every state (M = 1) or one per state
+    (M = N: a study's variants with their own element ends). ``status``
     (N,) int: :data:`kinprop.engine.motion.SOLVED` or the solve's code (the caller answers such
     states by the SVD path); -1 where not ``ok``. Rows not solved are NaN."""
     buf = newton.buffers(tb, plan, rows.shape[0])
@@ -238,7 +240,7 @@ def batch_first_order(tb, plan, Q, S, C, L, ok, rates, need, rows, cols, row_sca
         status[n] = code
         if code != SOLVED:
             continue
-        point_positions(tb, buf[newton.B_WS], points, xyz, pts, body_of)
+        point_positions(tb, buf[newton.B_WS], points, xyz[n if xyz.shape[0] > 1 else 0], pts, body_of)
         for w in range(wheels.shape[0]):
             wheel_first_order(wheels[w], params[w], pts, body_of, V, elements, stiffness, out[n, w])
 

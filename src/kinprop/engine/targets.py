@@ -94,6 +94,24 @@ class Configuration:
 
 
 @dataclass(frozen=True)
+class ExternalDesign:
+    """Free design variables outside the engine's state, e.g. element points
+    (:mod:`kinprop.propagation.element_points`): they move no body, so no assembly depends on
+    them, only the configurations' outputs. Outer unknowns after the design columns.
+
+    ``configurations(e)``: the configurations with the variables at ``e`` (their outputs);
+    ``partials(k, state, e)``: ``(n_outputs_k, len(e))``, the exact partial derivatives of
+    configuration ``k``'s outputs with respect to ``e`` at ``state`` (no coordinate responds);
+    ``weights``: as the design columns' (a larger weight lets a variable move more)."""
+
+    names: tuple[str, ...]
+    start: Array
+    configurations: Callable[[Array], Sequence[Configuration]]
+    partials: Callable[[int, State, Array], Array]
+    weights: Array | None = None
+
+
+@dataclass(frozen=True)
 class Row:
     """One scalar row ``sum(c * outputs_k[i]) = value`` over ``terms`` ``(k, i, c)``; a hard row
     (a configuration's condition) must hold exactly. ``scale`` divides the residual (a target
@@ -146,9 +164,11 @@ class TargetResult:
     met: bool = False
     #: the engine's solution of each configuration at the end (``after``'s states)
     solutions: tuple[Solution, ...] = ()
-    #: the hard and the target rows' Jacobians over the outer unknowns ``z = [u_1 .. u_K, p]``
+    #: the hard and the target rows' Jacobians over the outer unknowns ``z = [u_1 .. u_K, p, e]``
     #: at the end (each configuration's coordinates eliminated), and the number of ``u`` columns
     row_jacobians: tuple[Array, Array, int] | None = None
+    #: the :class:`ExternalDesign` variables' values at the end (None: none were free)
+    external: Array | None = None
 
     @property
     def converged(self) -> bool:
@@ -242,6 +262,7 @@ def solve_targets(
     tol: float = 1e-9,
     target_tol: float = 1e-6,
     max_iter: int = 60,
+    external: ExternalDesign | None = None,
 ) -> TargetResult:
     """The minimum-(weighted-)norm change of the ``free`` design columns (groups ``s C l`` or
     design addresses; shared by every configuration) that meets the target ``rows`` with every
@@ -249,7 +270,14 @@ def solve_targets(
     free coordinates (minus its ``held`` ones); the declared inputs a condition drives are
     unknowns of the outer iteration. ``tol`` bounds ``||Phi||`` and the conditions (relative to
     the engine's round-off floor), ``target_tol`` the target residuals (row units over
-    ``scale``). Every assembly is the engine's solve (:meth:`Engine.solve`)."""
+    ``scale``). Every assembly is the engine's solve (:meth:`Engine.solve`). ``external``:
+    free variables outside the state (:class:`ExternalDesign`; then ``configurations`` are
+    ``external.configurations(external.start)``)."""
+    e0 = np.zeros(0) if external is None else np.asarray(external.start, dtype=float).ravel()
+    ne = e0.size
+    built: dict[bytes, Sequence[Configuration]] = {}
+    if external is not None:
+        configurations = built[e0.tobytes()] = external.configurations(e0.copy())
     pcols = engine.columns(free) if free else np.zeros(0, np.int64)
     qset = set(engine.columns(["q"]).tolist())
     if set(pcols.tolist()) & qset:
@@ -277,41 +305,59 @@ def solve_targets(
     solve_tol = min(tol, 1e-10)
     uoffs = np.cumsum([0] + [d.size for d in driven])
 
+    def configs(e: Array) -> Sequence[Configuration]:
+        """The configurations with the external variables at ``e`` (built once per value)."""
+        if external is None:
+            return configurations
+        key = np.asarray(e, dtype=float).tobytes()
+        if key not in built:
+            if len(built) > 16:
+                built.clear()
+            built[key] = external.configurations(np.array(e, dtype=float))
+        return built[key]
+
     def assemble(froms: Sequence[State], targets: Sequence[State]) -> list[Solution]:
         """Every configuration re-assembled by the engine at ``targets``' design and driven
         inputs, followed from ``froms`` on their branch."""
         return [engine.solve(a, inner[k], target=b, tol=solve_tol) for k, (a, b) in enumerate(zip(froms, targets,
                 strict=True))]  # fmt: skip
 
-    def residuals(sts: Sequence[State], with_design: bool) -> tuple[Array, Array, list[Array]]:
-        outs = [np.asarray(configurations[k].outputs(st), float) for k, st in enumerate(sts)]
+    def residuals(sts: Sequence[State], with_design: bool, e: Array) -> tuple[Array, Array, list[Array]]:
+        cfgs = configs(e)
+        outs = [np.asarray(cfgs[k].outputs(st), float) for k, st in enumerate(sts)]
         hv = np.array([(v - r.value) / r.scale for r, v in zip(hard, _row_values(hard, outs), strict=True)])
         tv = (np.array([r.residual(v) / r.scale for r, v in zip(soft, _row_values(soft, outs), strict=True)])
               if with_design else np.zeros(0))  # fmt: skip
         return hv, tv, outs
 
-    def jacobians(sts: Sequence[State], with_design: bool, t: Array | None = None) -> tuple[Array, Array]:
-        """The hard and target rows' Jacobians over the outer unknowns ``z = [u_1 .. u_K, p]``,
+    def jacobians(sts: Sequence[State], with_design: bool, e: Array, t: Array | None = None) -> tuple[Array, Array]:
+        """The hard and target rows' Jacobians over the outer unknowns ``z = [u_1 .. u_K, p, e]``,
         each configuration's coordinates eliminated by the implicit-function theorem:
-        ``dq/dz = -Phi_q^+ Phi_z`` at its assembly; ``t`` the target residuals there (a bound
-        row with zero residual holds: its row is zero)."""
+        ``dq/dz = -Phi_q^+ Phi_z`` at its assembly (no coordinate responds to ``e``); ``t`` the
+        target residuals there (a bound row with zero residual holds: its row is zero)."""
         npc = pcols.size if with_design else 0
-        n = int(uoffs[-1]) + npc
+        nx = ne if with_design else 0
+        n = int(uoffs[-1]) + npc + nx
+        cfgs = configs(e)
         reduced = []
         for k, st in enumerate(sts):
             zc = np.concatenate([driven[k], pcols[:npc]])
             _, J = engine.evaluate(st)
             dq = -np.linalg.lstsq(J[:, inner[k]], J[:, zc], rcond=None)[0] if zc.size else np.zeros((inner[k].size, 0))
             cols = np.concatenate([inner[k], zc])
-            cfg = configurations[k]
+            cfg = cfgs[k]
             if cfg.rates is not None:  # along the tangent directions e_z + dq/dz
                 X = np.zeros((zc.size, engine.n_columns))
                 X[np.arange(zc.size), zc] = 1.0
                 X[:, inner[k]] = dq.T
-                reduced.append(np.asarray(cfg.rates(st, X), float))
-                continue
-            G = cfg.jacobian(st, cols) if cfg.jacobian is not None else output_jacobian(engine, cfg.outputs, st, cols)
-            reduced.append(G[:, : inner[k].size] @ dq + G[:, inner[k].size :])
+                red = np.asarray(cfg.rates(st, X), float)
+            else:
+                G = cfg.jacobian(st, cols) if cfg.jacobian is not None else output_jacobian(engine, cfg.outputs, st,
+                                                                                            cols)  # fmt: skip
+                red = G[:, : inner[k].size] @ dq + G[:, inner[k].size :]
+            if nx:  # the external variables move no coordinate: their partials alone
+                red = np.hstack([red, np.asarray(external.partials(k, st, e), float)])  # type: ignore[union-attr]
+            reduced.append(red)
 
         def lin(rs: list[Row], res: Array | None = None) -> Array:
             jac = np.zeros((len(rs), n))
@@ -321,7 +367,7 @@ def solve_targets(
                 for k, i, c in row.terms:
                     nu = driven[k].size
                     jac[r_, uoffs[k] : uoffs[k + 1]] += c * reduced[k][i, :nu]
-                    if npc:
+                    if npc + nx:
                         jac[r_, uoffs[-1] :] += c * reduced[k][i, nu:]
                 jac[r_] /= row.scale
             return jac
@@ -336,30 +382,35 @@ def solve_targets(
             dx = np.zeros(engine.n_columns)
             dx[driven[k]] = dz[uoffs[k] : uoffs[k + 1]]
             if with_design and pcols.size:
-                dx[pcols] = dz[uoffs[-1] :]
+                dx[pcols] = dz[uoffs[-1] : uoffs[-1] + pcols.size]
             out.append(engine.retract(st, dx))
         return out
 
-    def iterate(sols: list[Solution], with_design: bool) -> tuple[list[Solution], int, bool, list[float]]:
+    def iterate(sols: list[Solution], with_design: bool, e: Array) -> tuple[list[Solution], Array, int, bool,
+                                                                              list[float]]:  # fmt: skip
         """Gauss-Newton on the conditions and targets over ``z``; every configuration stays an
         engine assembly (a step whose assembly fails or that blows a residual up is halved)."""
         hist: list[float] = []
-        w = np.concatenate([np.ones(int(uoffs[-1]))] + ([wfull[pcols]] if with_design else []))
+        w = np.concatenate([np.ones(int(uoffs[-1]))] + ([wfull[pcols], wext] if with_design else []))
         sw = np.sqrt(w)
-        h, t, _ = residuals([s.state for s in sols], with_design)
+        nx = ne if with_design else 0
+        h, t, _ = residuals([s.state for s in sols], with_design, e)
         for it in range(max_iter + 1):
             hist.append(float(np.sqrt(h @ h + t @ t)))
             sts = [s.state for s in sols]
-            Hj, Tj = jacobians(sts, with_design, t)
+            Hj, Tj = jacobians(sts, with_design, e, t)
             dz = sw * _step(Hj * sw, h, Tj * sw, t)
             hn = float(np.linalg.norm(h))
-            small = float(np.linalg.norm(dz)) <= 1e-10 * max(1.0, engine.length_scale or 1.0)
+            # a small step is done unless it still changes the targets (a miss closed by a step
+            # of a rotation column, radians, is a tiny dz too)
+            small = float(np.linalg.norm(dz)) <= 1e-10 * max(1.0, engine.length_scale or 1.0) and (
+                not t.size or float(np.max(np.abs(Tj @ dz), initial=0.0)) < target_tol * 1e-3)  # fmt: skip
             # with bounds the compromise is approached linearly: stalled (relative 1e-9) is done
             stalled = bounded and with_design and it > 0 and hist[-2] - hist[-1] <= STALL * hist[-1]
             if hn < floor and (
                 small or stalled or t.size == 0 or float(np.max(np.abs(t), initial=0.0)) < target_tol * 1e-3
             ):
-                return sols, it, True, hist
+                return sols, e, it, True, hist
             if it == max_iter or not np.all(np.isfinite(dz)):
                 break
             # full steps (the conditions, off at second order after a design step, are re-closed
@@ -367,8 +418,9 @@ def solve_targets(
             lam, tn = 1.0, float(np.linalg.norm(t))
             for _ in range(8):
                 trial = assemble(sts, moved(sts, lam * dz, with_design))
+                e2 = e + lam * dz[dz.size - nx :] if nx else e
                 if all(s.converged for s in trial):
-                    h2, t2, _ = residuals([s.state for s in trial], with_design)
+                    h2, t2, _ = residuals([s.state for s in trial], with_design, e2)
                     h2n, t2n = float(np.linalg.norm(h2)), float(np.linalg.norm(t2))
                     # with bounds (a non-smooth residual) a step must not make it larger
                     grow = 1.0 if bounded and with_design else BLOWUP
@@ -378,15 +430,18 @@ def solve_targets(
                 lam *= 0.5
             else:
                 if bounded and with_design and hn < floor:  # no step lowers the residual: a compromise
-                    return sols, it, True, hist
+                    return sols, e, it, True, hist
                 break
-            sols, h, t = trial, h2, t2
-        return sols, max_iter, False, hist
+            sols, h, t, e = trial, h2, t2, e2
+        return sols, e, max_iter, False, hist
 
+    wext = np.ones(ne) if external is None or external.weights is None else np.asarray(external.weights, float)
+    if np.any(~(wext > 0) | ~np.isfinite(wext)):
+        raise AddressError(f"the external variables' weights must be positive, found {wext.tolist()}")
     # 1. every configuration with the starting design (the "before" curves)
     first = assemble([start] * len(goals), goals)
     if all(s.converged for s in first):
-        before_sols, it0, ok0, _ = iterate(first, with_design=False)
+        before_sols, _, it0, ok0, _ = iterate(first, False, e0)
     else:
         before_sols, it0, ok0 = first, 0, False
     before = [s.state for s in before_sols]
@@ -398,17 +453,18 @@ def solve_targets(
                             tuple(configurations), tuple(before), tuple(before), vb, np.full_like(vb, np.nan),
                             float("nan"), {}, solutions=tuple(before_sols))  # fmt: skip
     # 2. the design change
-    after_sols, it, ok, hist = iterate(list(before_sols), with_design=True)
+    after_sols, e1, it, ok, hist = iterate(list(before_sols), True, e0)
     after = [s.state for s in after_sols]
-    h, t, outs = residuals(after, True)
+    h, t, outs = residuals(after, True, e1)
+    configurations = configs(e1)
     va = _row_values(rows, outs)
     hard_res = float(np.linalg.norm(np.concatenate([engine.residual(s) for s in after] + [h])))
     conflicts: list[tuple[tuple[str, float], ...]] = []
     final = None
     if t.size:
-        Hj, Tj = jacobians(after, True, t)
+        Hj, Tj = jacobians(after, True, e1, t)
         final = (Hj, Tj, int(uoffs[-1]))
-        sw = np.sqrt(np.concatenate([np.ones(int(uoffs[-1])), wfull[pcols]]))
+        sw = np.sqrt(np.concatenate([np.ones(int(uoffs[-1])), wfull[pcols], wext]))
         Hy, Ty = Hj * sw, Tj * sw
         TN = Ty @ (np.eye(sw.size) - _pinv(Hy, RCOND_HARD) @ Hy)
         U, sv, _ = np.linalg.svd(TN)
@@ -430,10 +486,13 @@ def solve_targets(
         names = "; ".join(" vs ".join(n for n, _ in g) for g in conflicts) or "none identified"
         msg = (f"targets cannot all be met: least-squares compromise after {it} iterations, worst miss {worst:.3g}; "
                f"conflicting: {names}")  # fmt: skip
+    change = _design_change(engine, before[0], after[0], pcols)
+    if external is not None:
+        change |= {name: np.array([e1[k] - e0[k]]) for k, name in enumerate(external.names)}
     return TargetResult(Status.CONVERGED if ok else Status.NOT_CONVERGED, msg, it0 + it, tuple(rows),
-                        tuple(configurations), tuple(before), tuple(after), vb, va, hard_res,
-                        _design_change(engine, before[0], after[0], pcols), tuple(conflicts), tuple(hist), pcols, met,
-                        tuple(after_sols), final)  # fmt: skip
+                        tuple(configurations), tuple(before), tuple(after), vb, va, hard_res, change,
+                        tuple(conflicts), tuple(hist), pcols, met, tuple(after_sols), final,
+                        None if external is None else np.array(e1))  # fmt: skip
 
 
-__all__ = ["Configuration", "OutputMap", "Row", "TargetResult", "output_jacobian", "solve_targets"]
+__all__ = ["Configuration", "ExternalDesign", "OutputMap", "Row", "TargetResult", "output_jacobian", "solve_targets"]

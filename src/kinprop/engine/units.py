@@ -257,7 +257,7 @@ def address_scale(model: Model, name: str, engine: HasUnits | None = None) -> fl
     """Factor from solver units to the model's units of an address's value or of a derivative
     by it: ``180/pi`` for a joint angle or a ``C`` column (per radian of body-frame rotation)
     in a degree model, else 1."""
-    if not _degrees(model) or name.startswith(("point:", "hardpoint:", "distance:")):
+    if not _degrees(model) or name.startswith(("point:", "hardpoint:", "distance:", "element:")):
         return 1.0
     if name.startswith("body:"):
         return 180.0 / math.pi if name.endswith(BODY_ANGLES) else 1.0

@@ -113,7 +113,8 @@ def apply_element_changes(
         v = np.atleast_1d(np.asarray(value, dtype=float)).ravel()
         if v.size != len(comps):
             raise AddressError(f"{address}: expected {len(comps)} number(s), found {v.size}")
-        r, A, s = _pose(model, engine, state, k, side)
+        r, A, _ = _pose(model, engine, state, k, side)
+        s = np.asarray(elements[k].s_i if side == 0 else elements[k].s_j, dtype=float)  # earlier changes kept
         p = r + A @ s
         p[comps] = v
         new = tuple(float(x) for x in A.T @ (p - r))
@@ -123,11 +124,61 @@ def apply_element_changes(
     return dataclasses.replace(model, elements=tuple(elements)), rest
 
 
+def element_ends(model: Model) -> Array:
+    """``(ne, 2, 3)``: every element's ends ``s_i``, ``s_j`` in their bodies' frames."""
+    return np.array([[e.s_i, e.s_j] for e in model.elements], dtype=float).reshape(len(model.elements), 2, 3)
+
+
+def with_element_ends(model: Model, ends: Array) -> Model:
+    """``model`` with its elements' body-frame ends set to ``ends`` (ne, 2, 3)."""
+    ends = np.asarray(ends, dtype=float)
+    if not model.elements or np.array_equal(ends, element_ends(model)):
+        return model
+    elements = tuple(dataclasses.replace(e, s_i=tuple(map(float, ends[k, 0])), s_j=tuple(map(float, ends[k, 1])))
+                     for k, e in enumerate(model.elements))  # fmt: skip
+    return dataclasses.replace(model, elements=elements)
+
+
+def element_factors(model: Model, engine: Engine, state: State, addresses: Sequence[str]) -> dict[str, list[float]]:
+    """``{address: [element, side, d_x, d_y, d_z, p_c]}`` of one-component element addresses
+    (``element:spring.point_i[z]``), each a scalar design variable: its value ``v`` (global, at
+    ``state``'s assembly) puts the end at ``s + d (v - p_c)`` in its body's frame, ``d = A^T e_c``
+    and ``p_c`` the end's current global component (exact, affine; module docstring). Raises
+    :class:`AddressError` for an address that is not one component."""
+    out: dict[str, list[float]] = {}
+    for a in addresses:
+        k, side, comps = parse_element_address(model, a)
+        if ELEMENT.match(a.strip())["c"] is None:  # type: ignore[index]
+            raise AddressError(f"{a!r}: a scalar design variable is one component, e.g. {a.strip()}[z]")
+        r, A, s = _pose(model, engine, state, k, side)
+        c = comps[0]
+        out[a.strip()] = [float(k), float(side), *map(float, A[c]), float((r + A @ s)[c])]
+    return out
+
+
+def factor_ends(model: Model, factors: Mapping[str, Sequence[float]], addresses: Sequence[str], values: Array) -> Array:
+    """``(N, ne, 2, 3)``: the model's element ends (body frames) with the element factors
+    (:func:`element_factors`) set to ``values`` (N, len(addresses)); other addresses ignored."""
+    values = np.atleast_2d(np.asarray(values, dtype=float))
+    ends = np.repeat(element_ends(model)[None], values.shape[0], axis=0)
+    for k, a in enumerate(addresses):
+        f = factors.get(a.strip())
+        if f is None:
+            continue
+        e, side = int(f[0]), int(f[1])
+        ends[:, e, side] += (values[:, k] - f[5])[:, None] * np.asarray(f[2:5])[None, :]
+    return ends
+
+
 __all__ = [
     "apply_element_changes",
     "element_directions",
+    "element_ends",
+    "element_factors",
     "element_labels",
     "element_point",
+    "factor_ends",
     "is_element_address",
     "parse_element_address",
+    "with_element_ends",
 ]
