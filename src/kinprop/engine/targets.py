@@ -134,7 +134,8 @@ class TargetResult:
     after: tuple[State, ...]
     values_before: Array
     values_after: Array
-    #: ``||Phi||`` over all configurations and the conditions' residual at the end
+    #: the scaled ``||Phi||`` over all configurations (:attr:`Solution.residual`'s figure, metres)
+    #: combined with the conditions' miss (row units over ``scale``) at the end
     hard_residual: float
     #: free design variable key -> change (s', l: difference; C: body-frame rotation vector, rad)
     design_change: dict[str, Array]
@@ -402,7 +403,9 @@ def solve_targets(
     after = [s.state for s in after_sols]
     h, t, outs = residuals(after, True)
     va = _row_values(rows, outs)
-    hard_res = float(np.linalg.norm(np.concatenate([engine.residual(s) for s in after] + [h])))
+    # Solution.residual's figure (scaled ||Phi||, metres) over all configurations, and the conditions'
+    phi = float(np.linalg.norm(np.concatenate([engine.residual(s) * engine.row_scale for s in after])))
+    hard_res = float(np.hypot(phi, np.linalg.norm(h)))
     conflicts: list[tuple[tuple[str, float], ...]] = []
     final = None
     if t.size:
@@ -422,10 +425,11 @@ def solve_targets(
     met = ok and worst <= target_tol
     if not ok:
         msg = (
-            f"not converged after {it} iterations: ||Phi, conditions|| = {hard_res:.3g}, worst target miss {worst:.3g}"
+            f"not converged after {it} iterations: ||Phi|| = {phi:.3g}, conditions' miss "
+            f"{float(np.linalg.norm(h)):.3g}, worst target miss {worst:.3g}"
         )
     elif met:
-        msg = f"targets met in {it} iterations (worst miss {worst:.3g}, ||Phi|| = {hard_res:.3g})"
+        msg = f"targets met in {it} iterations (worst miss {worst:.3g}, ||Phi|| = {phi:.3g})"
     else:
         names = "; ".join(" vs ".join(n for n, _ in g) for g in conflicts) or "none identified"
         msg = (f"targets cannot all be met: least-squares compromise after {it} iterations, worst miss {worst:.3g}; "
