@@ -108,8 +108,8 @@ class Row:
     #: (zero while ``value`` is not exceeded), so a met bound does not pull the design
     bound: str = ""
 
-    def residual(self, v: float) -> float:
-        """The row's residual at the value ``v`` (a bound's violation, 0 when it holds)."""
+    def miss(self, v: float) -> float:
+        """The row's miss at the value ``v``: ``v - value`` (a bound's violation, 0 when it holds)."""
         r = v - self.value
         return max(r, 0.0) if self.bound == "<=" else min(r, 0.0) if self.bound == ">=" else r
 
@@ -162,14 +162,15 @@ class TargetResult:
 
     @property
     def targets(self) -> list[dict[str, Any]]:
-        """Per target row (not conditions): name, wanted, before, achieved, residual."""
+        """Per target row (not conditions): name, wanted, before, achieved, miss (``achieved -
+        wanted``, a bound's violation; row units: not ``||Phi||``, which ``residual`` names)."""
         return [
             {
                 "target": r.name,
                 "value": r.value,
                 "before": float(b),
                 "achieved": float(a),
-                "residual": r.residual(float(a)),
+                "miss": r.miss(float(a)),
                 "bound": r.bound,
             }
             for r, b, a in zip(self.rows, self.values_before, self.values_after, strict=True)
@@ -287,7 +288,7 @@ def solve_targets(
     def residuals(sts: Sequence[State], with_design: bool) -> tuple[Array, Array, list[Array]]:
         outs = [np.asarray(configurations[k].outputs(st), float) for k, st in enumerate(sts)]
         hv = np.array([(v - r.value) / r.scale for r, v in zip(hard, _row_values(hard, outs), strict=True)])
-        tv = (np.array([r.residual(v) / r.scale for r, v in zip(soft, _row_values(soft, outs), strict=True)])
+        tv = (np.array([r.miss(v) / r.scale for r, v in zip(soft, _row_values(soft, outs), strict=True)])
               if with_design else np.zeros(0))  # fmt: skip
         return hv, tv, outs
 
