@@ -54,7 +54,7 @@ def test_bounds_over_the_load_cases(double_wishbone: kp.Model) -> None:
     )
     assert not both.met and both.converged
     assert {n for g in both.result.conflicts for n, _ in g} == {s.text for s in both.specs}
-    assert [r["residual"] for r in both.table()] == pytest.approx([500.0, -500.0], rel=1e-6)
+    assert [r["miss"] for r in both.table()] == pytest.approx([500.0, -500.0], rel=1e-6)
     one = propagate_targets(m, ["reaction:UBJ.f@*<=8kN"], free=["UBJ.s_j[0]"])  # too little freedom
     assert one.converged and not one.met and one.result.conflicts
     worst = max(kp.statics(one.after_model(0), c, reference=m).value("reaction:UBJ.f") for c in m.loads.cases)

@@ -53,7 +53,7 @@ def test_conflicting_targets_exit_1_and_name_the_conflict(examples):
     obj = json.loads(r.stdout)
     # the solve converged (to the compromise): status is a kinprop.Status, met/compromise beside it
     assert (obj["status"], obj["targets_status"]) == ("converged", "compromise")
-    assert [t["residual"] for t in obj["targets"]] == pytest.approx([0.25, -0.25], abs=1e-9)
+    assert [t["miss"] for t in obj["targets"]] == pytest.approx([0.25, -0.25], abs=1e-9)
     assert {c["target"] for c in obj["conflicts"][0]} == {"camber@travel=50=-1.5", "camber@travel=50=-1"}
 
 

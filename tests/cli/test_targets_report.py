@@ -65,5 +65,5 @@ def test_unreachable_configuration_reports_nan_and_no_converged_status():
     assert r.exit_code == 1, r.output
     obj = json.loads(r.stdout)
     assert obj["targets_status"] == "not_converged" and obj["status"] != "converged"
-    assert all(t["achieved"] is None and t["residual"] is None for t in obj["targets"])
+    assert all(t["achieved"] is None and t["miss"] is None for t in obj["targets"])
     assert obj["targets"][0]["before"] == pytest.approx(0.0, abs=1e-6)  # travel 0 was reached

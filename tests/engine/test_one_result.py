@@ -15,7 +15,7 @@ import pytest
 import kinprop as kp
 from kinprop.analysis.study import run_study
 from kinprop.builders import rssr
-from kinprop.engine.status import message
+from kinprop.engine.status import Status, message
 from kinprop.model.loads import PointLoad
 
 STATUS_WORDS = {s.value for s in kp.Status}
@@ -77,3 +77,98 @@ def test_targets_say_converged_and_met_or_compromise_beside(examples):
     assert met.met and not both.met
     # every configuration at the end is an engine solution, assembled
     assert all(isinstance(s, kp.Solution) and s.converged for s in met.result.solutions)
+
+
+def _statuses(obj: object, key: str = "status") -> list[str]:
+    """Every value under ``key`` anywhere in a JSON document (rows of a sweep included)."""
+    if isinstance(obj, dict):
+        return [v for k, v in obj.items() if k == key] + [s for v in obj.values() for s in _statuses(v, key)]
+    if isinstance(obj, list):
+        return [s for v in obj for s in _statuses(v, key)]
+    return []
+
+
+def test_every_json_command_says_its_status_in_the_one_vocabulary(examples, tmp_path):
+    """Each JSON-producing command (successes and failures) writes only :class:`kinprop.Status`
+    words under ``status`` and ``met``/``compromise`` or a status under ``targets_status``."""
+    import json
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "cli"))
+    from cli_run import invoke_kinprop
+
+    fb, dw, off = examples / "fourbar.yaml", examples / "double_wishbone.yaml", examples / "slider_crank_offset.yaml"
+    free = ["--free", "A.q", "--free", "O4.q"]
+    runs = {  # name: (arguments before --json, exit code)
+        "assemble": (["assemble", fb], 0),
+        "propagate": (["propagate", fb, "--set", "O2.q=70"], 0),
+        "propagate, stopped short": (["propagate", fb, "--set", "B.s_i[0]=0.03", *free], 1),
+        "propagate, iteration cap": (["propagate", fb, "--set", "O2.q=70", "--max-iter", "1", "--no-continuation"], 1),
+        "sweep": (["sweep", examples / "fourbar_double_rocker.yaml", "--drive", "O2=0:180:12"], 1),
+        "sensitivity": (["sensitivity", fb, "--wrt", "B.s_i[0]"], 0),
+        "check": (["check", fb], 0),
+        "loads": (["loads", fb, "--force", "coupler.P=30,-45,0"], 0),
+        "loads, unbalanced": (["loads", off, "--moment", "crank=0,0,5"], 1),
+        "loads, equilibrium": (["loads", dw, "--wheel", "upright=0,0,11000", "--equilibrium"], 0),
+        "targets": (["propagate", dw, "--target", "camber@travel=50mm=-1.5deg", "--free", "hardpoint:UBJ"], 0),
+        "study": (["study", fb, "--vary", "B.s_i[0]=0.39:0.41", "--samples", "4", "-o", tmp_path / "s"], 0),
+    }
+    seen = set()
+    for name, (argv, code) in runs.items():
+        p = invoke_kinprop(*argv, "--json")
+        assert p.returncode == code, (name, p.stdout[-1500:], p.stderr[-1500:])
+        obj = json.loads(p.stdout)
+        words = _statuses(obj)
+        assert set(words) <= STATUS_WORDS, (name, set(words) - STATUS_WORDS)
+        assert set(_statuses(obj, "targets_status")) <= STATUS_WORDS | {"met", "compromise"}, name
+        seen |= set(words)
+    # the failures above say their own words, not a generic one
+    assert {"converged", "ok", "unbalanced", "infeasible", "not_converged"} <= seen, seen
+
+
+def test_motion_and_statics_say_ok_singular_unbalanced_from_the_one_table(examples):
+    """At an assembled pose: ``ok``, ``singular`` (a dead centre: the slider cannot drive the
+    crank) and ``unbalanced`` (a moment on a mechanism with no held input), each a
+    :class:`kinprop.Status` with its message from the table, and ``residual`` the pose's
+    scaled ``||Phi||`` as a solve reports it."""
+    import math
+
+    a, b, c = 0.10, 0.35, 0.05  # examples/slider_crank_offset.yaml
+    model = kp.assemble(kp.load_model(examples / "slider_crank_offset.yaml"), tol=1e-13).after
+    dead = kp.propagate(model, {"O2.q": math.degrees(math.asin(c / (a + b)))}, tol=1e-13)
+    at = dead.after
+    records = {
+        Status.OK: kp.motion(at, {"O2": 1.0}),
+        Status.SINGULAR: kp.motion(at, {"P": 1.0}),
+        Status.UNBALANCED: kp.statics(at, PointLoad("crank", (0.0, 0.0, 0.0), moment=(0.0, 0.0, 5.0))),
+    }
+    held = kp.statics(at, PointLoad("crank", (0.0, 0.0, 0.0), moment=(0.0, 0.0, 5.0)), inputs=["O2"])
+    for want, rec in [*records.items(), (Status.OK, held)]:
+        assert isinstance(rec.status, kp.Status) and rec.status is want
+        assert rec.ok is (want is Status.OK)
+        # the pose's ||Phi||, the figure and scaling of Solution.residual (the assembly's own)
+        assert rec.residual == pytest.approx(dead.result.residual, abs=1e-15)
+    assert records[Status.SINGULAR].message == message(Status.SINGULAR, undetermined=1)
+    assert held.message == message(Status.OK) == "ok"
+    assert records[Status.UNBALANCED].message.startswith("unbalanced: the constraints and the inputs do not hold")
+    assert all(np.isnan(v).all() for v in records[Status.SINGULAR].rates.values())
+    assert held.efforts["O2.q"] == pytest.approx(-5.0, rel=1e-9)  # the input holds the couple
+
+
+def test_a_continuation_result_is_a_view_of_its_solution(examples):
+    """``status``, ``fraction`` and ``substeps`` are the engine solution's; the message is the
+    table's line with the diagnosis (the coupler shortened beyond the loop's closure:
+    docs/analysis/continuation.md)."""
+    from kinprop.propagation.continuation import diagnose, propagate_continuation
+
+    m = kp.assemble(kp.load_model(examples / "fourbar.yaml")).after
+    bad = propagate_continuation(m, {"B.s_i[0]": 0.03}, free=("A.q", "O4.q"))
+    sol = bad.solution
+    assert isinstance(sol, kp.Solution) and bad.status is sol.status is Status.INFEASIBLE
+    assert (bad.fraction, bad.substeps) == (sol.fraction, sol.substeps)
+    assert bad.fraction == pytest.approx(0.945946, abs=1e-3)
+    assert bad.diagnosis == diagnose(sol) and bad.conflict_joints == ["B"]
+    assert bad.message.startswith(f"the change cannot be assembled beyond {sol.fraction:.6g}")
+    good = propagate_continuation(m, {"B.s_i[0]": 0.41}, free=("A.q", "O4.q"))
+    assert good.converged and good.fraction == 1.0 and good.message.endswith(good.solution.message)

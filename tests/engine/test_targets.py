@@ -164,7 +164,7 @@ def test_conflicting_targets_give_the_least_squares_compromise_and_name_the_conf
         model, ["camber@travel=50=-1.5", "camber@travel=50=-1.0", "toe@travel=50=0"], ["hardpoint:UBJ", "TR.s_i"]
     )
     assert tp.targets_status == "compromise" and tp.converged  # converged to the compromise
-    res = {r["target"]: r["residual"] for r in tp.table()}
+    res = {r["target"]: r["miss"] for r in tp.table()}
     assert res["camber@travel=50=-1.5"] == pytest.approx(0.25, abs=1e-9)
     assert res["camber@travel=50=-1.0"] == pytest.approx(-0.25, abs=1e-9)
     assert res["toe@travel=50=0"] == pytest.approx(0.0, abs=1e-9)

@@ -110,8 +110,14 @@ class Motion:
     accelerations: Mapping[str, Array] | None
 
     @property
-    def status(self) -> str:
+    def status(self) -> Status:
+        """:class:`kinprop.Status`: ``ok``, ``singular`` or ``not_assembled`` (docs/results.md)."""
         return self.state.status
+
+    @property
+    def residual(self) -> float:
+        """``||Phi||`` of the pose, scaled as the solver's test (:attr:`kinprop.Solution.residual`)."""
+        return self.state.residual
 
     @property
     def message(self) -> str:

@@ -108,8 +108,14 @@ class Statics:
     undetermined: tuple[str, ...]
 
     @property
-    def status(self) -> str:
+    def status(self) -> Status:
+        """:class:`kinprop.Status`: ``ok``, ``unbalanced`` or ``not_assembled`` (docs/results.md)."""
         return self.state.status
+
+    @property
+    def residual(self) -> float:
+        """``||Phi||`` of the pose, scaled as the solver's test (:attr:`kinprop.Solution.residual`)."""
+        return self.state.residual
 
     @property
     def ok(self) -> bool:
@@ -486,7 +492,7 @@ def equilibrium(
         r, A, _, _ = eng.poses(st)
         pf = applied_points(model, eng, np.array(r), np.array(A), case)
         tau, K, msg = reduced_stiffness(eng, st, pf, cols, laws)
-        if msg != "ok":
+        if msg:
             status, message = Status.INFEASIBLE, msg
             break
         if float(np.max(np.abs(tau), initial=0.0)) <= tol * _tau_scale(pf, laws, model, eng, st):
@@ -503,7 +509,8 @@ def equilibrium(
             break
         st = sol.state
     else:
-        message = f"not converged in {max_iter} steps"
+        message = (f"not converged after {max_iter} iterations: the released inputs' efforts are not below {tol:g} "
+                   "of the load scale")  # fmt: skip
     at = eng.model_of(st, model)
     s = statics(at, case, inputs=names, engine=eng, reference=model)
     stable = bool(np.all(np.linalg.eigvalsh(0.5 * (K + K.T)) > 0)) if K.size else True
@@ -577,7 +584,7 @@ def wheel_rate(
     r, A = np.array(r), np.array(A)
     pf = applied_points(model, eng, r, A, _case(model, loads))
     tau, K, msg = reduced_stiffness(eng, st, pf, cols, model_laws(model, eng, st)[0])
-    if msg != "ok":
+    if msg:
         return float("nan")
     ms = motion_state(eng, st, {eng.column_labels[cols[0]]: 1.0}, {})
     b = eng.body_index[wheel]

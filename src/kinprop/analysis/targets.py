@@ -574,7 +574,7 @@ class TargetPropagation:
         return u
 
     def table(self) -> list[dict[str, Any]]:
-        """One row per target: spec, output, wanted, before, achieved, residual, in the model's
+        """One row per target: spec, output, wanted, before, achieved, miss, in the model's
         units (angles in its angle unit, lengths in its length unit; slopes per length unit)."""
         rows = []
         deg = self.model.units.get("angle") == "deg"
@@ -585,7 +585,7 @@ class TargetPropagation:
             elif kind in ("deg", "gain") and not deg:  # a metric angle (degrees inside) in a radian model
                 k = RADIANS_PER["deg"]
             row = {"target": spec.text, "output": spec.output, "unit": self.unit(spec)}
-            rows.append(row | {n: t[n] * k for n in ("value", "before", "achieved", "residual")})
+            rows.append(row | {n: t[n] * k for n in ("value", "before", "achieved", "miss")})
         return rows
 
     @property
@@ -602,10 +602,10 @@ class TargetPropagation:
         return "\n".join(line.rstrip() for line in lines)
 
     def _repr_html_(self) -> str:
-        head = "".join(f"<th>{h}</th>" for h in ("target", "unit", "wanted", "before", "achieved", "residual"))
+        head = "".join(f"<th>{h}</th>" for h in ("target", "unit", "wanted", "before", "achieved", "miss"))
         body = "".join(
             f"<tr><td>{escape(r['target'])}</td><td>{escape(r['unit'])}</td>"
-            + "".join(f"<td>{r[k]:.6g}</td>" for k in ("value", "before", "achieved", "residual"))
+            + "".join(f"<td>{r[k]:.6g}</td>" for k in ("value", "before", "achieved", "miss"))
             + "</tr>"
             for r in self.table()
         )

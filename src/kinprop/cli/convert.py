@@ -74,7 +74,7 @@ def convert(
         gaps = {k: v for k, v in joint_mismatch(m).items() if v > MISMATCH_TOL}
         for joint, gap in gaps.items():
             err.print(
-                f"warning: {model}: joints.{joint}: not assembled (||Phi|| = {gap:.3g}); "
+                f"warning: {model}: joints.{joint}: not assembled (its rows miss by {gap:.3g}, model units); "
                 "the hardpoints keep body i's side (run kinprop assemble first)",
                 soft_wrap=True,
             )

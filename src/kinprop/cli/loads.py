@@ -90,6 +90,7 @@ def statics_json(s: Statics) -> dict:
         "case": s.case,
         "status": s.status,
         "message": s.message,
+        "residual": s.residual,
         "units": s.units,
         "efforts": dict(s.efforts),
         "reactions": reactions,
@@ -181,8 +182,9 @@ def loads(
     if json_out:
         data = statics_json(s)
         if eq is not None:
-            data["equilibrium"] = {"coordinates": {a: _model_value(at, a) for a in eq.released}, "steps": eq.iterations,
-                                   "stable": eq.stable, "wheel_rate": rate}  # fmt: skip
+            data["equilibrium"] = {"status": eq.status, "message": eq.message,
+                                   "coordinates": {a: _model_value(at, a) for a in eq.released},
+                                   "iterations": eq.iterations, "stable": eq.stable, "wheel_rate": rate}  # fmt: skip
         print_json(data)
     else:
         if eq is not None:

@@ -28,7 +28,7 @@ from kinprop.propagation import Propagation
 
 def targets_json(tp: TargetPropagation) -> dict[str, Any]:
     """The propagation JSON of the changed design plus the targets: ``targets_status``,
-    ``targets`` (wanted, before, achieved, residual; display units), ``conflicts``,
+    ``targets`` (wanted, before, achieved, miss; display units), ``conflicts``,
     ``configurations``, ``design_change``, ``hardpoint_moves`` (each changed attachment's ``A ds'``
     with the body's orientation before the change, global) and ``joint_positions`` (per
     configuration, the joint origins that moved: before and after, global)."""
@@ -64,10 +64,10 @@ def moved_joints(tp: TargetPropagation, k: int) -> dict[str, tuple[np.ndarray, n
 
 def targets_table(tp: TargetPropagation, title: str) -> Table:
     t = Table(title=escape(title), title_justify="left")
-    for c in ("target", "unit", "wanted", "before", "achieved", "residual"):
+    for c in ("target", "unit", "wanted", "before", "achieved", "miss"):
         t.add_column(c, justify="left" if c in ("target", "unit") else "right")
     for row in tp.table():
-        cells = (f"{row[k]:.6g}" for k in ("value", "before", "achieved", "residual"))
+        cells = (f"{row[k]:.6g}" for k in ("value", "before", "achieved", "miss"))
         t.add_row(escape(row["target"]), row["unit"], *cells)
     return t
 

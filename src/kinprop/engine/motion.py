@@ -27,7 +27,8 @@ normalisation ``-2 p'.p'``; coupling ``p''(x) qdot_b^2``.
 
 Singular configurations: the stacked matrix is factored by SVD (scaled rows and columns);
 when it is rank deficient (the driven rates do not determine the motion) or the driven rates
-violate the constraints (a locked input), the status is ``singular`` and every rate is NaN.
+violate the constraints (a locked input), the status is ``singular`` (:class:`kinprop.Status`,
+its message from the one table, :func:`kinprop.engine.status.message`) and every rate is NaN.
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from kinprop.constraints.basic import DISTANCE, DOT1, DOT2, SPHERICAL
+from kinprop.engine.status import Status, message
 from kinprop.jit import njit
 from kinprop.joints import composite, placement, universal
 from kinprop.joints import motion as joint_motion
@@ -81,7 +83,7 @@ State = Any
 
 #: relative singular value below which the velocity system counts as singular
 SINGULAR_RTOL = 1e-10
-OK, SINGULAR = "ok", "singular"
+OK, SINGULAR = Status.OK, Status.SINGULAR
 
 
 @dataclass(frozen=True)
@@ -89,7 +91,8 @@ class MotionState:
     """Rates and accelerations of one assembled state (solver units: radians, the model's
     length unit, per unit time). Arrays by layout q column and by body index."""
 
-    status: str
+    #: ``ok``, ``singular`` or (:func:`kinprop.analysis.motion.motion`) ``not_assembled``
+    status: Status
     message: str
     qdot: Array  # (n_q,)
     V: Array  # (nb, 6) spatial twists [v_O, omega]
@@ -108,7 +111,7 @@ class MotionState:
 
     @property
     def ok(self) -> bool:
-        return self.status == OK
+        return self.status is OK
 
     def point_velocity(self, body: int, point: Array) -> Array:
         """Velocity of the body point now at global ``point``: ``v_O + omega x P``."""
@@ -214,14 +217,7 @@ class _Factor:
         smax = float(s[0]) if s.size else 0.0
         rank = int(np.sum(s > SINGULAR_RTOL * smax)) if smax > 0 else 0
         self.conditioning = float(s[-1] / smax) if smax > 0 and s.size == n else 0.0
-        self.message = (
-            ""
-            if rank == n
-            else (
-                f"singular: the driven rates leave {n - rank} direction(s) of motion "
-                "undetermined (a singular configuration, or too few driven coordinates)"
-            )
-        )
+        self.message = "" if rank == n else message(SINGULAR, undetermined=n - rank)
 
     def solve(self, rhs_rows: Array, rhs_driven: Array | list[float]) -> tuple[Array, str]:
         """``x`` of ``[Phi_q ; E_D] x = [rhs_rows ; rhs_driven]`` (NaN and a message when singular
@@ -233,12 +229,9 @@ class _Factor:
         if len(self.cols):
             b[self.m :] *= self.cs[self.cols]
         xs = self.Vt.T @ ((self.U.T @ b) / self.s)
-        resid = float(np.linalg.norm(self.M @ xs - b))
-        if resid > 1e-8 * max(1.0, float(np.linalg.norm(b))):
-            return np.full(n, np.nan), (
-                "singular: the driven rates violate the constraints (residual "
-                f"{resid:.3g}): a locked input or a singular configuration"
-            )
+        resid, size = float(np.linalg.norm(self.M @ xs - b)), float(np.linalg.norm(b))
+        if resid > 1e-8 * max(1.0, size):
+            return np.full(n, np.nan), message(SINGULAR, mismatch=resid / size)
         return xs / self.cs, ""
 
 
@@ -510,7 +503,7 @@ def _compiled_motion(engine: Engine, state: State, rates: Mapping[str, Any]) -> 
         return None
     ws = buf[newton.B_WS]  # the buffers are reused: copy the poses out
     r, A, P, R = (ws[k].copy() for k in (kernels.W_BODY_R, kernels.W_BODY_A, kernels.W_FRAME_P, kernels.W_FRAME_R))
-    return MotionState(OK, "ok", qdot, V, r, A, P, R, conditioning=math.nan, residual=float(out[0]))
+    return MotionState(OK, message(OK), qdot, V, r, A, P, R, conditioning=math.nan, residual=float(out[0]))
 
 
 def motion_state(
@@ -539,7 +532,7 @@ def _motion(
         nan = None if accelerations is None else np.full_like(qdot, np.nan)
         ms = MotionState(
             status,
-            msg or "ok",
+            msg or message(OK),
             qdot,
             V,
             fr.r,
@@ -562,7 +555,7 @@ def _motion(
     qddot, msg = fac.solve(gamma, avals)
     dV = dV0 + _tree_velocities(engine, fr, qddot)  # the q-ddot part is linear, like the twists
     ms = MotionState(
-        SINGULAR if msg else OK, msg or "ok", qdot, V, fr.r, fr.A, fr.P, fr.R, qddot, dV, cond, fr.residual
+        SINGULAR if msg else OK, msg or message(OK), qdot, V, fr.r, fr.A, fr.P, fr.R, qddot, dV, cond, fr.residual
     )
     return ms, fac
 

@@ -15,7 +15,8 @@ the input applies to its coordinate (a torque about a revolute's axis, a force a
 positive in the direction of increasing ``q``) to hold the pose: by virtual work ``tau = -Q .
 dq/dq_D``. Solved by SVD of ``[Phi_q^T  E_D^T]`` (rows and columns scaled as the solver
 scales them); when ``Q`` is not in its range the inputs do not hold the loads (status
-``unbalanced``: a free motion, a singular pose or too few inputs).
+``unbalanced``: a free motion, a singular pose or too few inputs; :class:`kinprop.Status` and
+its one message table, :func:`kinprop.engine.status.message`).
 
 **Reactions.** The rows of a cut joint depend on the poses of its bodies ``i`` and ``j``
 through ``d = P_j - P_i`` (``P_i`` moved along ``z''_i`` by a T-D joint's own coordinate)
@@ -74,7 +75,7 @@ if TYPE_CHECKING:
 RANK_RTOL = 1e-10
 #: relative size above which a self-stress state changes a component (undetermined)
 UNDETERMINED_RTOL = 1e-7
-OK, UNBALANCED, NOT_ASSEMBLED = "ok", "unbalanced", Status.NOT_ASSEMBLED
+OK, UNBALANCED, NOT_ASSEMBLED = Status.OK, Status.UNBALANCED, Status.NOT_ASSEMBLED
 #: scaled residual norm above which a state is not an assembly (its loads would mean nothing)
 ASSEMBLED_TOL = 1e-6
 
@@ -118,7 +119,8 @@ class StaticsState:
     """Loads of one assembled state (solver units: the model's length and force units; the
     efforts of angular coordinates are torques, force x length per radian)."""
 
-    status: str
+    #: ``ok``, ``unbalanced`` or ``not_assembled`` (:class:`kinprop.Status`)
+    status: Status
     message: str
     #: multipliers of every row (NaN where undetermined is not tracked: use the reactions)
     lam: Array
@@ -153,10 +155,12 @@ class StaticsState:
     A: Array
     P: Array
     R: Array
+    #: ``||Phi||`` of the state (scaled as the solver's test, :attr:`kinprop.Solution.residual`)
+    residual: float = 0.0
 
     @property
     def ok(self) -> bool:
-        return self.status == OK
+        return self.status is OK
 
     def joint_point(self, j: int, side: int) -> Array:
         """Where the joint acts on its body ``side`` (the hardpoint ``P_i``/``P_j``)."""
@@ -451,7 +455,8 @@ def element_rates(
 def reduced_stiffness(
     engine: Engine, state: State, loads: PointForces, driven: Sequence[int], laws: Sequence[Law] = ()
 ) -> tuple[Array, Array, str]:
-    """``(tau, K, message)``: the efforts at the ``driven`` columns and their exact derivatives
+    """``(tau, K, message)`` (``message`` empty, or why there are none: the velocity analysis'
+    ``singular`` message, and NaN efforts): the efforts at the ``driven`` columns and their exact derivatives
     ``K[k, l] = d tau_k / d q_l`` (the other driven coordinates held, the constraints
     re-solved): the tangent stiffness of the mechanism reduced to its inputs.
 
@@ -494,7 +499,7 @@ def reduced_stiffness(
             sym = acc[min(k, m), max(k, m)]
             anti = 0.5 * np.array([spatial_cross(Vk[m][b], Vk[k][b]) for b in range(r.shape[0])])
             K[k, m] = -float(np.sum(dW * Vk[k]) + np.sum(W * (sym + anti)))
-    return tau, K, "ok"
+    return tau, K, ""
 
 
 def _reactions(engine: Engine, Zs: list[tuple[Array, Array]], lam: Array, W_applied: Array) -> Array:
@@ -575,12 +580,10 @@ def statics_state(
         nan = np.full((nj, 2, 6), np.nan)
         return StaticsState(
             NOT_ASSEMBLED if not_assembled else UNBALANCED,
-            message(Status.NOT_ASSEMBLED, residual=fr.residual) if not_assembled else
-            f"unbalanced: the constraints and the inputs do not hold the loads (residual {resid:.3g} of "
-            f"{float(np.linalg.norm(b)):.3g}): the mechanism can move under them (too few inputs, or a "
-            "singular pose)",
+            message(NOT_ASSEMBLED, residual=fr.residual) if not_assembled else
+            message(UNBALANCED, mismatch=resid / float(np.linalg.norm(b))),
             np.full(m, np.nan), tuple(driven), np.full(nd, np.nan), nan, nan, nan, np.zeros((nj, 2, 6), bool), W,
-            f, lengths, ends, np.full(nj, np.nan), np.zeros((0, nj, 2, 6)), fr.r, fr.A, fr.P, fr.R,
+            f, lengths, ends, np.full(nj, np.nan), np.zeros((0, nj, 2, 6)), fr.r, fr.A, fr.P, fr.R, fr.residual,
         )  # fmt: skip
     x = xs * unscale
     lam, tau = x[:m], x[m:]
@@ -617,13 +620,10 @@ def statics_state(
     wrench_out[und.any(axis=2)] = np.nan  # a side with an undetermined component: no global wrench
     tau = np.where(tau_und, np.nan, tau)
     member[member_und] = np.nan
-    msg = "ok" if not null.shape[0] else (
-        f"ok: {null.shape[0]} self-stress state(s); {int(und.sum())} reaction component(s) are not determined "
-        "by the loads"
-    )  # fmt: skip
+    msg = message(OK, self_stress=null.shape[0], undetermined=int(und.sum()))
     return StaticsState(OK, msg, lam, tuple(driven), tau, wrench_out, local, at_point, und, W, f, lengths, ends, member,
                         stress,
-                        fr.r, fr.A, fr.P, fr.R)  # fmt: skip
+                        fr.r, fr.A, fr.P, fr.R, fr.residual)  # fmt: skip
 
 
 __all__ = [

@@ -4,7 +4,7 @@ variant and analysis at a pose says about its outcome (:class:`kinprop.Status`; 
 :func:`message` gives the one-line outcome, :func:`notes` the lines a user should know besides
 (sub-stepping, an ambiguous branch). ``Solution``/``BatchSolution`` read them, and so do the
 records that carry a status without a solve (a study's invalid variant, motion and statics at a
-pose that is not an assembly)."""
+pose: ``ok``, ``singular``, ``unbalanced``, ``not_assembled``)."""
 
 from __future__ import annotations
 
@@ -30,11 +30,30 @@ def notes(status: Status, flags: int, substeps: int) -> list[str]:
 
 def message(status: Status, iterations: int = 0, residual: float = 0.0, tol: float = 0.0, requested_tol: float = 0.0,
             fraction: float = 1.0, substeps: int = 1, flags: int = 0, optimality: float = 0.0,
-            max_iter: int = 0) -> str:  # fmt: skip
-    """The one message table of :class:`Status` (every solve, batch row and sweep step says its
-    outcome with it). ``residual`` is the scaled ``||Phi||`` (:attr:`Engine.row_scale`: metres);
-    ``optimality`` the optimality residual (SI; docs/analysis/weights.md), shown when not 0;
-    ``max_iter`` the iteration cap of one sub-step (0: not known)."""
+            max_iter: int = 0, *, undetermined: int = 0, mismatch: float = 0.0,
+            self_stress: int = 0) -> str:  # fmt: skip
+    """The one message table of :class:`Status` (every solve, batch row, sweep step and analysis
+    at a pose says its outcome with it). ``residual`` is the scaled ``||Phi||``
+    (:attr:`Engine.row_scale`: metres); ``optimality`` the optimality residual (SI;
+    docs/analysis/weights.md), shown when not 0; ``max_iter`` the iteration cap of one sub-step
+    (0: not known). At a pose: ``undetermined`` the directions of motion the driven rates leave
+    open (``singular``) or the reaction components the loads leave open (``ok``, with
+    ``self_stress`` states); ``mismatch`` the part of the scaled right-hand side the linear
+    system cannot meet, relative to its size (``singular``: the driven rates; ``unbalanced``:
+    the loads)."""
+    if status is Status.OK:
+        return (f"ok: {self_stress} self-stress state(s); {undetermined} reaction component(s) are not "
+                "determined by the loads" if self_stress else "ok")  # fmt: skip
+    if status is Status.SINGULAR:
+        if undetermined:
+            return (f"singular: the driven rates leave {undetermined} direction(s) of motion undetermined "
+                    "(a singular configuration, or too few driven coordinates)")  # fmt: skip
+        return (f"singular: the driven rates violate the constraints (relative mismatch {mismatch:.3g}): "
+                "a locked input or a singular configuration")  # fmt: skip
+    if status is Status.UNBALANCED:
+        return (f"unbalanced: the constraints and the inputs do not hold the loads ({mismatch:.3g} of the "
+                "generalised load is not held): the mechanism can move under them (too few inputs, or a "
+                "singular pose)")  # fmt: skip
     bound = (
         f"{tol:.3g} (round-off floor at this model's length scale; tol {requested_tol:g})"
         if tol > requested_tol

@@ -126,8 +126,8 @@ class Row:
     #: (zero while ``value`` is not exceeded), so a met bound does not pull the design
     bound: str = ""
 
-    def residual(self, v: float) -> float:
-        """The row's residual at the value ``v`` (a bound's violation, 0 when it holds)."""
+    def miss(self, v: float) -> float:
+        """The row's miss at the value ``v``: ``v - value`` (a bound's violation, 0 when it holds)."""
         r = v - self.value
         return max(r, 0.0) if self.bound == "<=" else min(r, 0.0) if self.bound == ">=" else r
 
@@ -152,7 +152,8 @@ class TargetResult:
     after: tuple[State, ...]
     values_before: Array
     values_after: Array
-    #: ``||Phi||`` over all configurations and the conditions' residual at the end
+    #: the scaled ``||Phi||`` over all configurations (:attr:`Solution.residual`'s figure, metres)
+    #: combined with the conditions' miss (row units over ``scale``) at the end
     hard_residual: float
     #: free design variable key -> change (s', l: difference; C: body-frame rotation vector, rad)
     design_change: dict[str, Array]
@@ -181,14 +182,15 @@ class TargetResult:
 
     @property
     def targets(self) -> list[dict[str, Any]]:
-        """Per target row (not conditions): name, wanted, before, achieved, residual."""
+        """Per target row (not conditions): name, wanted, before, achieved, miss (``achieved -
+        wanted``, a bound's violation; row units: not ``||Phi||``, which ``residual`` names)."""
         return [
             {
                 "target": r.name,
                 "value": r.value,
                 "before": float(b),
                 "achieved": float(a),
-                "residual": r.residual(float(a)),
+                "miss": r.miss(float(a)),
                 "bound": r.bound,
             }
             for r, b, a in zip(self.rows, self.values_before, self.values_after, strict=True)
@@ -326,7 +328,7 @@ def solve_targets(
         cfgs = configs(e)
         outs = [np.asarray(cfgs[k].outputs(st), float) for k, st in enumerate(sts)]
         hv = np.array([(v - r.value) / r.scale for r, v in zip(hard, _row_values(hard, outs), strict=True)])
-        tv = (np.array([r.residual(v) / r.scale for r, v in zip(soft, _row_values(soft, outs), strict=True)])
+        tv = (np.array([r.miss(v) / r.scale for r, v in zip(soft, _row_values(soft, outs), strict=True)])
               if with_design else np.zeros(0))  # fmt: skip
         return hv, tv, outs
 
@@ -458,7 +460,9 @@ def solve_targets(
     h, t, outs = residuals(after, True, e1)
     configurations = configs(e1)
     va = _row_values(rows, outs)
-    hard_res = float(np.linalg.norm(np.concatenate([engine.residual(s) for s in after] + [h])))
+    # Solution.residual's figure (scaled ||Phi||, metres) over all configurations, and the conditions'
+    phi = float(np.linalg.norm(np.concatenate([engine.residual(s) * engine.row_scale for s in after])))
+    hard_res = float(np.hypot(phi, np.linalg.norm(h)))
     conflicts: list[tuple[tuple[str, float], ...]] = []
     final = None
     if t.size:
@@ -478,10 +482,11 @@ def solve_targets(
     met = ok and worst <= target_tol
     if not ok:
         msg = (
-            f"not converged after {it} iterations: ||Phi, conditions|| = {hard_res:.3g}, worst target miss {worst:.3g}"
+            f"not converged after {it} iterations: ||Phi|| = {phi:.3g}, conditions' miss "
+            f"{float(np.linalg.norm(h)):.3g}, worst target miss {worst:.3g}"
         )
     elif met:
-        msg = f"targets met in {it} iterations (worst miss {worst:.3g}, ||Phi|| = {hard_res:.3g})"
+        msg = f"targets met in {it} iterations (worst miss {worst:.3g}, ||Phi|| = {phi:.3g})"
     else:
         names = "; ".join(" vs ".join(n for n, _ in g) for g in conflicts) or "none identified"
         msg = (f"targets cannot all be met: least-squares compromise after {it} iterations, worst miss {worst:.3g}; "

@@ -159,7 +159,7 @@ def continuation_json(res: ContinuationResult) -> dict[str, Any]:
         "conflict": [{"row": r, "weight": w} for r, w in res.conflict],
         "residual_rows": [{"row": r, "value": v} for r, v in res.residual_rows],
         "singularity_ratio": res.singularity_ratio,
-        "sub_steps": res.substeps,
+        "substeps": res.substeps,
         "last_feasible": {"coordinates": coordinates_json(res.after), "design": design_json(res.after)},
     }
 
@@ -290,6 +290,8 @@ def sensitivity_json(
         "free": list(free),
         "weights": dict(weights) if weights else {},
         "assembly": {
+            "status": r.status,
+            "message": r.message,
             "initial_residual": r.residual_history[0],
             "residual": r.residual,
             "iterations": r.iterations,

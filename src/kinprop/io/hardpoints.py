@@ -592,7 +592,8 @@ def _keys_keeping(joint: Joint, f: JointFrames, q: Array | None) -> dict[str, An
 
 
 def joint_mismatch(model: Model) -> dict[str, float]:
-    """Residual norm ``||Phi||`` of each cut joint's rows at the model's coordinates.
+    """Norm of each cut joint's rows at the model's coordinates, unscaled (model units: a
+    point row's gap is a distance), not the scaled ``||Phi||`` a solve reports.
 
     Zero (to rounding) for an assembled model. A hardpoint file has one point (or axis) where
     the two sides of a joint meet, so :func:`model_to_hardpoints` drops these gaps.

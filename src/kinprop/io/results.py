@@ -66,6 +66,7 @@ def propagation_json(prop: Propagation) -> dict[str, Any]:
         "message": r.message,
         "warnings": prop.notes,
         "fraction": r.fraction,
+        "substeps": r.substeps,
         "rank": r.rank,
         "free": list(prop.free),
         "changes": {k: _num(v) for k, v in prop.changes.items()},

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -99,27 +99,61 @@ def diagnose(sol: Solution, top: int = TOP) -> Diagnosis:
 
 @dataclass(frozen=True)
 class ContinuationResult:
-    """Outcome of :func:`propagate_continuation`, read from one engine solution.
+    """Outcome of :func:`propagate_continuation`: a view of one engine solution (``solution``,
+    the solve of the full change) with its :class:`Diagnosis`; its ``status``, ``fraction`` and
+    ``substeps`` are the solution's.
 
     ``propagation`` goes from the input model to the last feasible state: the full change when
     ``converged``, else the change scaled to ``fraction``; its ``changes`` hold the values set
     there, keyed by variable (``B.s_i``: the whole vector).
     """
 
-    converged: bool
-    fraction: float
+    #: the engine's solution of the full change (:class:`kinprop.Solution`)
+    solution: Solution
     propagation: Propagation
-    #: sub-steps the engine's loop took (accepted and halved)
-    substeps: int
-    message: str
-    #: rows weighted by the left singular vector of the smallest singular value, (label, weight)
-    conflict: tuple[tuple[str, float], ...] = ()
-    #: rows with the largest residual with the full change at the last feasible coordinates, (label, Phi_k)
-    residual_rows: tuple[tuple[str, float], ...] = ()
-    #: s_min / s_max of the free-variable Jacobian at the last feasible state
-    singularity_ratio: float = field(default=float("nan"))
-    #: the engine's outcome for the full change (:class:`kinprop.Status`)
-    status: Status = Status.CONVERGED
+    diagnosis: Diagnosis
+
+    @property
+    def status(self) -> Status:
+        """The engine's outcome for the full change (:class:`kinprop.Status`)."""
+        return self.solution.status
+
+    @property
+    def converged(self) -> bool:
+        return self.solution.converged
+
+    @property
+    def fraction(self) -> float:
+        """Fraction of the change followed on the start's branch (1 when converged)."""
+        return 1.0 if self.converged else self.solution.fraction
+
+    @property
+    def substeps(self) -> int:
+        """Sub-steps the engine's loop took (accepted and halved)."""
+        return self.solution.substeps
+
+    @property
+    def message(self) -> str:
+        """The solution's message (the one table), and when it stopped short the diagnosis."""
+        sol = self.solution
+        if sol.converged:
+            return f"the change was followed in {sol.substeps} sub-steps: {sol.message}"
+        return failure_message(sol, self.diagnosis)
+
+    @property
+    def conflict(self) -> tuple[tuple[str, float], ...]:
+        """Rows weighted by the left singular vector of the smallest singular value, (label, weight)."""
+        return self.diagnosis.conflict
+
+    @property
+    def residual_rows(self) -> tuple[tuple[str, float], ...]:
+        """Rows with the largest residual with the full change at the last feasible coordinates, (label, Phi_k)."""
+        return self.diagnosis.residual_rows
+
+    @property
+    def singularity_ratio(self) -> float:
+        """s_min / s_max of the free-variable Jacobian at the last feasible state."""
+        return self.diagnosis.singularity_ratio
 
     @property
     def after(self) -> Model:
@@ -128,7 +162,7 @@ class ContinuationResult:
     @property
     def conflict_joints(self) -> list[str]:
         """Joints owning the conflicting rows, most involved first."""
-        return list(dict.fromkeys(r.split(":", 1)[0] for r, _ in self.conflict + self.residual_rows))
+        return self.diagnosis.joints
 
     def __repr__(self) -> str:
         """The outcome in one line, then the propagation's summary (model units)."""
@@ -171,18 +205,15 @@ def continuation_of(model: Model, sol: Solution, free: Sequence[str], top: int =
     reached = {k: np.array(eng.get(sol.state, k), dtype=float) for k in keys}
     if sol.converged:
         partial = replace(sol, changes=reached)
-        msg = f"the change was followed in {sol.substeps} sub-steps: {sol.message}"
     else:
         scaled = float(np.linalg.norm(eng.residual(sol.state) * eng.row_scale))
         assembled = sol.fraction > 0.0 or scaled < sol.tol
         partial = replace(sol, changes=reached, status=Status.CONVERGED if assembled else sol.status,
                           residual=scaled if assembled else sol.residual)  # fmt: skip
-        msg = failure_message(sol, d)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SingularityWarning)
         prop = propagation_of(eng, model, partial, free)
-    return ContinuationResult(sol.converged, sol.fraction if not sol.converged else 1.0, prop, sol.substeps, msg,
-                              d.conflict, d.residual_rows, d.singularity_ratio, sol.status)  # fmt: skip
+    return ContinuationResult(sol, prop, d)
 
 
 def propagate_continuation(

@@ -64,6 +64,15 @@ class Status(StrEnum):
     #: never returned by the compiled loop: an analysis of a pose (velocities, loads) was asked
     #: at a state that is not an assembly (``||Phi||`` too large), so nothing was computed
     NOT_ASSEMBLED = "not_assembled"
+    #: never returned by the compiled loop: an analysis at an assembled pose (``kp.motion``,
+    #: ``kp.statics``; no iteration) has its unique answer
+    OK = "ok"
+    #: the velocity analysis at an assembled pose has no unique answer: the driven rates leave
+    #: directions of motion undetermined, or violate the constraints (a locked input)
+    SINGULAR = "singular"
+    #: the statics at an assembled pose has no answer: the constraints and inputs do not hold
+    #: the loads (the mechanism can move under them)
+    UNBALANCED = "unbalanced"
 
 
 STATUSES = tuple(Status)
