@@ -91,11 +91,15 @@ inlined = partial(kernel, inline="always")
 #: stay allocation-free and cacheable; ``LAPACK_INT`` is the integer type of its ``rank`` output.
 GELSD = _LAPACK().numba_ez_gelsd(numba.types.float64)
 LAPACK_INT = F_INT_nptype
-prange = numba.prange
-set_parallel_chunksize = numba.set_parallel_chunksize
 #: False when numba's compiler is switched off (``NUMBA_DISABLE_JIT=1``): the kernels run as Python
 JIT = not numba.config.DISABLE_JIT
-get_num_threads = numba.get_num_threads
+
+
+def num_threads() -> int:
+    """Threads a batch is split over: numba's thread count (``NUMBA_NUM_THREADS``, default the
+    cores), read from its configuration without starting numba's threading layer."""
+    return max(1, int(numba.config.NUMBA_NUM_THREADS))
+
 
 __all__ = [
     "GELSD",
@@ -103,12 +107,10 @@ __all__ = [
     "LAPACK_INT",
     "MODE",
     "cache_dir",
-    "get_num_threads",
     "inlined",
     "is_warm",
     "kernel",
     "njit",
-    "prange",
-    "set_parallel_chunksize",
+    "num_threads",
     "warm_marker",
 ]
