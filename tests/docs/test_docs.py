@@ -75,7 +75,7 @@ NOT_COUNTED = [
     re.compile(r"\b(?:Python|numba|numpy|scipy|pandas|version|v)\s*\d+(?:\.\d+)+", re.IGNORECASE),
     re.compile(r"\b\d{4}-\d{2}-\d{2}\b"),  # dates
     re.compile(
-        r"(?:\b(?:sections?|sec\.|eqs?\.|equations?|tables?|figs?\.|figures?|chapters?|items?|"
+        r"(?:\b(?:sections?|secs?\.|eqs?\.|equations?|tables?|figs?\.|figures?|chapters?|items?|"
         r"issues?)|§)\s*"
         rf"{_NUM}(?:\s*(?:,|and|or|to|-|–)\s*{_NUM})*",
         re.IGNORECASE,
