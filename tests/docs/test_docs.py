@@ -34,7 +34,8 @@ paragraph (several marks may stack):
   exempts only the numbers listed, the others stay under the other marks.
 
 Not counted: numbers in code blocks, HTML comments, link targets and URLs; version numbers,
-dates, and references (section 5.2, eq. 5.10, Table 1, issue 19, item 3, ...); inline code that
+dates, standards (ISO 8855), names (dot-1), and references (section 5.2, eq. 5.10, Table 1,
+issue 19, item 3, ...); inline code that
 is a command, an option or an argument (``kinprop ...``, ``--tol 1e-3``, ``LCA.q=5``,
 ``dot-2``: a span without spaces that has letters).
 """
@@ -74,6 +75,8 @@ NOT_COUNTED = [
     re.compile(r"\b\d+\.\d+\.\d+(?:\.\d+)*\b"),  # versions, dotted section numbers
     re.compile(r"\b(?:Python|numba|numpy|scipy|pandas|version|v)\s*\d+(?:\.\d+)+", re.IGNORECASE),
     re.compile(r"\b\d{4}-\d{2}-\d{2}\b"),  # dates
+    re.compile(r"\b(?:ISO|DIN|SAE)\s*\d+\b"),  # standards
+    re.compile(r"\b[A-Za-z]+-\d+\b"),  # names such as dot-1, dot-2
     re.compile(
         r"(?:\b(?:sections?|secs?\.|eqs?\.|equations?|tables?|figs?\.|figures?|chapters?|items?|"
         r"issues?)|§)\s*"
@@ -414,7 +417,7 @@ def test_the_rule_counts_results_and_not_references(tmp_path: Path) -> None:
     value; not counted: integers in prose, versions, dates, references, arguments, links."""
     text = (
         "Python 3.11, numba 0.60.1, 2026-12-07, section 5.2, eq. 5.10 and 5.15, Table 1, "
-        "[x](a/1.5.md), `--tol 1e-3`, `LCA.q=5`, `dot-2`, 3 iterations: `q2 = -0.4337`, 4.76 deg, "
+        "[x](a/1.5.md), `--tol 1e-3`, `LCA.q=5`, `dot-2`, dot-1, ISO 8855, 3 iterations: `q2 = -0.4337`, 4.76 deg, "
         "1e-9 and 31.45 N/mm.\n\n| a | b |\n|---|---|\n| `x` 3 | 0.5 |\n"
     )
     prose, table = _doc(tmp_path, text)
