@@ -309,13 +309,14 @@ def _run_command(argv: list[str], cwd: Path) -> tuple[int, str]:
 
 def _printed(expected: str, printed: list[float]) -> bool:
     """``expected`` (as the doc prints it) is among the numbers the command printed, to the
-    doc's precision: within two units of its last printed digit or 1e-5 relative."""
+    doc's precision: a rounding of one of them (within half a unit of its last digit, so a wrong
+    last digit fails) or within 1e-5 relative."""
     e = float(expected)
     digits = expected.lower().split("e")[0]
     ulp = 10.0 ** -(len(digits.split(".")[1]) if "." in digits else 0)
     if "e" in expected.lower():
         ulp *= 10.0 ** int(expected.lower().split("e")[1])
-    tol = max(2 * ulp, 1e-5 * abs(e))
+    tol = max(0.5 * ulp * (1 + 1e-9), 1e-5 * abs(e))
     return any(abs(a - e) <= tol for a in printed)
 
 
