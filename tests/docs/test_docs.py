@@ -437,6 +437,8 @@ def test_a_wrong_number_in_a_marked_table_fails(tmp_path: Path) -> None:
     table = _doc(tmp_path, text)[0]
     assert table.checked() == ["0.6870", "-3"]
     _check_numbers(table, "p = [0.6869999 1 2 -3]")
+    with pytest.raises(AssertionError, match=r"did not print \['0.6870'\]"):  # 0.6876 rounds to 0.6876
+        _check_numbers(table, "p = [0.6876 -3]")
     with pytest.raises(AssertionError, match=r"did not print \['-3'\]"):
         _check_numbers(table, "p = [0.687 3]")
     wrong = _doc(tmp_path, text.replace("0.6870", "0.695"))[0]
