@@ -62,7 +62,7 @@ SKIP = re.compile(r"<!--\s*doc-test:\s*skip\b(?P<why>[^>]*)-->")
 MARK = re.compile(r"^\s*<!--\s*doc-test:\s*(?P<kind>numbers|stated)\b(?P<rest>.*?)-->\s*$")
 HIDDEN = re.compile(r"^\s*<!--\s*doc-test:\s*python\s*$")
 FENCE = re.compile(r"^```(?P<lang>[a-z]*)\s*$")
-NUMBER = re.compile(r"(?<![\w.])[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?![\w.])", re.IGNORECASE)
+NUMBER = re.compile(r"(?<![\w.])[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?!\w|\.\w)", re.IGNORECASE)  # "4.76." ends a sentence
 CLI = [sys.executable, "-c", "from kinprop.cli import main; main()"]
 TIMEOUT = 600
 
@@ -453,6 +453,41 @@ def test_a_wrong_number_in_a_marked_table_fails(tmp_path: Path) -> None:
             _check_numbers(hidden[1], printed)
 
 
+def test_a_doc_with_a_wrong_number_fails(tmp_path: Path) -> None:
+    """The whole loop on a small doc (a snippet, marks above a table and a paragraph, a hidden
+    snippet, a forward ``numbers from``): right numbers pass; each wrong one fails."""
+    doc = """```python
+print("p =", 0.6870, -3)
+```
+
+<!-- doc-test: numbers -->
+| p | q |
+|---|---|
+| 0.6870 | -3 |
+
+<!-- doc-test: numbers from print(2.5) -->
+The second snippet prints 2.5.
+
+<!-- doc-test: python
+print(4.76, 1e-9)
+-->
+Counted: 4.76 and 1e-9.
+
+```python
+print(2.5)
+```
+"""
+    run_doc(_doc(tmp_path, doc), tmp_path)
+    for right, wrong in (
+        ("| 0.6870 |", "| 0.6880 |"),
+        ("| -3 |", "| 3 |"),
+        ("prints 2.5", "prints 2.6"),
+        ("4.76 and", "4.77 and"),
+    ):
+        with pytest.raises(AssertionError, match=r"did not print|the hidden snippet printed"):
+            run_doc(_doc(tmp_path, doc.replace(right, wrong)), tmp_path)
+
+
 def test_marks_are_collected() -> None:
     """The docs' tables and paragraphs marked for checking are collected to be run (else the
     rule above proves nothing)."""
@@ -475,6 +510,11 @@ def test_doc_runs(doc: Path, tmp_path: Path) -> None:
     shutil.copytree(ROOT / "examples", tmp_path / "examples")
     shutil.copytree(ROOT / "benchmarks", tmp_path / "benchmarks")
     shutil.copytree(ROOT / "docs", tmp_path / "docs")  # plots go to docs/img/ in some commands
+    run_doc(todo, tmp_path)
+
+
+def run_doc(todo: list[Block], cwd: Path) -> None:
+    """Run a doc's blocks in order in ``cwd`` and check its marked tables and paragraphs."""
     printed = ""
     history: list[tuple[str, str]] = []
     later = []  # ``numbers from TEXT``: checked once every command of the doc has run
@@ -485,7 +525,7 @@ def test_doc_runs(doc: Path, tmp_path: Path) -> None:
             else:
                 later.append(block)
         elif block.skip is None:
-            printed = _run_block(block, tmp_path, history)
+            printed = _run_block(block, cwd, history)
         else:
             printed = ""
     for block in later:
