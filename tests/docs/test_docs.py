@@ -85,7 +85,7 @@ NOT_COUNTED = [
     ),
 ]
 INLINE_CODE = re.compile(r"`([^`]*)`")
-#: a number in text: a unit may follow it without a space (8.4x, 5mm), a sentence's period too
+#: a number in text: a unit may follow a decimal without a space (8.4x), a sentence's period too
 TEXT_NUMBER = re.compile(r"(?<![\w.])[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?![\d_]|\.\d)", re.IGNORECASE)
 
 
@@ -104,7 +104,11 @@ def counted_numbers(text: str, table: bool) -> list[str]:
     for pattern in NOT_COUNTED:
         text = pattern.sub(" ", text)
     text = text.replace("|", " ").replace("│", " ").replace("┃", " ").replace("−", "-")
-    nums = TEXT_NUMBER.findall(text)
+    nums = [  # an integer followed by letters is a name (s'21T-D, 2F-85, 3D), not a quantity
+        m.group()
+        for m in TEXT_NUMBER.finditer(text)
+        if not (text[m.end() : m.end() + 1].isalpha() and m.group().lstrip("+-").isdigit())
+    ]
     return nums if table else [x for x in nums if "." in x or "e" in x.lower()]
 
 
@@ -421,7 +425,7 @@ def test_the_rule_counts_results_and_not_references(tmp_path: Path) -> None:
     text = (
         "Python 3.11, numba 0.60.1, 2026-12-07, section 5.2, eq. 5.10 and 5.15, Table 1, "
         "[x](a/1.5.md), `--tol 1e-3`, `LCA.q=5`, `dot-2`, dot-1, ISO 8855, 3 iterations: `q2 = -0.4337`, 4.76 deg, "
-        "1e-9 and 31.45 N/mm, 8.4x, −0.25.\n\n| a | b |\n|---|---|\n| `x` 3 | 0.5 |\n"
+        "1e-9 and 31.45 N/mm, 8.4x, −0.25.\n\n| a | b |\n|---|---|\n| `x` 3 s'21T-D | 0.5 |\n"
     )
     prose, table = _doc(tmp_path, text)
     assert prose.counted() == ["-0.4337", "4.76", "1e-9", "31.45", "8.4", "-0.25"]
