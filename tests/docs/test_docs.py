@@ -92,7 +92,7 @@ TEXT_NUMBER = re.compile(r"(?<![\w.])[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?![\d_]|\.
 def _argument_like(span: str) -> bool:
     """Inline code that is a command, an option or an argument (its numbers are inputs)."""
     s = span.strip()
-    if s.startswith(("kinprop ", "python ", "pip ", ".venv/", "-")) or " --" in s:
+    if s.startswith(("kinprop ", "python ", "pip ", ".venv/", "--")) or re.match(r"-[A-Za-z]", s) or " --" in s:
         return True
     return not re.search(r"\s", s) and bool(re.search(r"[A-Za-z_]", NUMBER.sub("", s)))
 
@@ -425,14 +425,14 @@ def test_the_rule_counts_results_and_not_references(tmp_path: Path) -> None:
     text = (
         "Python 3.11, numba 0.60.1, 2026-12-07, section 5.2, eq. 5.10 and 5.15, Table 1, "
         "[x](a/1.5.md), `--tol 1e-3`, `LCA.q=5`, `dot-2`, dot-1, ISO 8855, 3 iterations: `q2 = -0.4337`, 4.76 deg, "
-        "1e-9 and 31.45 N/mm, 8.4x, −0.25.\n\n| a | b |\n|---|---|\n| `x` 3 s'21T-D | 0.5 |\n"
+        "1e-9 and 31.45 N/mm, 8.4x, −0.25, `-0.5`, `-o out.yaml`.\n\n| a | b |\n|---|---|\n| `x` 3 s'21T-D | 0.5 |\n"
     )
     prose, table = _doc(tmp_path, text)
-    assert prose.counted() == ["-0.4337", "4.76", "1e-9", "31.45", "8.4", "-0.25"]
+    assert prose.counted() == ["-0.4337", "4.76", "1e-9", "31.45", "8.4", "-0.25", "-0.5"]
     assert table.counted() == ["3", "0.5"]
     assert prose.uncovered() == prose.counted()
     marked = _doc(tmp_path, "<!-- doc-test: stated 1e-9 4.76: an input and a tolerance -->\n" + text)[0]
-    assert marked.uncovered() == ["-0.4337", "31.45", "8.4", "-0.25"]
+    assert marked.uncovered() == ["-0.4337", "31.45", "8.4", "-0.25", "-0.5"]
     assert _doc(tmp_path, "<!-- doc-test: stated inputs -->\n" + text)[0].uncovered() == []
 
 
