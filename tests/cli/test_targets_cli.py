@@ -33,7 +33,7 @@ def test_targets_met_from_the_cli_with_achieved_values(examples, tmp_path):
     assert slope["achieved"] == pytest.approx(0.0, abs=1e-12)
     assert set(obj["design_change"]) == {"UBJ.s_i", "UBJ.s_j", "TR.s_i"}
     assert set(obj["hardpoint_moves"]) == {"UBJ.i", "UBJ.j", "TR.i"}
-    assert obj["configurations"] == ["metric:upright.wheel_centre_dz=50", "metric:upright.wheel_centre_dz=-50"]
+    assert obj["configurations"] == ["travel:upright=50", "travel:upright=-50"]
     assert [t["unit"] for t in obj["targets"]] == ["deg", "deg/mm"]
     assert set(obj["bodies"]) == {"chassis", "lca", "uca", "upright"}
     assert set(obj["joint_values"]) == {"LCA", "LBJ", "UCA", "UBJ", "TR"}

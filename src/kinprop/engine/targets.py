@@ -91,6 +91,13 @@ class Configuration:
     #: equilibrium, which has no partials off the constraint manifold); when given, it is used
     #: instead of ``jacobian``
     rates: Callable[[State, Array], Array] | None = None
+    #: the configuration's own engine (a model with drive joints, :mod:`kinprop.analysis.drives`:
+    #: the same design variables by address); None: :func:`solve_targets`' engine
+    engine: Engine | None = None
+    #: its starting state in that engine (None: :func:`solve_targets`' ``start``)
+    start: State | None = None
+    #: its free coordinates (groups, addresses; minus ``held``); None: :func:`solve_targets`'
+    coordinates: tuple[str, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -170,6 +177,8 @@ class TargetResult:
     row_jacobians: tuple[Array, Array, int] | None = None
     #: the :class:`ExternalDesign` variables' values at the end (None: none were free)
     external: Array | None = None
+    #: each configuration's engine (``before``/``after`` are states of these)
+    engines: tuple[Engine, ...] = ()
 
     @property
     def converged(self) -> bool:
@@ -224,6 +233,17 @@ def output_jacobian(engine: Engine, f: OutputMap, state: State, columns: Array) 
     return G
 
 
+def _same_columns(engine: Engine, other: Engine, cols: Array) -> Array:
+    """``engine``'s layout columns ``cols`` in ``other``'s layout (the same variables by key)."""
+    if other is engine:
+        return cols
+    out = np.empty(cols.size, np.int64)
+    for n, c in enumerate(cols.tolist()):
+        v = next(v for v in engine.layout.variables if v.start <= c < v.start + v.size)
+        out[n] = other.layout[v.key].start + c - v.start
+    return out
+
+
 def _pinv(A: Array, rcond: float) -> Array:
     return np.linalg.pinv(A, rcond=rcond) if A.size else A.T.copy()
 
@@ -272,8 +292,10 @@ def solve_targets(
     free coordinates (minus its ``held`` ones); the declared inputs a condition drives are
     unknowns of the outer iteration. ``tol`` bounds ``||Phi||`` and the conditions (relative to
     the engine's round-off floor), ``target_tol`` the target residuals (row units over
-    ``scale``). Every assembly is the engine's solve (:meth:`Engine.solve`). ``external``:
-    free variables outside the state (:class:`ExternalDesign`; then ``configurations`` are
+    ``scale``). Every assembly is the engine's solve (:meth:`Engine.solve`) — a configuration's
+    own (:attr:`Configuration.engine`, e.g. with drive joints) when it has one; ``free``
+    addresses name the same variables in every engine. ``external``: free variables outside
+    the state (:class:`ExternalDesign`; then ``configurations`` are
     ``external.configurations(external.start)``)."""
     e0 = np.zeros(0) if external is None else np.asarray(external.start, dtype=float).ravel()
     ne = e0.size
@@ -285,15 +307,19 @@ def solve_targets(
     if set(pcols.tolist()) & qset:
         raise AddressError("targets: --free names design variables (hardpoints, s, C, l); coordinates move anyway")
     goals, inner, driven = [], [], []
+    engs = [cfg.engine or engine for cfg in configurations]
+    starts = [start if cfg.start is None else cfg.start for cfg in configurations]
+    pc = [_same_columns(engine, eng, pcols) for eng in engs]  # the free design columns in each engine
     conditioned = {int(k) for r in rows if r.hard for k, _, _ in r.terms}
     for n, cfg in enumerate(configurations):
-        st, _, keys = engine.apply(start, cfg.held)
+        eng, coords = engs[n], coordinates if cfg.coordinates is None else cfg.coordinates
+        st, _, keys = eng.apply(starts[n], cfg.held)
         goals.append(st)
-        inner.append(engine.columns(coordinates, keys))
-        # the declared inputs are held, unless a condition of this configuration drives them
-        # (e.g. wheel travel sets the lower arm's angle): then they are outer unknowns
-        drives = n in conditioned and "q" in coordinates
-        driven.append(np.setdiff1d(engine.columns([*coordinates, "inputs"], keys), inner[-1]) if drives
+        inner.append(eng.columns(coords, keys))
+        # the declared inputs are held, unless a condition row of this configuration drives them
+        # (e.g. a point's height sets the lower arm's angle): then they are outer unknowns
+        drives = n in conditioned and "q" in coords
+        driven.append(np.setdiff1d(eng.columns([*coords, "inputs"], keys), inner[-1]) if drives
                       else np.zeros(0, np.int64))  # fmt: skip
     wfull = np.ones(engine.n_columns)
     for sel, w in (weights or {}).items():
@@ -303,7 +329,7 @@ def solve_targets(
     hard = [r for r in rows if r.hard]
     soft = [r for r in rows if not r.hard]
     bounded = any(r.bound for r in soft)
-    floor = max(tol, engine.roundoff_floor(start))
+    floor = max(tol, *(eng.roundoff_floor(st) for eng, st in zip(engs, starts, strict=True)))
     solve_tol = min(tol, 1e-10)
     uoffs = np.cumsum([0] + [d.size for d in driven])
 
@@ -321,7 +347,7 @@ def solve_targets(
     def assemble(froms: Sequence[State], targets: Sequence[State]) -> list[Solution]:
         """Every configuration re-assembled by the engine at ``targets``' design and driven
         inputs, followed from ``froms`` on their branch."""
-        return [engine.solve(a, inner[k], target=b, tol=solve_tol) for k, (a, b) in enumerate(zip(froms, targets,
+        return [engs[k].solve(a, inner[k], target=b, tol=solve_tol) for k, (a, b) in enumerate(zip(froms, targets,
                 strict=True))]  # fmt: skip
 
     def residuals(sts: Sequence[State], with_design: bool, e: Array) -> tuple[Array, Array, list[Array]]:
@@ -343,18 +369,19 @@ def solve_targets(
         cfgs = configs(e)
         reduced = []
         for k, st in enumerate(sts):
-            zc = np.concatenate([driven[k], pcols[:npc]])
-            _, J = engine.evaluate(st)
+            eng = engs[k]
+            zc = np.concatenate([driven[k], pc[k][:npc]])
+            _, J = eng.evaluate(st)
             dq = -np.linalg.lstsq(J[:, inner[k]], J[:, zc], rcond=None)[0] if zc.size else np.zeros((inner[k].size, 0))
             cols = np.concatenate([inner[k], zc])
             cfg = cfgs[k]
             if cfg.rates is not None:  # along the tangent directions e_z + dq/dz
-                X = np.zeros((zc.size, engine.n_columns))
+                X = np.zeros((zc.size, eng.n_columns))
                 X[np.arange(zc.size), zc] = 1.0
                 X[:, inner[k]] = dq.T
                 red = np.asarray(cfg.rates(st, X), float)
             else:
-                G = cfg.jacobian(st, cols) if cfg.jacobian is not None else output_jacobian(engine, cfg.outputs, st,
+                G = cfg.jacobian(st, cols) if cfg.jacobian is not None else output_jacobian(eng, cfg.outputs, st,
                                                                                             cols)  # fmt: skip
                 red = G[:, : inner[k].size] @ dq + G[:, inner[k].size :]
             if nx:  # the external variables move no coordinate: their partials alone
@@ -381,11 +408,11 @@ def solve_targets(
         the shared design moved (:meth:`Engine.retract`), its other coordinates as they are."""
         out = []
         for k, st in enumerate(sts):
-            dx = np.zeros(engine.n_columns)
+            dx = np.zeros(engs[k].n_columns)
             dx[driven[k]] = dz[uoffs[k] : uoffs[k + 1]]
             if with_design and pcols.size:
-                dx[pcols] = dz[uoffs[-1] : uoffs[-1] + pcols.size]
-            out.append(engine.retract(st, dx))
+                dx[pc[k]] = dz[uoffs[-1] : uoffs[-1] + pcols.size]
+            out.append(engs[k].retract(st, dx))
         return out
 
     def iterate(sols: list[Solution], with_design: bool, e: Array) -> tuple[list[Solution], Array, int, bool,
@@ -441,7 +468,7 @@ def solve_targets(
     if np.any(~(wext > 0) | ~np.isfinite(wext)):
         raise AddressError(f"the external variables' weights must be positive, found {wext.tolist()}")
     # 1. every configuration with the starting design (the "before" curves)
-    first = assemble([start] * len(goals), goals)
+    first = assemble(starts, goals)
     if all(s.converged for s in first):
         before_sols, _, it0, ok0, _ = iterate(first, False, e0)
     else:
@@ -453,7 +480,7 @@ def solve_targets(
         return TargetResult(Status.NOT_CONVERGED, "not assembled: a configuration could not be reached with "
                             "the starting design (its conditions or Phi did not converge)", it0, tuple(rows),
                             tuple(configurations), tuple(before), tuple(before), vb, np.full_like(vb, np.nan),
-                            float("nan"), {}, solutions=tuple(before_sols))  # fmt: skip
+                            float("nan"), {}, solutions=tuple(before_sols), engines=tuple(engs))  # fmt: skip
     # 2. the design change
     after_sols, e1, it, ok, hist = iterate(list(before_sols), True, e0)
     after = [s.state for s in after_sols]
@@ -461,7 +488,7 @@ def solve_targets(
     configurations = configs(e1)
     va = _row_values(rows, outs)
     # Solution.residual's figure (scaled ||Phi||, metres) over all configurations, and the conditions'
-    phi = float(np.linalg.norm(np.concatenate([engine.residual(s) * engine.row_scale for s in after])))
+    phi = float(np.linalg.norm(np.concatenate([e.residual(s) * e.row_scale for e, s in zip(engs, after, strict=True)])))
     hard_res = float(np.hypot(phi, np.linalg.norm(h)))
     conflicts: list[tuple[tuple[str, float], ...]] = []
     final = None
@@ -491,13 +518,13 @@ def solve_targets(
         names = "; ".join(" vs ".join(n for n, _ in g) for g in conflicts) or "none identified"
         msg = (f"targets cannot all be met: least-squares compromise after {it} iterations, worst miss {worst:.3g}; "
                f"conflicting: {names}")  # fmt: skip
-    change = _design_change(engine, before[0], after[0], pcols)
+    change = _design_change(engs[0], before[0], after[0], pc[0])
     if external is not None:
         change |= {name: np.array([e1[k] - e0[k]]) for k, name in enumerate(external.names)}
     return TargetResult(Status.CONVERGED if ok else Status.NOT_CONVERGED, msg, it0 + it, tuple(rows),
                         tuple(configurations), tuple(before), tuple(after), vb, va, hard_res, change,
                         tuple(conflicts), tuple(hist), pcols, met, tuple(after_sols), final,
-                        None if external is None else np.array(e1))  # fmt: skip
+                        None if external is None else np.array(e1), tuple(engs))  # fmt: skip
 
 
 __all__ = ["Configuration", "ExternalDesign", "OutputMap", "Row", "TargetResult", "output_jacobian", "solve_targets"]
