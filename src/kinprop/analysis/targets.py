@@ -10,9 +10,10 @@ A target spec (CLI ``--target``, Python ``propagate_targets(model, [...])``)::
   (``joint:UBJ.euler[1]``, ``joint:B.displacement``; :mod:`kinprop.propagation.poses`).
 * ``CONDITION`` puts the target in a configuration of its own; conditions hold exactly:
   ``JOINT.q=V`` / ``JOINT.q[k]=V`` holds a coordinate (not free there);
-  ``travel=V`` is the wheel travel (``metric:WHEEL.wheel_centre_dz = V``: the suspension's free
-  coordinates move until the wheel centre is V above its reference); any other ``OUTPUT=V`` is
-  a condition row of its own. Targets with the same conditions share a configuration; a
+  a drive — ``travel=V`` / ``travel:WHEEL=V`` (or ``metric:WHEEL.wheel_centre_dz=V``), ``roll=V``,
+  ``steer:WHEEL=V`` — holds the drive joint of :mod:`kinprop.analysis.drives` at V (the joints
+  ``sweep --drive`` and ``camber@travel=50`` use; the input it releases moves); any other
+  ``OUTPUT=V`` is a condition row of its own. Targets with the same conditions share a configuration; a
   target without conditions lives in the base configuration (every coordinate free).
 * ``slope:OUTPUT@COND=A..B=V``: the slope ``(OUTPUT(B) - OUTPUT(A)) / (B - A)`` over a single
   condition's range (e.g. bump steer ``slope:toe@travel=-50..50=0``), unit output per condition.
@@ -609,6 +610,8 @@ class TargetPropagation:
                 k = 1.0 / RADIANS_PER["deg"]
             elif kind in ("deg", "gain") and not deg:  # a metric angle (degrees inside) in a radian model
                 k = RADIANS_PER["deg"]
+            if spec.slope is not None and _kind(self.model, spec.slope[0][0].output) == "rad":
+                k *= RADIANS_PER[self.model.units.get("angle", "rad")]  # per radian inside: per model angle unit
             row = {"target": spec.text, "output": spec.output, "unit": self.unit(spec)}
             rows.append(row | {n: t[n] * k for n in ("value", "before", "achieved", "miss")})
         return rows
