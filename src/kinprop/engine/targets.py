@@ -72,6 +72,17 @@ BLOWUP = 10.0
 STALL = 1e-9
 #: a left singular vector component at least this large names a target in a conflict
 CONFLICT_WEIGHT = 0.1
+#: the trust region of the design step (SI: metres and radians over sqrt(weight)): the first
+#: radius and the largest, and the largest total design change, as fractions of the
+#: mechanism's size (:attr:`Engine.length_scale`, at least one metre)
+RADIUS_START, RADIUS_MAX, REACH = 1.0, 1.0, 1.0
+#: a step is taken when the residual falls by at least this fraction of the linear model's
+#: predicted fall; the radius doubles above ``GOOD`` (when the step used it), shrinks below ``POOR``
+ACCEPT, POOR, GOOD = 1e-4, 0.25, 0.75
+#: a least-squares compromise is stationary when the part of the targets' miss ``r`` that the
+#: linear model can remove is at most ``GTOL |r|`` (``|U^T r|``, ``U`` the range of the targets'
+#: Jacobian on the conditions' null space): the full step would lower ``|r|^2`` by ``GTOL^2``
+GTOL = 1e-8
 
 OutputMap = Callable[[State], Array]
 
@@ -261,15 +272,52 @@ def _design_change(engine: Engine, a: State, b: State, pcols: Array) -> dict[str
     return out
 
 
-def _step(Hy: Array, h: Array, Ty: Array, t: Array) -> Array:
+def _step(Hy: Array, h: Array, Ty: Array, t: Array, radius: float = np.inf, sv_floor: float = 0.0
+          ) -> tuple[Array, float]:  # fmt: skip
     """The hierarchical minimum-norm step (module docstring): the hard rows first, the target
-    rows in what they leave free, in the scaled unknowns ``y``."""
+    rows in what they leave free, in the scaled unknowns ``y``; the targets' part damped
+    (Levenberg-Marquardt) to at most ``radius`` long, without the directions whose singular
+    value is below ``sv_floor`` (they change no target). Also ``|U^T r| / |r|`` of the targets'
+    linear least-squares problem ``A v = r`` there (0: stationary, a compromise; 1: consistent)."""
     Hp = _pinv(Hy, RCOND_HARD)
     yh = -Hp @ h
     if not t.size:
-        return yh
+        return yh, 0.0
     Nm = np.eye(Hy.shape[1]) - Hp @ Hy
-    return yh + Nm @ (_pinv(Ty @ Nm, RCOND_TARGET) @ (-t - Ty @ yh))
+    A, r = Ty @ Nm, -t - Ty @ yh
+    U, sv, Vt = np.linalg.svd(A, full_matrices=False)
+    keep = sv > max(RCOND_TARGET * sv.max(initial=0.0), sv_floor, 1e-300)
+    U, sv, Vt = U[:, keep], sv[keep], Vt[keep]
+    c = U.T @ r
+    rn = float(np.linalg.norm(r))
+    cosine = float(np.linalg.norm(c)) / rn if rn > 0 else 0.0
+    return yh + Vt.T @ _damped(sv, c, radius), cosine
+
+
+def _damped(sv: Array, c: Array, radius: float) -> Array:
+    """The coefficients ``sv c / (sv^2 + mu)`` of the damped least-squares step along the right
+    singular vectors, with the smallest ``mu >= 0`` that makes it at most ``radius`` long."""
+    if not sv.size:
+        return c * 0.0
+    v = c / sv
+    if float(np.linalg.norm(v)) <= radius:
+        return v
+    # |v(mu)| falls with mu, and is at most |sv c| / mu: bisection on log(mu) below that bound
+    lo, hi = (np.log(float(np.linalg.norm(sv * c)) / radius) + d for d in (-70.0, 0.0))
+    while hi - lo > 1e-10:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if float(np.linalg.norm(sv * c / (sv**2 + np.exp(mid)))) > radius else (lo, mid)
+    return sv * c / (sv**2 + np.exp(hi))
+
+
+def _within(total: Array, y: Array, reach: float) -> float:
+    """The largest ``a`` in [0, 1] with ``|total + a y| <= reach``."""
+    if float(np.linalg.norm(total + y)) <= reach:
+        return 1.0
+    a, b, c = float(y @ y), 2.0 * float(total @ y), float(total @ total) - reach**2
+    if a <= 0.0 or c >= 0.0:
+        return 0.0
+    return max(0.0, min(1.0, (-b + np.sqrt(b * b - 4.0 * a * c)) / (2.0 * a)))
 
 
 def solve_targets(
@@ -415,20 +463,41 @@ def solve_targets(
             out.append(engs[k].retract(st, dx))
         return out
 
+    limited = [False]  # the last design iteration ended on the design-change limit (REACH)
+
+    def metric(with_design: bool) -> Array:
+        """``dz = sw y`` over the outer unknowns: ``y`` in metres and radians over sqrt(weight),
+        so that a model in mm and in m take the same steps (:attr:`Engine.si_scale`)."""
+        w = np.concatenate([np.ones(int(uoffs[-1]))] + ([wfull[pcols], wext] if with_design else []))
+        si = np.concatenate([engs[k].si_scale[driven[k]] for k in range(len(engs))]
+                            + ([engine.si_scale[pcols], np.full(ne, engine.unit)] if with_design else []))  # fmt: skip
+        return np.sqrt(w) / si
+
+    size = max(1.0, (engine.length_scale or 1.0) * engine.unit)  # the mechanism's size, metres
+    # a direction along which a change of the mechanism's size moves the targets less than a
+    # thousandth of their tolerance changes none (round-off, e.g. caster by a tie-rod point)
+    flat = 1e-3 * target_tol / size
+
     def iterate(sols: list[Solution], with_design: bool, e: Array) -> tuple[list[Solution], Array, int, bool,
                                                                               list[float]]:  # fmt: skip
         """Gauss-Newton on the conditions and targets over ``z``; every configuration stays an
-        engine assembly (a step whose assembly fails or that blows a residual up is halved)."""
+        engine assembly. With targets, a trust-region (Levenberg-Marquardt) step in SI units
+        over sqrt(weight): taken only when the miss falls, the radius shrinking when an assembly
+        fails or the linear model is poor; the design's total change at most ``REACH`` times
+        the mechanism's size. Without (the conditions alone): halved when an assembly fails or
+        the residual blows up tenfold."""
         hist: list[float] = []
-        w = np.concatenate([np.ones(int(uoffs[-1]))] + ([wfull[pcols], wext] if with_design else []))
-        sw = np.sqrt(w)
-        nx = ne if with_design else 0
+        nu, nx = int(uoffs[-1]), ne if with_design else 0
+        sw = metric(with_design)
+        radius, total, reach = RADIUS_START * size, np.zeros(sw.size - nu), REACH * size
         h, t, _ = residuals([s.state for s in sols], with_design, e)
+        lm = with_design and t.size > 0
         for it in range(max_iter + 1):
             hist.append(float(np.sqrt(h @ h + t @ t)))
             sts = [s.state for s in sols]
             Hj, Tj = jacobians(sts, with_design, e, t)
-            dz = sw * _step(Hj * sw, h, Tj * sw, t)
+            y, cosine = _step(Hj * sw, h, Tj * sw, t, sv_floor=flat)
+            dz = sw * y
             hn = float(np.linalg.norm(h))
             # a small step is done unless it still changes the targets (a miss closed by a step
             # of a rotation column, radians, is a tiny dz too)
@@ -436,31 +505,63 @@ def solve_targets(
                 not t.size or float(np.max(np.abs(Tj @ dz), initial=0.0)) < target_tol * 1e-3)  # fmt: skip
             # with bounds the compromise is approached linearly: stalled (relative 1e-9) is done
             stalled = bounded and with_design and it > 0 and hist[-2] - hist[-1] <= STALL * hist[-1]
-            if hn < floor and (
-                small or stalled or t.size == 0 or float(np.max(np.abs(t), initial=0.0)) < target_tol * 1e-3
-            ):
+            met = t.size > 0 and float(np.max(np.abs(t), initial=0.0)) < target_tol * 1e-3
+            if hn < floor and (small or stalled or cosine <= GTOL or t.size == 0 or met):
+                if met and lm:  # one more full step, kept when it lowers the miss
+                    trial = assemble(sts, moved(sts, dz, with_design))
+                    e2 = e + dz[dz.size - nx :] if nx else e
+                    if all(s.converged for s in trial):
+                        h2, t2, _ = residuals([s.state for s in trial], with_design, e2)
+                        if float(h2 @ h2 + t2 @ t2) < float(h @ h + t @ t) and float(np.linalg.norm(h2)) < floor:
+                            return trial, e2, it + 1, True, [*hist, float(np.sqrt(h2 @ h2 + t2 @ t2))]
                 return sols, e, it, True, hist
             if it == max_iter or not np.all(np.isfinite(dz)):
                 break
-            # full steps (the conditions, off at second order after a design step, are re-closed
-            # by the next); halved when an assembly fails or the residual blows up tenfold
-            lam, tn = 1.0, float(np.linalg.norm(t))
-            for _ in range(8):
-                trial = assemble(sts, moved(sts, lam * dz, with_design))
-                e2 = e + lam * dz[dz.size - nx :] if nx else e
+            merit, taken = float(h @ h + t @ t), False
+            for _ in range(30 if lm else 8):
+                if lm:  # the trust-region step, kept inside the design-change limit
+                    y = _step(Hj * sw, h, Tj * sw, t, radius, flat)[0]
+                    a = _within(total, y[nu:], reach)
+                    if a <= 1e-9:  # on the limit and pulled outwards: the best within it
+                        limited[0] = hn < floor
+                        return sols, e, it, hn < floor, hist
+                    y = a * y
+                    dz = sw * y
+                trial = assemble(sts, moved(sts, dz, with_design))
+                e2 = e + dz[dz.size - nx :] if nx else e
                 if all(s.converged for s in trial):
                     h2, t2, _ = residuals([s.state for s in trial], with_design, e2)
-                    h2n, t2n = float(np.linalg.norm(h2)), float(np.linalg.norm(t2))
-                    # with bounds (a non-smooth residual) a step must not make it larger
-                    grow = 1.0 if bounded and with_design else BLOWUP
-                    grew = np.hypot(h2n, t2n) > grow * np.hypot(hn, tn) + np.sqrt(floor)
-                    if np.isfinite(h2n + t2n) and not grew:
-                        break
-                lam *= 0.5
-            else:
-                if bounded and with_design and hn < floor:  # no step lowers the residual: a compromise
+                    new = float(h2 @ h2 + t2 @ t2)
+                    if lm and np.isfinite(new):
+                        lh, lt = h + Hj @ dz, t + Tj @ dz
+                        pred = merit - float(lh @ lh + lt @ lt)
+                        rho = (merit - new) / pred if pred > 0 else -1.0
+                        step = float(np.linalg.norm(y[nu:])) if y.size > nu else float(np.linalg.norm(y))
+                        if rho > GOOD and step >= 0.99 * radius:
+                            radius = min(2.0 * radius, RADIUS_MAX * size)
+                        elif rho < POOR:
+                            radius = max(0.5 * step, 1e-300)
+                        if rho > ACCEPT:
+                            taken = True
+                            break
+                    elif not lm:
+                        # with bounds (a non-smooth residual) a step must not make it larger
+                        grow = 1.0 if bounded and with_design else BLOWUP
+                        if np.isfinite(new) and np.sqrt(new) <= grow * np.sqrt(merit) + np.sqrt(floor):
+                            taken = True
+                            break
+                elif lm:
+                    radius = 0.5 * float(np.linalg.norm(y[nu:] if y.size > nu else y))
+                if not lm:
+                    dz = 0.5 * dz
+                if lm and radius <= 1e-12 * size:
+                    break
+            if not taken:
+                if with_design and hn < floor:  # no step, however short, lowers the miss: a compromise
                     return sols, e, it, True, hist
                 break
+            if lm:
+                total = total + y[nu:]
             sols, h, t, e = trial, h2, t2, e2
         return sols, e, max_iter, False, hist
 
@@ -495,11 +596,11 @@ def solve_targets(
     if t.size:
         Hj, Tj = jacobians(after, True, e1, t)
         final = (Hj, Tj, int(uoffs[-1]))
-        sw = np.sqrt(np.concatenate([np.ones(int(uoffs[-1])), wfull[pcols], wext]))
+        sw = metric(True)
         Hy, Ty = Hj * sw, Tj * sw
         TN = Ty @ (np.eye(sw.size) - _pinv(Hy, RCOND_HARD) @ Hy)
         U, sv, _ = np.linalg.svd(TN)
-        rank = int(np.sum(sv > RCOND_TARGET * max(sv.max(initial=0.0), 1e-300))) if sv.size else 0
+        rank = int(np.sum(sv > max(RCOND_TARGET * sv.max(initial=0.0), flat, 1e-300))) if sv.size else 0
         for m in range(rank, U.shape[1]):
             u = U[:, m]
             if abs(u @ t) > target_tol:
@@ -518,6 +619,10 @@ def solve_targets(
         names = "; ".join(" vs ".join(n for n, _ in g) for g in conflicts) or "none identified"
         msg = (f"targets cannot all be met: least-squares compromise after {it} iterations, worst miss {worst:.3g}; "
                f"conflicting: {names}")  # fmt: skip
+        if limited[0]:  # the miss still falls outwards: the best within the limit of a design change
+            msg = (f"targets cannot be met within a design change of {REACH * size:.3g} m (the mechanism's size; "
+                   f"metres and radians over sqrt(weight)): the best there after {it} iterations, worst miss "
+                   f"{worst:.3g}")  # fmt: skip
     change = _design_change(engs[0], before[0], after[0], pc[0])
     if external is not None:
         change |= {name: np.array([e1[k] - e0[k]]) for k, name in enumerate(external.names)}
