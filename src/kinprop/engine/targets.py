@@ -255,6 +255,20 @@ def _same_columns(engine: Engine, other: Engine, cols: Array) -> Array:
     return out
 
 
+def _response(engine: Engine, J: Array, inner: Array, zc: Array) -> Array:
+    """``dq/dz = -Phi_q^+ Phi_z`` of the coordinates ``inner`` to the columns ``zc``: with
+    freedom left (mobility), the least change in metres and radians, as the engine's assembly
+    takes it (:meth:`Engine.weights_for`), so the linear model is the assembly's in any unit."""
+    if not zc.size:
+        return np.zeros((inner.size, 0))
+    Js = J * engine.row_scale[:, None]
+    metric = engine.weights_for(inner, None)
+    if metric is None:
+        return -np.linalg.lstsq(Js[:, inner], Js[:, zc], rcond=None)[0]
+    d = np.sqrt(metric)
+    return -d[:, None] * np.linalg.lstsq(Js[:, inner] * d, Js[:, zc], rcond=None)[0]
+
+
 def _pinv(A: Array, rcond: float) -> Array:
     return np.linalg.pinv(A, rcond=rcond) if A.size else A.T.copy()
 
@@ -420,7 +434,7 @@ def solve_targets(
             eng = engs[k]
             zc = np.concatenate([driven[k], pc[k][:npc]])
             _, J = eng.evaluate(st)
-            dq = -np.linalg.lstsq(J[:, inner[k]], J[:, zc], rcond=None)[0] if zc.size else np.zeros((inner[k].size, 0))
+            dq = _response(eng, J, inner[k], zc)
             cols = np.concatenate([inner[k], zc])
             cfg = cfgs[k]
             if cfg.rates is not None:  # along the tangent directions e_z + dq/dz
