@@ -18,12 +18,16 @@ step is the weighted minimum-norm solution of the linearised rows, with the hard
 
     y_h = -pinv(H_y) H,    N = I - pinv(H_y) H_y,    y = y_h + N pinv(T_y N) (-T - T_y y_h)
 
-the minimum-norm step to the least-squares compromise of the targets. The rows' Jacobians over
+the minimum-norm step to the least-squares compromise of the targets (``y`` in metres and
+radians over sqrt(weight): :attr:`Engine.si_scale`), its targets' part a trust-region
+(Levenberg-Marquardt) step: ``pinv(T_y N)`` damped to the radius, a step taken only when the
+miss falls, the design's total change within the mechanism's size (``REACH``), so an
+unreachable target ends at the least-squares best within reach. The rows' Jacobians over
 ``z`` eliminate the coordinates by the implicit-function theorem at each assembly,
 ``dq_k/dz = -Phi_q^+ Phi_z`` (the engine's analytic ``Phi_x``, Table 1), the design step is
 applied on the manifold (:meth:`Engine.retract`: additive for q, s', l; exponential map for C)
-and the configurations re-assembled by the engine; a step is halved only when an assembly fails
-or the residual grows tenfold.
+and the configurations re-assembled by the engine; the conditions alone (the "before" solve)
+take Newton steps halved only when an assembly fails or the residual grows tenfold.
 
 A configuration's output rows use its ``jacobian`` when given — :mod:`kinprop.analysis.targets`
 gives analytic ones for points, hardpoints, distances, coordinates, design variables and the
