@@ -54,9 +54,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from kinprop.analysis.context import OutputContext, find_point
-from kinprop.analysis.metrics import is_first_order, wheel_bodies
+from kinprop.analysis.metrics import wheel_bodies
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
-from kinprop.analysis.sensitivity import output_sensitivity_matrix
+from kinprop.analysis.sensitivity import OnBase, output_sensitivity_matrix
 from kinprop.analysis.statics import LOAD_PREFIXES
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine, State
@@ -610,8 +610,10 @@ def driven_sensitivity(
     module docstring) with respect to the design addresses ``wrt`` (no ``hardpoint:``; see
     :func:`kinprop.propagation.hardpoints.global_columns`), in solver units: at each drive
     position solved from the model's state, the implicit-function tangent with the drive held
-    (:func:`kinprop.analysis.sensitivity.output_sensitivity_matrix`); a slope's is the
-    difference of its two ends' over the span."""
+    (:func:`kinprop.analysis.sensitivity.output_sensitivity_matrix`), the outputs' derivatives
+    along it the base model's (a first-order metric, ``camber_gain@travel=50``, exact: its
+    velocity analysis by the suspension's own inputs, as :func:`outputs_at` evaluates it); a
+    slope's is the difference of its two ends' over the span."""
     per: dict[tuple, dict[str, Array]] = {}
     columns: list[str] = []
     rows: dict[str, DrivenOutput] = {}
@@ -619,9 +621,7 @@ def driven_sensitivity(
     for calc in DrivenOutputs(model, of, free=free, tol=tol, max_iter=max_iter).parts:
         for s in calc.specs:
             rows[s.name] = s
-            if (s.output.startswith("metric:") or "." not in s.output) and is_first_order(s.output.split(".")[-1]):
-                raise AddressError(f"--of {s.name!r}: derivatives of first-order metrics at a drive position are "
-                                   "not available (their velocity analysis would hold the drive)")  # fmt: skip
+        view, cols = base_view(calc.base_engine, calc.engine)
         held = [k for cfg in calc.configs for k, _ in cfg if not is_drive(k)]
         loose = [k for k in held if k.split(".")[0] not in model.mechanism.inputs]
         if loose:
@@ -634,8 +634,12 @@ def driven_sensitivity(
             names = list(dict.fromkeys(s.output for s in calc.specs if cfg in s.configs))
             drives = [k for k, _ in cfg if is_drive(k)]
             loose_free = calc.driven.free(free, drives)
-            D, out_rows, columns, _ = output_sensitivity_matrix(at, names, wrt, loose_free, weights,
-                                                                engine=calc.engine, units="solver")  # fmt: skip
+            # the tangent with the drive held (the augmented model's), the outputs the base
+            # model's there: a first-order metric moves the suspension by its own inputs
+            base = OnBase(calc.driven.base_of(calc.engine, states[c][0]), calc.base_engine, view, cols)
+            D, out_rows, columns, _ = output_sensitivity_matrix(
+                at, names, wrt, loose_free, weights, engine=calc.engine, units="solver", base=base
+            )
             per[(id(calc), cfg)] = dict(zip(out_rows, np.asarray(D), strict=True))
             for s in calc.specs:
                 if cfg in s.configs:
