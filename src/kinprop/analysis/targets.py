@@ -782,7 +782,8 @@ def propagate_targets(
                 _config_outputs(m, eng, outs[k]),
                 {c.output: [c.value] for c in cs if c.held},
                 _config_jacobian(m, eng, outs[k]) if analytic and not any(map(is_load_output, outs[k])) else None,
-                _config_rates(m, eng, outs[k]) if analytic and any(map(is_load_output, outs[k])) else None,
+                # loads have no partials off the constraint manifold: their rates, also without analytic
+                _config_rates(m, eng, outs[k]) if any(map(is_load_output, outs[k])) else None,
             )
             cfgs.append(cfg if drives[k] is None else drives[k].lift(cfg, cs))  # type: ignore[union-attr]
         return cfgs

@@ -514,6 +514,8 @@ def solve_targets(
             hist.append(float(np.sqrt(h @ h + t @ t)))
             sts = [s.state for s in sols]
             Hj, Tj = jacobians(sts, with_design, e, t)
+            if not (np.all(np.isfinite(Hj)) and np.all(np.isfinite(Tj))):
+                break  # an output's derivative is not finite there: not converged
             y, cosine = _step(Hj * sw, h, Tj * sw, t, sv_floor=flat)
             dz = sw * y
             hn = float(np.linalg.norm(h))
@@ -613,6 +615,7 @@ def solve_targets(
     final = None
     if t.size:
         Hj, Tj = jacobians(after, True, e1, t)
+    if t.size and np.all(np.isfinite(Hj)) and np.all(np.isfinite(Tj)):
         final = (Hj, Tj, int(uoffs[-1]))
         sw = metric(True)
         Hy, Ty = Hj * sw, Tj * sw
