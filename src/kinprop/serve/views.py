@@ -11,11 +11,11 @@ import numpy as np
 
 from kinprop.analysis.metrics import wheel_bodies
 from kinprop.analysis.outputs import output_names
-from kinprop.analysis.points import joint_hardpoints, named_points
+from kinprop.analysis.points import hardpoint_table, joint_hardpoints, named_points
 from kinprop.analysis.units import unit_of
 from kinprop.engine.units import from_solver_units
 from kinprop.model import Model
-from kinprop.plot.report import coordinate_components, default_curve_outputs, hardpoint_rows
+from kinprop.plot.report import coordinate_components, default_curve_outputs
 from kinprop.plot.scene import Scene, bounds, build_scene, scale
 from kinprop.plot.style import AXIS, FADED_ALPHA, MARKERS, POINT, segment_colour
 from kinprop.serve.session import Session
@@ -165,7 +165,7 @@ def state_json(
         "units": dict(model.units),
         "variables": variables_json(model, session),
         "hardpoint_style": hardpoint_style,
-        "hardpoint_rows": hardpoint_rows(model),
+        "hardpoint_rows": hardpoint_table(model),
         "status_line": session.status_line(),
         "coordinates": {k: _xyz(v) for k, v in model.coordinates.items()},
         "hardpoints": joint_hardpoints(model),
