@@ -49,11 +49,11 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from kinprop.analysis.context import OutputContext, find_point
+from kinprop.analysis.context import OutputContext, find_point, locate_point
 from kinprop.analysis.metrics import wheel_bodies
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
 from kinprop.analysis.sensitivity import OnBase, output_sensitivity_matrix
@@ -64,7 +64,7 @@ from kinprop.engine import compile as compile_engine
 from kinprop.engine.units import METRES_PER, RADIANS_PER
 from kinprop.errors import AddressError, ConvergenceError
 from kinprop.model import Design, Model
-from kinprop.model.design import as_coordinates, parse_address
+from kinprop.model.design import parse_address
 from kinprop.model.mechanism import Body, Joint, Mechanism
 from kinprop.propagation.element_points import element_ends, with_element_ends
 from kinprop.spatial import Array
@@ -111,6 +111,19 @@ class Driven:
     released: Mapping[str, tuple[str, ...]]
     angle: Mapping[str, bool]
     joints: frozenset[str] = field(default_factory=frozenset)
+    #: the augmented model's engine (compiled once, by :func:`augment`)
+    engine: Engine | None = None
+    #: the model's own engine when one was given or needed (a roll drive), else None: then the
+    #: augmented engine evaluates the model's outputs too (:meth:`follower`)
+    base_engine: Engine | None = None
+
+    def follower(self) -> Model:
+        """The augmented model with the model's own inputs only: its drive joints follow the
+        wheels, so its motions, first-order metrics and statics are the model's (a travel or
+        steer joint adds one coordinate and one row, and carries no load). Not for a roll joint,
+        which ties the wheels."""
+        mech = self.model.mechanism
+        return replace(self.model, mechanism=replace(mech, inputs=self.base.mechanism.inputs))
 
     def free(self, free: Sequence[str], drives: Sequence[str]) -> tuple[str, ...]:
         """The free set of a solve driving ``drives``: ``free``, the inputs they release and the
@@ -151,11 +164,16 @@ def wheel_for(model: Model, name: str) -> list[str]:
 
 
 def _reference(model: Model, wheel: str) -> Array:
+    """The global ``wheel_centre_ref`` of ``wheel`` (a fixed body's point: no kinematics)."""
     found = find_point(model, wheel, "wheel_centre_ref", on_wheel=False)
     if found is None:
         raise AddressError(f"wheel travel of {wheel!r} needs its reference: a fixed-body point "
                            f"{wheel}.wheel_centre_ref (or wheel_centre_ref with one wheel)")  # fmt: skip
-    return OutputContext.of(model).body_point(*found)
+    source = locate_point(model, *found)
+    if source[0] == "joint":  # a joint's point on the fixed body: where that joint's frame is
+        return OutputContext.of(model).body_point(*found)
+    b = model.mechanism.body(found[0])
+    return b.r + b.A @ np.asarray(source[2], dtype=float)
 
 
 def _fixed(model: Model) -> Body:
@@ -215,20 +233,25 @@ def drive_joints(model: Model) -> set[str]:
 
 def augment(model: Model, drives: Sequence[str], engine: Engine | None = None) -> Driven:
     """``model`` with the drive joints of ``drives`` (``travel:WHEEL``, ``roll``; module
-    docstring), placed at the model's state."""
-    eng = engine if engine is not None else compile_engine(model)
+    docstring), placed at the model's state, and its engine (:attr:`Driven.engine`, compiled
+    here once). ``engine``: the model's, when the caller has it. Without it the augmented engine
+    serves for the model's own kinematics too (the drive joints add bodies, never move the
+    model's), and for the inputs a drive releases: a travel or steer joint that is not driven
+    follows its wheel (one coordinate, one row), so the model's motions are unchanged; a roll
+    joint ties two wheels, so a roll drive compiles the model for those."""
     mech = model.mechanism
     ground = _fixed(model)
     Ag, rg = ground.A, ground.r
     bodies, joints, inputs = list(mech.bodies), list(mech.joints), list(mech.inputs)
-    design: dict[str, Array] = {}
     addresses: dict[str, tuple[str, ...]] = {}
-    released: dict[str, tuple[str, ...]] = {}
+    released: dict[str, tuple[tuple[str, str], ...]] = {}  # (kind, wheel): resolved once the engine exists
     angle: dict[str, bool] = {}
     added: set[str] = set()
-    ctx = OutputContext.of(model, engine=eng)
     taken = set(mech.body_names) | set(mech.joint_names)
     present = drive_joints(model)
+    holds: list[tuple[str, str, Array]] = []  # (hold joint, wheel, point on the plane body)
+    steers: list[tuple[str, str, str]] = []  # (steer joint, its hold, wheel)
+    fixed: dict[str, Array] = {}  # design of the drive joints that needs no kinematics
 
     def fresh(name: str) -> str:
         if name in taken:
@@ -239,20 +262,15 @@ def augment(model: Model, drives: Sequence[str], engine: Engine | None = None) -
     def hold(name: str, body: str, wheel: str, on_body: Array) -> None:
         """The dot-2 row: ``wheel``'s centre on the plane of ``body`` through ``on_body``, normal z."""
         joints.append(Joint(fresh(name), "dot-2", body, wheel, frozenset({"s_i", "s_j", "C_i"}), cut=True))
-        centre = ctx.body_point(wheel, "wheel_centre")
-        design[f"{name}.s_i"] = on_body
-        design[f"{name}.s_j"] = ctx.kin.A[wheel].T @ (centre - ctx.kin.r[wheel])
-        design[f"{name}.C_i"] = np.eye(3)
+        holds.append((name, wheel, on_body))
         added.add(name)
 
     for d in dict.fromkeys(drives):
-        if d == ROLL and ROLL in present:
-            addresses[d] = (f"{ROLL}.q",)
-            released[d] = tuple(travel_input(model, w, eng) for w in wheel_bodies(model))
-            angle[d] = True
-            continue
         if d == ROLL:
             wheels = wheel_bodies(model)
+            addresses[d], released[d], angle[d] = (f"{ROLL}.q",), tuple(("travel", w) for w in wheels), True
+            if ROLL in present:
+                continue
             if len(wheels) != 2:
                 raise AddressError(f"'roll' drives an axle of two wheels; this model has {len(wheels)}")
             refs = [_reference(model, w) for w in wheels]
@@ -260,53 +278,42 @@ def augment(model: Model, drives: Sequence[str], engine: Engine | None = None) -
             body, joint = fresh("roll_plane"), fresh(ROLL)
             bodies.append(Body(body))
             joints.append(Joint(joint, "revolute", ground.name, body, frozenset({"s_i", "C_i", "s_j", "C_j"}), False))
-            design |= {f"{joint}.s_i": Ag.T @ (centre - rg), f"{joint}.C_i": Ag.T @ _ABOUT_MINUS_X,
-                       f"{joint}.s_j": centre, f"{joint}.C_j": _ABOUT_MINUS_X}  # fmt: skip
+            fixed |= {f"{joint}.s_i": Ag.T @ (centre - rg), f"{joint}.C_i": Ag.T @ _ABOUT_MINUS_X,
+                      f"{joint}.s_j": centre, f"{joint}.C_j": _ABOUT_MINUS_X}  # fmt: skip
             for w, ref in zip(wheels, refs, strict=True):
                 hold(f"{w}_roll_hold", body, w, ref)
             inputs.append(joint)
             added.add(joint)
-            addresses[d] = (f"{joint}.q",)
-            released[d] = tuple(travel_input(model, w, eng) for w in wheels)
-            angle[d] = True
             continue
         if d.startswith(f"{STEER}:"):
             (w,) = wheel_for(model, d)
+            addresses[d], released[d], angle[d] = (f"{w}_steer.q",), (("steer", w),), True
             if f"{w}_steer" in present:
-                addresses[d], released[d], angle[d] = (f"{w}_steer.q",), (steer_input(model, w, eng),), True
                 continue
-            at = ctx.body_point(w, "wheel_centre")
-            axis = ctx.body_point(w, "spin_axis") - at
             body = joint = fresh(f"{w}_steer")
             bodies.append(Body(body))
             joints.append(Joint(joint, "revolute", ground.name, body, frozenset({"s_i", "C_i", "s_j"}), False))
-            design |= {f"{joint}.s_i": Ag.T @ (at - rg), f"{joint}.C_i": Ag.T, f"{joint}.s_j": at}
             hold_name = fresh(f"{w}_steer_hold")  # the spin axis across the steer body's x axis (eq. 1)
             joints.append(Joint(hold_name, "dot-1", body, w, frozenset({"C_i", "C_j"}), cut=True))
-            design |= {f"{hold_name}.C_i": _ALONG_X, f"{hold_name}.C_j": _frame_along(ctx.kin.A[w].T @ axis)}
+            steers.append((joint, hold_name, w))
             inputs.append(joint)
             added |= {joint, hold_name}
-            addresses[d], released[d], angle[d] = (f"{joint}.q",), (steer_input(model, w, eng),), True
             continue
         for w in wheel_for(model, d):
             key = f"{TRAVEL}:{w}"
             if key in addresses:
                 continue
+            addresses[key], released[key], angle[key] = (f"{w}_travel.q",), (("travel", w),), False
             if f"{w}_travel" in present:
-                addresses[key], released[key] = (f"{w}_travel.q",), (travel_input(model, w, eng),)
-                angle[key] = False
                 continue
             ref = _reference(model, w)
             body = joint = fresh(f"{w}_travel")
             bodies.append(Body(body))
             joints.append(Joint(joint, "translational", ground.name, body, frozenset({"s_i", "C_i"}), False))
-            design |= {f"{joint}.s_i": Ag.T @ (np.zeros(3) - rg), f"{joint}.C_i": Ag.T}
+            fixed |= {f"{joint}.s_i": Ag.T @ (np.zeros(3) - rg), f"{joint}.C_i": Ag.T}
             hold(f"{w}_travel_hold", body, w, ref)
             inputs.append(joint)
             added.add(joint)
-            addresses[key] = (f"{joint}.q",)
-            released[key] = (travel_input(model, w, eng),)
-            angle[key] = False
         if d == TRAVEL:
             ws = wheel_for(model, d)
             addresses[d] = tuple(a for w in ws for a in addresses[f"{TRAVEL}:{w}"])
@@ -314,10 +321,33 @@ def augment(model: Model, drives: Sequence[str], engine: Engine | None = None) -
             angle[d] = False
     mechanism = Mechanism(tuple(bodies), tuple(joints), mech.name, tuple(inputs), mech.couplings, mech.edits)
     base_design = {k: np.array(v) for k, v in model.design.items()}
-    aug = Model(mechanism, Design(base_design | design), as_coordinates(dict(model.coordinates)), model.units,
-                model.source, model.elements, model.vehicle, model.loads)  # fmt: skip
-    drv = Driven(aug, model, addresses, released, angle, frozenset(added))
-    return Driven(_with_drive_state(drv, model), model, addresses, released, angle, frozenset(added))
+
+    def with_design(design: Mapping[str, Array]) -> Model:
+        return replace(model, mechanism=mechanism, design=Design(base_design | dict(design)))
+
+    placed = with_design(fixed)  # the model's bodies placed; the drive joints' own frames follow
+    aug_engine = compile_engine(placed)
+    ctx = OutputContext.of(model, engine=engine) if engine is not None else OutputContext.of(placed, engine=aug_engine)
+    design = dict(fixed)
+    for name, wheel, on_body in holds:
+        centre = ctx.body_point(wheel, "wheel_centre")
+        design[f"{name}.s_i"] = on_body
+        design[f"{name}.s_j"] = ctx.kin.A[wheel].T @ (centre - ctx.kin.r[wheel])
+        design[f"{name}.C_i"] = np.eye(3)
+    for joint, hold_name, w in steers:
+        at = ctx.body_point(w, "wheel_centre")
+        axis = ctx.body_point(w, "spin_axis") - at
+        design |= {f"{joint}.s_i": Ag.T @ (at - rg), f"{joint}.C_i": Ag.T, f"{joint}.s_j": at}
+        design |= {f"{hold_name}.C_i": _ALONG_X, f"{hold_name}.C_j": _frame_along(ctx.kin.A[w].T @ axis)}
+    drv = Driven(with_design(design), model, addresses, {}, angle, frozenset(added), aug_engine)
+    aug = _with_drive_state(drv, model)
+    aug_engine = aug_engine.rebased(aug)
+    if engine is None and any(k == ROLL for k in released):
+        engine = compile_engine(model)  # a roll joint ties the wheels: the inputs are found on the model
+    on, eng = (model, engine) if engine is not None else (aug, aug_engine)
+    inputs_of = {"travel": travel_input, "steer": steer_input}
+    found = {d: tuple(inputs_of[kind](on, w, eng) for kind, w in rel) for d, rel in released.items()}
+    return Driven(aug, model, addresses, found, angle, frozenset(added), aug_engine, engine)
 
 
 def base_view(base: Engine, engine: Engine) -> tuple[Callable[[State], State], Array]:
@@ -361,8 +391,12 @@ def steer_angle(axis: Array) -> float:
 def _with_drive_state(drv: Driven, model: Model) -> Model:
     """The augmented model at ``model``'s design and coordinates: the drive coordinates where
     the wheels are (a travel: the wheel centre's height over its reference; roll: 0 when the
-    wheels are at opposite travels, else their mean angle)."""
-    ctx = OutputContext.of(model)
+    wheels are at opposite travels, else their mean angle). The model's kinematics come from
+    the augmented engine (the drive joints move none of its bodies)."""
+    design = {k: np.array(v) for k, v in drv.model.design.items()}
+    design |= {k: np.array(v) for k, v in model.design.items()}
+    merged = drv.model.with_state(Design(design), dict(model.coordinates))
+    ctx = OutputContext.of(merged, engine=drv.engine)
     coords = dict(model.coordinates)
     for d, addrs in drv.addresses.items():
         if d == ROLL:  # opposite travels dz over the track: -tan(roll)
@@ -379,8 +413,6 @@ def _with_drive_state(drv: Driven, model: Model) -> Model:
             w = d[len(TRAVEL) + 1 :]
             dz = ctx.body_point(w, "wheel_centre")[2] - _reference(model, w)[2]
             coords[addrs[0].split(".")[0]] = np.array([dz])
-    design = {k: np.array(v) for k, v in drv.model.design.items()}
-    design |= {k: np.array(v) for k, v in model.design.items()}
     return drv.model.with_state(Design(design), coords)
 
 
@@ -527,9 +559,9 @@ class _Positions:
         drives = list(dict.fromkeys(d for s in self.specs for d in s.drives))
         if ROLL in drives and any(d.startswith(TRAVEL) for d in drives):
             raise AddressError("a roll and a travel condition in one output are not supported")
-        self.driven = augment(model, drives, engine)
-        self.engine = compile_engine(self.driven.model)
         self.base_engine = engine if engine is not None else compile_engine(model)
+        self.driven = augment(model, drives, self.base_engine)
+        self.engine = self.driven.engine
         self.free, self.tol, self.max_iter = tuple(free), tol, max_iter
         self.configs = list(dict.fromkeys(cfg for s in self.specs for cfg in s.configs))
 
