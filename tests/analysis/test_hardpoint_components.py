@@ -124,3 +124,22 @@ def test_cli_set_and_free_take_components():
     assert za == pytest.approx(zb, abs=1e-9) and za == pytest.approx(59.7907, abs=1e-4)
     bad = _cli("propagate", FILE, "--set", "hardpoint:TR.i[q]=60")
     assert bad.exit_code == 2 and "hardpoint:TR.i[q]" in bad.output
+
+
+def test_a_free_component_of_a_ball_joint_moves_that_coordinate_alone(tmp_path):
+    """``--free hardpoint:UBJ[z]`` in a target is one unknown, the ball joint's height: both
+    bodies' s' move by the same global step, so UBJ keeps its x and y (freed one by one, the
+    upper arm turned and UBJ moved 9 mm in x too). The target met is the independent solver's
+    camber with UBJ at the returned height; the design position keeps its camber."""
+    out = tmp_path / "ubj.yaml"
+    r = _cli("propagate", FILE, "--target", "camber@LCA.q=4=-1.0", "--free", "hardpoint:UBJ[z]", "-o", out, "--json")
+    assert r.exit_code == 0, r.output
+    after = kp.load_model(out)
+    eng = compile_engine(after)
+    p = current_point(eng, eng.reference, "hardpoint:UBJ")
+    np.testing.assert_allclose(p[:2], HMMWV["UBJ"][:2], atol=1e-9)
+    assert abs(p[2] - HMMWV["UBJ"][2]) > 1.0  # it did move
+    truth = solve({**HMMWV, "UBJ": p}, 4.0)
+    assert truth["camber"] == pytest.approx(-1.0, abs=1e-7)
+    before = suspension_metrics(kp.load_model(FILE), "upright")
+    assert suspension_metrics(after, "upright")["camber"] == pytest.approx(before["camber"], abs=1e-9)

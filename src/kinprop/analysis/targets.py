@@ -110,7 +110,7 @@ from kinprop.propagation.element_points import (
     is_element_address,
     with_element_ends,
 )
-from kinprop.propagation.hardpoints import body_rotation, free_addresses, free_weights, resolve_changes
+from kinprop.propagation.hardpoints import body_rotation, free_tie, free_weights, resolve_changes
 from kinprop.propagation.point_jacobians import PointJacobians, PointSpec
 from kinprop.propagation.poses import joint_values
 from kinprop.propagation.propagate import Propagation, engine_for, propagation_of
@@ -794,9 +794,9 @@ def propagate_targets(
         views = [(lambda x: x) if d is None else d.view for d in drives]
         external = replace(external, partials=lambda k, state, e: base_partials(k, views[k](state), e))
     opts = {"tol": tol, "target_tol": target_tol, "max_iter": max_iter}
-    res = solve_targets(eng, st, build(model) if external is None else [], rows, free_addresses(eng, free),
-                        coordinates=coordinates, weights=free_weights(eng, weights), external=external,
-                        **opts)  # fmt: skip
+    addresses, tie = free_tie(eng, st, free)
+    res = solve_targets(eng, st, build(model) if external is None else [], rows, addresses, coordinates=coordinates,
+                        weights=free_weights(eng, weights), external=external, tie=tie, **opts)  # fmt: skip
     designed = None
     if external is not None and res.external is not None:
         designed = _element_model(model, eng, start, labels, res.external)

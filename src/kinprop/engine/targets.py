@@ -351,6 +351,7 @@ def solve_targets(
     target_tol: float = 1e-6,
     max_iter: int = 60,
     external: ExternalDesign | None = None,
+    tie: Array | None = None,
 ) -> TargetResult:
     """The minimum-(weighted-)norm change of the ``free`` design columns (groups ``s C l`` or
     design addresses; shared by every configuration) that meets the target ``rows`` with every
@@ -362,13 +363,22 @@ def solve_targets(
     own (:attr:`Configuration.engine`, e.g. with drive joints) when it has one; ``free``
     addresses name the same variables in every engine. ``external``: free variables outside
     the state (:class:`ExternalDesign`; then ``configurations`` are
-    ``external.configurations(external.start)``)."""
+    ``external.configurations(external.start)``). ``tie``: the design unknowns are ``y`` with
+    ``d(free columns) = tie @ y`` (one column of ``tie`` per unknown, e.g. a global hardpoint
+    component that writes the s' columns of both its bodies together; its unknown is a length,
+    weight 1) instead of the free columns themselves."""
     e0 = np.zeros(0) if external is None else np.asarray(external.start, dtype=float).ravel()
     ne = e0.size
     built: dict[bytes, Sequence[Configuration]] = {}
     if external is not None:
         configurations = built[e0.tobytes()] = external.configurations(e0.copy())
     pcols = engine.columns(free) if free else np.zeros(0, np.int64)
+    P = np.eye(pcols.size) if tie is None else np.asarray(tie, dtype=float)
+    if P.shape[0] != pcols.size:
+        raise ValueError(f"tie: {P.shape[0]} rows for {pcols.size} free design columns")
+    # each unknown's weight and SI factor: a column's own, a tied global coordinate's 1 and metres
+    alone = [np.flatnonzero(P[:, j]) for j in range(P.shape[1])]
+    own = [a[0] if a.size == 1 and P[a[0], j] == 1.0 else -1 for j, a in enumerate(alone)]
     qset = set(engine.columns(["q"]).tolist())
     if set(pcols.tolist()) & qset:
         raise AddressError("targets: --free names design variables (hardpoints, s, C, l); coordinates move anyway")
@@ -392,6 +402,8 @@ def solve_targets(
         if not (float(w) > 0 and np.isfinite(float(w))):
             raise AddressError(f"weight for {sel!r} must be positive, found {w}")
         wfull[engine.columns([sel])] = float(w)
+    tie_w = np.array([wfull[pcols[i]] if i >= 0 else 1.0 for i in own])
+    tie_si = np.array([engine.si_scale[pcols[i]] if i >= 0 else engine.unit for i in own])
     hard = [r for r in rows if r.hard]
     soft = [r for r in rows if not r.hard]
     bounded = any(r.bound for r in soft)
@@ -431,7 +443,7 @@ def solve_targets(
         target residuals there (a bound row with zero residual holds: its row is zero)."""
         npc = pcols.size if with_design else 0
         nx = ne if with_design else 0
-        n = int(uoffs[-1]) + npc + nx
+        n = int(uoffs[-1]) + (P.shape[1] if with_design else 0) + nx
         cfgs = configs(e)
         reduced = []
         for k, st in enumerate(sts):
@@ -450,6 +462,9 @@ def solve_targets(
                 G = cfg.jacobian(st, cols) if cfg.jacobian is not None else output_jacobian(eng, cfg.outputs, st,
                                                                                             cols)  # fmt: skip
                 red = G[:, : inner[k].size] @ dq + G[:, inner[k].size :]
+            if npc:  # over the design unknowns: d(columns) = P dy
+                nu_k = driven[k].size
+                red = np.hstack([red[:, :nu_k], red[:, nu_k:] @ P])
             if nx:  # the external variables move no coordinate: their partials alone
                 red = np.hstack([red, np.asarray(external.partials(k, st, e), float)])  # type: ignore[union-attr]
             reduced.append(red)
@@ -477,7 +492,7 @@ def solve_targets(
             dx = np.zeros(engs[k].n_columns)
             dx[driven[k]] = dz[uoffs[k] : uoffs[k + 1]]
             if with_design and pcols.size:
-                dx[pc[k]] = dz[uoffs[-1] : uoffs[-1] + pcols.size]
+                dx[pc[k]] = P @ dz[uoffs[-1] : uoffs[-1] + P.shape[1]]
             out.append(engs[k].retract(st, dx))
         return out
 
@@ -486,9 +501,10 @@ def solve_targets(
     def metric(with_design: bool) -> Array:
         """``dz = sw y`` over the outer unknowns: ``y`` in metres and radians over sqrt(weight),
         so that a model in mm and in m take the same steps (:attr:`Engine.si_scale`)."""
-        w = np.concatenate([np.ones(int(uoffs[-1]))] + ([wfull[pcols], wext] if with_design else []))
+        wp, sp = tie_w, tie_si
+        w = np.concatenate([np.ones(int(uoffs[-1]))] + ([wp, wext] if with_design else []))
         si = np.concatenate([engs[k].si_scale[driven[k]] for k in range(len(engs))]
-                            + ([engine.si_scale[pcols], np.full(ne, engine.unit)] if with_design else []))  # fmt: skip
+                            + ([sp, np.full(ne, engine.unit)] if with_design else []))  # fmt: skip
         return np.sqrt(w) / si
 
     size = max(1.0, (engine.length_scale or 1.0) * engine.unit)  # the mechanism's size, metres

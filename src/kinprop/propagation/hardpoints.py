@@ -366,6 +366,44 @@ def component_columns(engine: Engine, state: State, address: str) -> list[str]:
     return hit
 
 
+def free_tie(engine: Engine, state: State, selectors: Sequence[str]) -> tuple[tuple[str, ...], Array | None]:
+    """``(addresses, tie)`` of a target solve's free set (:func:`kinprop.engine.targets.solve_targets`):
+    :func:`free_addresses`, and the columns that must move together. A component of a point two
+    moving bodies share (``hardpoint:UBJ[z]``: ``UBJ.s_i[2]`` and ``UBJ.s_j[2]``) is one unknown,
+    its global coordinate: both bodies' s' move by the same global step, so no body moves at
+    the assembly the point is given at (freed one by one, the loop would close by turning an arm,
+    moving the point in x and y too). ``tie`` is None when there is no such component."""
+    addresses = free_addresses(engine, selectors)
+    cols = engine.columns(addresses) if addresses else np.zeros(0, np.int64)
+    labels = engine.column_labels
+    pos = {labels[c]: i for i, c in enumerate(cols.tolist())}
+    tied: list[Array] = []
+    used: set[int] = set()
+    for sel in selectors:
+        if not is_global(sel):
+            continue
+        g = parse_global(engine, sel)
+        if g.component is None or g.pivot is not None:
+            continue
+        fields, M, _ = hardpoint_map(engine, state, g.text)
+        rows = [lab for f in fields for lab in _labels(engine, f)]
+        col = M[:, g.component]
+        big = 1e-8 * max(1.0, float(np.abs(col).max()))
+        entries = {lab: float(x) for lab, x in zip(rows, col, strict=True) if ".s_" in lab and abs(x) > big}
+        if len({lab.split("[")[0] for lab in entries}) < 2:
+            continue  # a point on one moving body: its columns are the unknowns themselves
+        t = np.zeros(cols.size)
+        for lab, x in entries.items():
+            t[pos[lab]] = x
+            used.add(pos[lab])
+        tied.append(t)
+    if not tied:
+        return addresses, None
+    eye = np.eye(cols.size)
+    rest = [eye[:, i] for i in range(cols.size) if i not in used]
+    return addresses, np.column_stack(tied + rest)
+
+
 def free_weights(engine: Engine, weights: Mapping[str, float] | None) -> dict[str, float] | None:
     """Weights keyed like :func:`free_addresses` (a global address weighs all its fields)."""
     if not weights:
@@ -497,6 +535,7 @@ __all__ = [
     "GlobalAddress",
     "current_point",
     "free_addresses",
+    "free_tie",
     "free_weights",
     "global_columns",
     "global_plan",
