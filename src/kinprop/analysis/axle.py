@@ -33,7 +33,7 @@ from kinprop.analysis.context import OutputContext, WheelSpec
 from kinprop.analysis.drives import outputs_at
 from kinprop.analysis.metrics import _radius, contact_point
 from kinprop.analysis.outputs import evaluate_outputs
-from kinprop.engine.units import METRES_PER
+from kinprop.engine.units import METRES_PER, RADIANS_PER, radians_per_angle
 from kinprop.errors import AddressError
 from kinprop.model import Model
 
@@ -116,7 +116,7 @@ def steering_ratio(
     side = {w: 1.0 if ctx.body_point(w, "wheel_centre")[1] > 0 else -1.0 for w in (left, right)}
     names = {w: f"slope:metric:{w}.toe@{rack}={at - step!r}..{at + step!r}" for w in (left, right)}
     v = outputs_at(model, list(names.values()))
-    per_deg = 1.0 if model.units.get("angle") == "deg" else 180.0 / math.pi  # toe slope -> deg per length
+    per_deg = radians_per_angle(model) / RADIANS_PER["deg"]  # toe slope -> deg per length
     mean = sum(-side[w] * v[n] * per_deg for w, n in names.items()) / 2.0
     return 360.0 / c / abs(mean)
 
@@ -130,7 +130,7 @@ def ackermann(model: Model, inner: str, outer: str, rack: str, travel: float, wh
 
     def steer(w: str) -> float:  # road-wheel angle, positive to the left, from the toe change
         toe0, toe1 = v[f"metric:{w}.toe@{rack}={0.0!r}"], v[f"metric:{w}.toe@{rack}={travel!r}"]
-        return math.radians(-side[w] * (toe1 - toe0))
+        return -side[w] * (toe1 - toe0) * RADIANS_PER["deg"]  # toe is in degrees (a metric)
 
     d_i, d_o = abs(steer(inner)), abs(steer(outer))
     ctx = OutputContext.of(model)

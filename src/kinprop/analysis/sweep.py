@@ -50,7 +50,7 @@ from kinprop.analysis.outputs import evaluate_outputs, expand_outputs, output_fu
 from kinprop.analysis.units import derivative_scale, unit_of
 from kinprop.engine import Engine, Solution, State, Status
 from kinprop.engine import compile as compile_engine
-from kinprop.engine.units import changes_to_internal, check_units, from_solver_units, to_solver_units
+from kinprop.engine.units import changes_to_internal, check_units, degrees, from_solver_units, to_solver_units
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.propagation.conditioning import SINGULAR_RTOL, conditioning
@@ -108,7 +108,7 @@ def _coordinate_info(asm: Engine, model: Model, joint: str) -> tuple[int, tuple[
     size = asm.layout[key].size
     tree = joint in asm.topology.tree_joints
     angles = model.mechanism.joint(joint).jtype.angle_indices if tree else ()
-    return size, tuple(angles) if model.units.get("angle") == "deg" else ()
+    return size, tuple(angles) if degrees(model) else ()
 
 
 def _drive_values(text: str, spec: str) -> Array:
@@ -180,7 +180,7 @@ def parse_drive(model: Model, text: str, engine: Engine | None = None) -> Drive:
     if eq and is_drive(name.strip()):  # wheel travel or body roll (kinprop.analysis.drives)
         if name.strip() != ROLL:
             wheel_for(model, name.strip())
-        deg = name.strip().startswith((ROLL, STEER)) and model.units.get("angle") == "deg"
+        deg = name.strip().startswith((ROLL, STEER)) and degrees(model)
         return Drive(name.strip(), 0, _drive_values(text, spec.strip()), deg, 1, name.strip())
     m = _DRIVE.match(text.strip())
     if not m:

@@ -96,7 +96,7 @@ from kinprop.engine.targets import (
     output_jacobian,
     solve_targets,
 )
-from kinprop.engine.units import METRES_PER, RADIANS_PER, changes_to_internal, check_units
+from kinprop.engine.units import METRES_PER, RADIANS_PER, changes_to_internal, check_units, degrees
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.design import parse_address
@@ -603,7 +603,7 @@ class TargetPropagation:
         """One row per target: spec, output, wanted, before, achieved, miss, in the model's
         units (angles in its angle unit, lengths in its length unit; slopes per length unit)."""
         rows = []
-        deg = self.model.units.get("angle") == "deg"
+        deg = degrees(self.model)
         for spec, t in zip(self.specs, self.result.targets, strict=True):
             k, kind = 1.0, _kind(self.model, spec.output)
             if kind == "rad" and deg and spec.slope is None:

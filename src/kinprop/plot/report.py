@@ -19,7 +19,7 @@ from kinprop.analysis.metrics import metric_names
 from kinprop.analysis.points import hardpoint_table
 from kinprop.analysis.sweep import sweep
 from kinprop.engine import compile as compile_engine
-from kinprop.engine.units import angle_indices
+from kinprop.engine.units import RADIANS_PER, angle_indices, degrees
 from kinprop.io.commands import sweep_inputs, sweep_json
 from kinprop.model import Model
 from kinprop.plot.scene import build_scene, scale
@@ -69,7 +69,7 @@ def slider_joints(model: Model) -> tuple[str, ...]:
 def coordinate_components(model: Model, sliders: tuple[str, ...] = ()) -> list[dict[str, Any]]:
     """Every joint coordinate a sweep can drive (not Euler parameters), in model units;
     ``slider_ok`` for the ``sliders`` joints (:func:`slider_joints`)."""
-    deg = model.units.get("angle") == "deg"
+    deg = degrees(model)
     size = scale([build_scene(model)])
     out = []
     for joint, q in model.coordinates.items():
@@ -83,10 +83,14 @@ def coordinate_components(model: Model, sliders: tuple[str, ...] = ()) -> list[d
             if k in euler:
                 continue
             angle = k in angles
-            value = math.degrees(q[k]) if angle and deg else float(q[k])
+            value = float(q[k]) / RADIANS_PER["deg"] if angle and deg else float(q[k])
             unit = ("deg" if deg else "rad") if angle else model.units.get("length", "")
             if angle:
-                half, wide = (CURVE_DEG, SLIDER_DEG) if deg else (math.radians(CURVE_DEG), math.radians(SLIDER_DEG))
+                half, wide = (
+                    (CURVE_DEG, SLIDER_DEG)
+                    if deg
+                    else (CURVE_DEG * RADIANS_PER["deg"], SLIDER_DEG * RADIANS_PER["deg"])
+                )
             else:
                 half, wide = CURVE_FRACTION * size, SLIDER_FRACTION * size
             spec = joint if q.size == 1 else f"{joint}[{k}]"
