@@ -30,7 +30,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from kinprop.analysis.context import OutputContext, WheelSpec
-from kinprop.analysis.drives import outputs_at
+from kinprop.analysis.drives import model_at, outputs_at
 from kinprop.analysis.metrics import _radius, contact_point
 from kinprop.analysis.outputs import evaluate_outputs
 from kinprop.engine.units import METRES_PER, RADIANS_PER, radians_per_angle
@@ -47,9 +47,24 @@ def _contact(model: Model, wheel: str) -> np.ndarray:
     return contact_point(centre, ctx.body_point(wheel, "spin_axis") - centre, radius)
 
 
-def roll_centre(model: Model, left: str, right: str, travel_inputs: Mapping[str, str]) -> dict[str, float]:
+def roll_centre(
+    model: Model,
+    left: str,
+    right: str,
+    travel_inputs: Mapping[str, str],
+    *,
+    travel: float | None = None,
+    roll: float | None = None,
+) -> dict[str, float]:
     """Axle roll centre (module docstring): ``{"y", "z", "height"}``; ``travel_inputs`` names
-    each wheel's bump input (``{"upright_L": "LCA_L", ...}``)."""
+    each wheel's bump input (``{"upright_L": "LCA_L", ...}``). At the model's state, or, for
+    its migration, at a heave ``travel`` of both wheels (the length unit) or a body ``roll``
+    (the angle unit): the drives of :mod:`kinprop.analysis.drives`, the height then above the
+    ground line through the moved contact points."""
+    if travel is not None and roll is not None:
+        raise AddressError("roll_centre: give a travel or a roll, not both")
+    if travel is not None or roll is not None:
+        model = model_at(model, f"travel={travel!r}" if travel is not None else f"roll={roll!r}")
     wheels = {w: WheelSpec(travel_input=travel_inputs[w]) for w in (left, right)}
     v = evaluate_outputs(
         model, [f"metric:{w}.{m}" for w in (left, right) for m in ("fvic_y", "fvic_z")], wheels=wheels, units="solver"

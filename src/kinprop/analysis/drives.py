@@ -685,6 +685,20 @@ def driven_sensitivity(
     return out, list(of), columns
 
 
+def model_at(model: Model, condition: str, *, engine: Engine | None = None, tol: float = 1e-10,
+             max_iter: int = 50) -> Model:  # fmt: skip
+    """The model at a drive position, ``condition`` as after an output's ``@`` (``travel=50``,
+    ``roll=2deg``, ``RACK.q=10``): one engine solve from the model's state; the drive joints
+    are not part of the returned model. Raises :class:`ConvergenceError` when it is out of reach."""
+    wheels = wheel_bodies(model)
+    probe = f"metric:{wheels[0]}.camber@{condition}" if wheels else f"{model.mechanism.joints[0].name}.q@{condition}"
+    pos = _Positions(model, [probe], tol=tol, max_iter=max_iter, engine=engine)
+    states, ok = pos.states([model])
+    if not ok[0][0]:
+        raise ConvergenceError(f"{condition!r}: the drive position could not be reached from the model's state")
+    return pos.driven.base_of(pos.engine, states[0][0])
+
+
 def outputs_at(
     model: Model, names: Sequence[str], *, engine: Engine | None = None, tol: float = 1e-10, max_iter: int = 50
 ) -> dict[str, float]:
@@ -707,5 +721,5 @@ def outputs_at(
 
 
 __all__ = ["Driven", "DrivenOutput", "DrivenOutputs", "augment", "base_view", "condition_value", "drive_condition",
-           "driven_sensitivity", "expand_driven", "is_drive", "is_driven", "outputs_at", "parse_driven",
+           "driven_sensitivity", "expand_driven", "is_drive", "is_driven", "model_at", "outputs_at", "parse_driven",
            "travel_input"]  # fmt: skip
