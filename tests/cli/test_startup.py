@@ -79,20 +79,9 @@ def test_one_solve_of_a_small_model_imports_neither_numba_nor_scipy(tmp_path) ->
     (folder / "complete").write_text("test\n")
     slider = str(examples_dir() / "slider_crank.yaml")
     env = {k: v for k, v in os.environ.items() if k not in ("KINPROP_JIT", "NUMBA_DISABLE_JIT")}
+    args = ["propagate", slider, "--set", "J12.s_j=-2.8,0.2,0.1", "--free", "q"]
     p = subprocess.run(
-        [
-            sys.executable,
-            "-X",
-            "importtime",
-            "-m",
-            "kinprop",
-            "propagate",
-            slider,
-            "--set",
-            "J12.s_j=-2.8,0.2,0.1",
-            "--free",
-            "q",
-        ],  # fmt: skip
+        [sys.executable, "-X", "importtime", "-m", "kinprop", *args],
         capture_output=True,
         text=True,
         env=env | {"KINPROP_CACHE_DIR": str(tmp_path / "cache")},
