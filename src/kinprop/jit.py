@@ -26,6 +26,7 @@ from __future__ import annotations
 import hashlib
 import os
 import sys
+import threading
 from collections.abc import Callable
 from functools import cache, partial
 from pathlib import Path
@@ -95,6 +96,7 @@ LAPACK_INT: Any = "int32"
 prange: Any = range
 
 _bound: str | None = None  # None (not chosen yet), "python" or "compiled"
+_binding = threading.RLock()  # the first kernel calls of two threads choose once
 _KERNELS: list[_Kernel] = []
 
 
@@ -133,10 +135,11 @@ def njit(func: Callable[..., Any] | None = None, **options: Any) -> Any:
     if func is None:
         return partial(njit, **options)
     k = _Kernel(func, options)
-    _KERNELS.append(k)
-    if _bound is None:
-        return k
-    k.target = _runnable(k, _bound)
+    with _binding:
+        _KERNELS.append(k)
+        if _bound is None:
+            return k
+        k.target = _runnable(k, _bound)
     return k.target  # a module imported after the choice holds what runs
 
 
@@ -187,12 +190,16 @@ def wanted() -> str:
 
 def bind(how: str | None = None) -> str:
     """Choose how the kernels run (default :func:`wanted`), once per process; returns the choice."""
+    with _binding:
+        if _bound is None:
+            _bind(how or wanted())
+    if how not in (None, _bound):
+        raise RuntimeError(f"the kernels of this process already run {_bound}")
+    return _bound  # type: ignore[return-value]
+
+
+def _bind(how: str) -> None:
     global _bound, COMPILED, GELSD, LAPACK_INT, prange
-    if _bound is not None:
-        if how not in (None, _bound):
-            raise RuntimeError(f"the kernels of this process already run {_bound}")
-        return _bound
-    how = how or wanted()
     old = {"COMPILED": COMPILED, "GELSD": GELSD, "LAPACK_INT": LAPACK_INT, "prange": prange}
     if how == "compiled":
         numba = _numba()
@@ -214,7 +221,6 @@ def bind(how: str | None = None) -> str:
             elif key in old and value is old[key]:
                 d[key] = new[key]
     _bound = how
-    return how
 
 
 def note_model(n_coordinates: int) -> None:
