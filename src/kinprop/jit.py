@@ -9,7 +9,7 @@ import numba: they register the function, and the process chooses how every kern
 the first kernel call (:func:`bind`, once): compiled by numba (imported then), or the same
 source run as plain Python ("uncompiled"): one implementation either way. Binding rewrites, in every
 loaded ``kinprop`` module, the names of the registered kernels (and :data:`COMPILED`,
-:data:`GELSD`, :data:`LAPACK_INT`, :data:`prange`) to what runs, so that compiled kernels call
+:data:`GELSD`, :data:`LAPACK_INT`) to what runs, so that compiled kernels call
 compiled kernels; a kernel held elsewhere forwards its calls.
 
 ``KINPROP_JIT`` chooses: ``on`` (the default: compiled), ``off`` (never compiled; also
@@ -92,8 +92,6 @@ COMPILED = False
 GELSD: Any = None
 #: the integer type of ``dgelsd``'s ``rank`` output
 LAPACK_INT: Any = "int32"
-#: numba's ``prange`` (``range`` uncompiled)
-prange: Any = range
 
 _bound: str | None = None  # None (not chosen yet), "python" or "compiled"
 _binding = threading.RLock()  # the first kernel calls of two threads choose once
@@ -199,15 +197,14 @@ def bind(how: str | None = None) -> str:
 
 
 def _bind(how: str) -> None:
-    global _bound, COMPILED, GELSD, LAPACK_INT, prange
-    old = {"COMPILED": COMPILED, "GELSD": GELSD, "LAPACK_INT": LAPACK_INT, "prange": prange}
+    global _bound, COMPILED, GELSD, LAPACK_INT
+    old = {"COMPILED": COMPILED, "GELSD": GELSD, "LAPACK_INT": LAPACK_INT}
     if how == "compiled":
         numba = _numba()
         from numba.np.linalg import _LAPACK, F_INT_nptype
 
-        COMPILED, GELSD = True, _LAPACK().numba_ez_gelsd(numba.types.float64)
-        LAPACK_INT, prange = F_INT_nptype, numba.prange
-    new = {"COMPILED": COMPILED, "GELSD": GELSD, "LAPACK_INT": LAPACK_INT, "prange": prange}
+        COMPILED, GELSD, LAPACK_INT = True, _LAPACK().numba_ez_gelsd(numba.types.float64), F_INT_nptype
+    new = {"COMPILED": COMPILED, "GELSD": GELSD, "LAPACK_INT": LAPACK_INT}
     swap: dict[int, Any] = {}
     for k in _KERNELS:
         k.target = swap[id(k)] = _runnable(k, how)
@@ -230,14 +227,11 @@ def note_model(n_coordinates: int) -> None:
     _model_size = max(n_coordinates, _model_size or 0)
 
 
-def get_num_threads() -> int:
-    """numba's thread count (1 uncompiled)."""
-    return _numba().get_num_threads() if bind() == "compiled" else 1
-
-
-def set_parallel_chunksize(n: int) -> int:
-    """numba's ``set_parallel_chunksize`` (nothing uncompiled); returns the previous size."""
-    return _numba().set_parallel_chunksize(n) if bind() == "compiled" else 0
+def num_threads() -> int:
+    """Threads a batch is split over: numba's thread count (``NUMBA_NUM_THREADS``, default the
+    cores), read from its configuration without starting numba's threading layer; 1 when the
+    kernels run uncompiled (as Python they hold the GIL)."""
+    return max(1, int(_numba().config.NUMBA_NUM_THREADS)) if bind() == "compiled" else 1
 
 
 def __getattr__(name: str) -> Any:
@@ -254,14 +248,12 @@ __all__ = [
     "SMALL_MODEL",
     "bind",
     "cache_dir",
-    "get_num_threads",
     "inlined",
     "is_warm",
     "kernel",
     "njit",
     "note_model",
-    "prange",
-    "set_parallel_chunksize",
+    "num_threads",
     "wanted",
     "warm_marker",
 ]

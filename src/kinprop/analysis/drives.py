@@ -47,17 +47,17 @@ derivative_scale` takes them to the model's units, as for every output).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+import re
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from kinprop.analysis.context import OutputContext, find_point
-from kinprop.analysis.metrics import is_first_order, wheel_bodies
+from kinprop.analysis.metrics import wheel_bodies
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
-from kinprop.analysis.sensitivity import output_sensitivity_matrix
+from kinprop.analysis.sensitivity import OnBase, output_sensitivity_matrix
 from kinprop.analysis.statics import LOAD_PREFIXES
-from kinprop.analysis.targets import _number
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine, State
 from kinprop.engine import compile as compile_engine
@@ -70,6 +70,7 @@ from kinprop.propagation.element_points import element_ends, with_element_ends
 from kinprop.spatial import Array
 
 TRAVEL, ROLL, STEER = "travel", "roll", "steer"
+_NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/]*)\s*$")
 #: joint frame whose z'' is the body's x axis (a steer body's forward direction)
 _ALONG_X = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 #: joint frame of a revolute turning about -x (z'' = -x): positive roll lifts the left (+y) side
@@ -319,6 +320,29 @@ def augment(model: Model, drives: Sequence[str], engine: Engine | None = None) -
     return Driven(_with_drive_state(drv, model), model, addresses, released, angle, frozenset(added))
 
 
+def base_view(base: Engine, engine: Engine) -> tuple[Callable[[State], State], Array]:
+    """``(view, columns)`` between an augmented model's ``engine`` and its base model's
+    ``base``: ``view(state)`` the base engine's state of an augmented state (the drive joints
+    dropped, nothing solved), ``columns[c]`` the augmented column of base column ``c`` (the same
+    variable by key). A base output's derivative over augmented columns is its derivative over
+    ``columns``, zero along the drive joints' own."""
+    joints = np.array([engine.joint_index[j.name] for j in base.mechanism.joints], np.int64)
+    nj = len(engine.mechanism.joints)
+    q = np.zeros(base.n_coordinates, np.int64)
+    columns = np.zeros(base.n_columns, np.int64)
+    for v in base.layout.variables:
+        w = engine.layout[v.key]
+        columns[v.columns] = np.arange(w.start, w.start + v.size)
+        if v.group == "q":
+            q[v.columns] = columns[v.columns]
+    lengths = np.concatenate([joints, np.arange(nj, engine.default_state().L.size)])
+
+    def view(st: State) -> State:
+        return State(st.Q[..., q], st.S[..., joints, :, :], st.C[..., joints, :, :, :], st.L[..., lengths])
+
+    return view, columns
+
+
 def _frame_along(z: Array) -> Array:
     """A rotation whose third column (z'') is along ``z``."""
     z = np.asarray(z, float) / np.linalg.norm(z)
@@ -379,23 +403,38 @@ class DrivenOutput:
         return list(dict.fromkeys(k for cfg in self.configs for k, _ in cfg if is_drive(k)))
 
 
-def _condition_key(model: Model, name: str, where: str) -> tuple[str, str]:
-    """``(key, kind)`` of a condition's name: a drive (``travel:W``, ``roll``) or a coordinate
-    address; kind ``length`` or ``angle``."""
+def _number(text: str, where: str) -> tuple[float, str]:
+    """A number with an optional unit (``-1.5deg``, ``50mm``, ``0``): ``(value, unit)``."""
+    m = _NUMBER.match(text)
+    if not m:
+        raise AddressError(f"{where}: {text!r} is not a number with an optional unit (e.g. -1.5deg, 50mm)")
+    return float(m[1]), m[2]
+
+
+def drive_condition(model: Model, name: str) -> str | None:
+    """The drive a condition's name means (``travel``, ``travel:WHEEL``, ``roll``,
+    ``steer:WHEEL``; the wheel-centre height ``metric:WHEEL.wheel_centre_dz`` is that wheel's
+    travel), validated against the model's wheels, or None when it names no drive."""
     name = name.strip()
     wheels = wheel_bodies(model)
     if name in ("wheel_centre_dz", "metric:wheel_centre_dz", "wheel_travel") and len(wheels) == 1:
         name = TRAVEL
     if name.startswith("metric:") and name.endswith((".wheel_centre_dz", ".wheel_travel")):
         name = f"{TRAVEL}:{name[len('metric:') :].rsplit('.', 1)[0]}"
-    if name == TRAVEL or name.startswith(f"{TRAVEL}:"):
+    if not is_drive(name):
+        return None
+    if name != ROLL:
         wheel_for(model, name)
-        return name, "length"
-    if name == ROLL:
-        return name, "angle"
-    if name.startswith(f"{STEER}:"):
-        wheel_for(model, name)
-        return name, "angle"
+    return name
+
+
+def _condition_key(model: Model, name: str, where: str) -> tuple[str, str]:
+    """``(key, kind)`` of a condition's name: a drive (``travel:W``, ``roll``) or a coordinate
+    address; kind ``length`` or ``angle``."""
+    name = name.strip()
+    drive = drive_condition(model, name)
+    if drive is not None:
+        return drive, "length" if drive.startswith(TRAVEL) else "angle"
     try:
         addr = parse_address(name if "." in name else f"{name}.q")
     except Exception:
@@ -407,7 +446,7 @@ def _condition_key(model: Model, name: str, where: str) -> tuple[str, str]:
     return str(addr), "angle" if (addr.index or 0) in angles else "length"
 
 
-def _value(model: Model, kind: str, text: str, where: str) -> float:
+def condition_value(model: Model, kind: str, text: str, where: str) -> float:
     """A condition value (model units unless a unit is written) in solver units."""
     v, unit = _number(text, where)
     if kind == "angle":
@@ -446,7 +485,7 @@ def parse_driven(model: Model, name: str, engine: Engine | None = None) -> Drive
         a_text, _, b_text = rng.partition("..")
         if _number(b_text, where)[1] and not _number(a_text, where)[1]:
             a_text += _number(b_text, where)[1]  # "-50..50mm": the unit once, for both ends
-        a, b = _value(model, kind, a_text, where), _value(model, kind, b_text, where)
+        a, b = condition_value(model, kind, a_text, where), condition_value(model, kind, b_text, where)
         if a == b:
             raise AddressError(f"{where}: the slope's range is empty")
         return DrivenOutput(name, out.strip(), (((k, a),), ((k, b),)), b - a)
@@ -456,7 +495,7 @@ def parse_driven(model: Model, name: str, engine: Engine | None = None) -> Drive
         if ".." in val:
             raise AddressError(f"{where}: a range A..B is a slope's: slope:{out.strip()}@{c}")
         k, kind = _condition_key(model, key, where)
-        cfg.append((k, _value(model, kind, val, where)))
+        cfg.append((k, condition_value(model, kind, val, where)))
     if len({k for k, _ in cfg}) != len(cfg):
         raise AddressError(f"{where}: a condition is given twice")
     return DrivenOutput(name, out.strip(), (tuple(sorted(cfg)),))
@@ -571,8 +610,10 @@ def driven_sensitivity(
     module docstring) with respect to the design addresses ``wrt`` (no ``hardpoint:``; see
     :func:`kinprop.propagation.hardpoints.global_columns`), in solver units: at each drive
     position solved from the model's state, the implicit-function tangent with the drive held
-    (:func:`kinprop.analysis.sensitivity.output_sensitivity_matrix`); a slope's is the
-    difference of its two ends' over the span."""
+    (:func:`kinprop.analysis.sensitivity.output_sensitivity_matrix`), the outputs' derivatives
+    along it the base model's (a first-order metric, ``camber_gain@travel=50``, exact: its
+    velocity analysis by the suspension's own inputs, as :func:`outputs_at` evaluates it); a
+    slope's is the difference of its two ends' over the span."""
     per: dict[tuple, dict[str, Array]] = {}
     columns: list[str] = []
     rows: dict[str, DrivenOutput] = {}
@@ -580,9 +621,7 @@ def driven_sensitivity(
     for calc in DrivenOutputs(model, of, free=free, tol=tol, max_iter=max_iter).parts:
         for s in calc.specs:
             rows[s.name] = s
-            if (s.output.startswith("metric:") or "." not in s.output) and is_first_order(s.output.split(".")[-1]):
-                raise AddressError(f"--of {s.name!r}: derivatives of first-order metrics at a drive position are "
-                                   "not available (their velocity analysis would hold the drive)")  # fmt: skip
+        view, cols = base_view(calc.base_engine, calc.engine)
         held = [k for cfg in calc.configs for k, _ in cfg if not is_drive(k)]
         loose = [k for k in held if k.split(".")[0] not in model.mechanism.inputs]
         if loose:
@@ -595,8 +634,12 @@ def driven_sensitivity(
             names = list(dict.fromkeys(s.output for s in calc.specs if cfg in s.configs))
             drives = [k for k, _ in cfg if is_drive(k)]
             loose_free = calc.driven.free(free, drives)
-            D, out_rows, columns, _ = output_sensitivity_matrix(at, names, wrt, loose_free, weights,
-                                                                engine=calc.engine, units="solver")  # fmt: skip
+            # the tangent with the drive held (the augmented model's), the outputs the base
+            # model's there: a first-order metric moves the suspension by its own inputs
+            base = OnBase(calc.driven.base_of(calc.engine, states[c][0]), calc.base_engine, view, cols)
+            D, out_rows, columns, _ = output_sensitivity_matrix(
+                at, names, wrt, loose_free, weights, engine=calc.engine, units="solver", base=base
+            )
             per[(id(calc), cfg)] = dict(zip(out_rows, np.asarray(D), strict=True))
             for s in calc.specs:
                 if cfg in s.configs:
@@ -631,5 +674,6 @@ def outputs_at(
     return {n: out[n] for n in names}
 
 
-__all__ = ["Driven", "DrivenOutput", "DrivenOutputs", "augment", "driven_sensitivity", "expand_driven",
-           "is_drive", "is_driven", "outputs_at", "parse_driven", "travel_input"]  # fmt: skip
+__all__ = ["Driven", "DrivenOutput", "DrivenOutputs", "augment", "base_view", "condition_value", "drive_condition",
+           "driven_sensitivity", "expand_driven", "is_drive", "is_driven", "outputs_at", "parse_driven",
+           "travel_input"]  # fmt: skip
