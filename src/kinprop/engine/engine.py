@@ -27,7 +27,7 @@ from kinprop.engine.motion import MotionState, motion_state
 from kinprop.engine.status import message, notes
 from kinprop.engine.units import METRES_PER, UnitTable
 from kinprop.errors import AddressError, ConvergenceError
-from kinprop.jit import num_threads
+from kinprop.jit import note_model, num_threads
 from kinprop.kinematics import kernels
 from kinprop.kinematics.layout import VariableLayout, build_layout, column_labels
 from kinprop.kinematics.tables import RowBlock, Tables, build_tables, row_blocks
@@ -292,13 +292,14 @@ class Engine:
         self.row_blocks: tuple[RowBlock, ...] = row_blocks(mechanism, self.topology)
         self.n_rows = sum(b.rows.stop - b.rows.start for b in self.row_blocks)
         self.n_columns = self.layout.n
+        self.n_coordinates = sum(v.size for v in self.layout.group("q"))
+        note_model(self.n_coordinates)  # before the first kernel call: how kernels run may depend on it
         self.tables: Tables = build_tables(mechanism, self.topology, self.layout, self.row_blocks)
         self.nnz = int(kernels.count_entries(self.tables))
         self.joint_index = {j.name: k for k, j in enumerate(mechanism.joints)}
         #: slot of each coupling's c0 in the state's ``L`` (after the joints' lengths)
         self.coupling_slot = {c.name: len(mechanism.joints) + N_COEF * k for k, c in enumerate(mechanism.couplings)}
         self.body_index = {b.name: k for k, b in enumerate(mechanism.bodies)}
-        self.n_coordinates = sum(v.size for v in self.layout.group("q"))
         #: which coordinate components are angles or Euler parameters, for every unit
         #: conversion (:mod:`kinprop.engine.units`), resolved once here
         self.unit_table: UnitTable = UnitTable.of(mechanism, self.topology)

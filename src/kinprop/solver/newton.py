@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from kinprop.jit import GELSD, JIT, LAPACK_INT, inlined, kernel, njit
+from kinprop.jit import COMPILED, GELSD, LAPACK_INT, inlined, kernel, njit
 from kinprop.kinematics.kernels import (
     VEC_CALLER,
     W_FRAME_R,
@@ -156,8 +156,8 @@ def _lstsq(M, m, n, b, sv, rank):
     least ``max(m, n)`` long) holds the right side on entry and the minimum-norm least-squares
     solution in ``b[:n]`` on exit. ``sv``, ``rank``: scratch. Returns LAPACK's info (0: ok).
     Called through numba's own LAPACK binding, so it allocates nothing numba counts;
-    uncompiled (``NUMBA_DISABLE_JIT``), through ``numpy.linalg.lstsq`` (the same routine)."""
-    if not JIT:
+    uncompiled (:mod:`kinprop.jit`), through ``numpy.linalg.lstsq`` (the same routine)."""
+    if not COMPILED:
         b[:n] = np.linalg.lstsq(M[: m * n].reshape((n, m)).T, b[:m], rcond=None)[0]
         return 0
     return GELSD(_KIND_D, m, n, 1, M.ctypes, max(m, 1), b.ctypes, max(m, n, 1), sv.ctypes,
