@@ -15,11 +15,12 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from kinprop.analysis.metrics import metric_names
+from kinprop.analysis.context import find_point
+from kinprop.analysis.metrics import metric_names, wheel_bodies
 from kinprop.analysis.points import hardpoint_table
 from kinprop.analysis.sweep import sweep
 from kinprop.engine import compile as compile_engine
-from kinprop.engine.units import RADIANS_PER, angle_indices, degrees
+from kinprop.engine.units import METRES_PER, RADIANS_PER, angle_indices, degrees
 from kinprop.io.commands import sweep_inputs, sweep_json
 from kinprop.model import Model
 from kinprop.plot.scene import build_scene, scale
@@ -114,6 +115,24 @@ def coordinate_components(model: Model, sliders: tuple[str, ...] = ()) -> list[d
     return sorted(out, key=lambda c: (not c["slider_ok"], c["size"] > 1))
 
 
+#: the wheel-travel drive's default curve: +-50 mm, in the model's length unit
+TRAVEL_CURVE_M = 0.05
+
+
+def travel_drive(model: Model) -> list[dict[str, Any]]:
+    """The wheel-travel drive (``travel``, :mod:`kinprop.analysis.drives`: equal length steps of
+    the wheel centres' height over their ``wheel_centre_ref``, both wheels of an axle in heave)
+    of a suspension whose wheels have that reference, as a drive entry of the page; else none."""
+    wheels = wheel_bodies(model)
+    if not wheels or not all(find_point(model, w, "wheel_centre_ref", on_wheel=False) for w in wheels):
+        return []
+    length = model.units.get("length", "m")
+    half = TRAVEL_CURVE_M / METRES_PER.get(length, 1.0)
+    return [{"spec": "travel", "address": "travel", "joint": "", "type": "wheel travel", "angle": False,
+             "unit": length, "value": 0.0, "curve": [-half, half], "slider": [-half, half], "slider_ok": False,
+             "size": 1}]  # fmt: skip
+
+
 def default_curve_outputs(model: Model, drives: list[dict[str, Any]]) -> list[str]:
     """Camber and toe of the first wheel body; else the other single coordinates (a four-bar's
     rocker angle over its crank's), else a named point's or a hardpoint's z."""
@@ -130,10 +149,11 @@ def default_curve_outputs(model: Model, drives: list[dict[str, Any]]) -> list[st
 
 
 def default_curves(model: Model, steps: int = 49) -> dict[str, Any] | None:
-    """The default charts' data: a sweep of the first input (:func:`slider_joints`) over its
+    """The default charts' data, over the workbench's default drive: wheel travel for a
+    suspension (:func:`travel_drive`), else the first input (:func:`slider_joints`), over its
     default range with :func:`default_curve_outputs`, as ``kinprop sweep --json`` prints it
     (model units); None when the model has no single-coordinate input to drive."""
-    comps = coordinate_components(model, slider_joints(model))
+    comps = travel_drive(model) + coordinate_components(model, slider_joints(model))
     if not comps or comps[0]["size"] != 1:
         return None
     d = comps[0]

@@ -9,14 +9,13 @@ from typing import Any
 
 import numpy as np
 
-from kinprop.analysis.context import find_point
 from kinprop.analysis.metrics import wheel_bodies
 from kinprop.analysis.outputs import output_names
 from kinprop.analysis.points import hardpoint_table, joint_hardpoints, named_points
 from kinprop.analysis.units import unit_of
-from kinprop.engine.units import METRES_PER, from_solver_units
+from kinprop.engine.units import from_solver_units
 from kinprop.model import Model
-from kinprop.plot.report import coordinate_components, default_curve_outputs
+from kinprop.plot.report import coordinate_components, default_curve_outputs, travel_drive
 from kinprop.plot.scene import Scene, bounds, build_scene, scale
 from kinprop.plot.style import AXIS, FADED_ALPHA, MARKERS, POINT, segment_colour
 from kinprop.serve.session import Session
@@ -146,24 +145,6 @@ def status_text(changes: dict[str, Any], result: dict[str, Any]) -> str:
     if result.get("changed"):
         parts.append("moved: " + " ".join(result["changed"]))
     return "  ·  ".join(parts)
-
-
-#: the wheel-travel drive's default curve: +-50 mm, in the model's length unit
-TRAVEL_CURVE_M = 0.05
-
-
-def travel_drive(model: Model) -> list[dict[str, Any]]:
-    """The wheel-travel drive (``travel``, :mod:`kinprop.analysis.drives`: equal length steps of
-    the wheel centres' height over their ``wheel_centre_ref``, both wheels of an axle in heave)
-    of a suspension whose wheels have that reference, as a drive entry of the page; else none."""
-    wheels = wheel_bodies(model)
-    if not wheels or not all(find_point(model, w, "wheel_centre_ref", on_wheel=False) for w in wheels):
-        return []
-    length = model.units.get("length", "m")
-    half = TRAVEL_CURVE_M / METRES_PER.get(length, 1.0)
-    return [{"spec": "travel", "address": "travel", "joint": "", "type": "wheel travel", "angle": False,
-             "unit": length, "value": 0.0, "curve": [-half, half], "slider": [-half, half], "slider_ok": False,
-             "size": 1}]  # fmt: skip
 
 
 def state_json(
