@@ -21,7 +21,16 @@ from pathlib import Path
 import platformdirs
 
 #: packages whose sources are compiled into the kernels
-_KERNEL_SOURCES = ("spatial.py", "jit.py", "joints", "constraints", "kinematics", "solver", "engine/outputs.py")
+_KERNEL_SOURCES = (
+    "spatial.py",
+    "jit.py",
+    "joints",
+    "constraints",
+    "kinematics",
+    "solver",
+    "engine/outputs.py",
+    "engine/statics_kernels.py",
+)
 
 
 def kernel_version() -> str:
