@@ -59,7 +59,7 @@ if TYPE_CHECKING:
     from kinprop.engine.engine import Engine, State
 
 #: relative singular value below which a direction of [Phi_q^T E_D^T] counts as null
-RANK_RTOL = 1e-10
+RANK_RTOL = sk.RANK_RTOL
 #: relative size above which a self-stress state changes a component (undetermined)
 UNDETERMINED_RTOL = 1e-7
 OK, UNBALANCED, NOT_ASSEMBLED = Status.OK, Status.UNBALANCED, Status.NOT_ASSEMBLED
@@ -391,27 +391,20 @@ def reduced_stiffness(
     return tau, K, ""
 
 
-def equilibrium_system(engine: Engine, Phi_q: Array, driven: Sequence[int]) -> tuple[Array, Array, Array]:
-    """``(A_s, unscale, c_s)``: ``[Phi_q^T  E_D^T]`` with rows and columns scaled as the solver
-    scales them; ``A_s (y / unscale) = b / c_s`` for ``[Phi_q^T  E_D^T] y = b``."""
-    nq, m, nd = engine.n_coordinates, Phi_q.shape[0], len(driven)
-    rs, cs = engine.row_scale, engine.col_scale[:nq]
-    dr = list(driven)
-    As = np.zeros((nq, m + nd))  # unknowns [lambda / rs ; tau / cs_D]
-    As[:, :m] = (Phi_q * (rs[:, None] / cs[None, :])).T
-    As[dr, m + np.arange(nd)] = 1.0
-    return As, np.concatenate([rs, cs[dr]]), cs
-
-
 @dataclass(frozen=True)
 class _Terms:
-    """What the statics of a state computed on the way that their rates reuse: the cut
-    joints' rows (:func:`kinprop.engine.statics_kernels.cut_terms`), the reactions before
-    any NaN, the scaled system and its factors."""
+    """What the statics of a state computed on the way that their rates reuse: the applied
+    wrenches with the elements', the cut joints' rows
+    (:func:`kinprop.engine.statics_kernels.cut_terms`), the reactions before any NaN, the
+    scaled system's SVD and rank and its scales."""
 
+    W: Array
     cut: tuple[Array, ...]
     wrench: Array
-    As: Array
+    U: Array
+    s: Array
+    Vt: Array
+    rank: int
     unscale: Array
     cs: Array
 
@@ -424,68 +417,58 @@ def _statics(
     st = fr.state
     tb = engine.tables
     m, nd, nj = engine.n_rows, len(driven), tb.joint.shape[0]
-    f, lengths, ends, W_el = sk.element_forces(*laws, fr.r, fr.A, st.Q, fr.P, fr.R, fr.r.shape[0])
-    W = np.asarray(applied, dtype=float) + W_el
-    Qg = sk.generalized_forces(tb, fr.Tq, W, engine.n_coordinates)
-    As, unscale, cs = equilibrium_system(engine, fr.Phi_q, driven)
-    b = -Qg / cs
-    U, s, Vt = np.linalg.svd(As, full_matrices=True)
-    smax = float(s[0]) if s.size and s[0] > 0 else 1.0
-    rank = int(np.sum(s > RANK_RTOL * smax))
-    xs = Vt[:rank].T @ ((U[:, :rank].T @ b) / s[:rank])
-    null = Vt[rank:]
-    resid = float(np.linalg.norm(As @ xs - b))
+    nq = engine.n_coordinates
+    dr = np.asarray(driven, dtype=np.int64).reshape(nd)
+    (W, f, lengths, ends, unscale, U, s, Vt, rank, resid, bn, lam, tau, wrench, at_point, local, member,
+     ct) = sk.statics_core(tb, fr.r, fr.A, fr.P, fr.R, fr.Tq, st.Q, st.L, fr.Phi_q, engine.row_scale,
+                           engine.col_scale[:nq], dr, *laws, np.asarray(applied, dtype=float))  # fmt: skip
     not_assembled = fr.residual > ASSEMBLED_TOL
-    if not_assembled or (resid > 1e-8 * max(float(np.linalg.norm(b)), 1e-300) and resid > 0):
+    if not_assembled or (resid > 1e-8 * max(bn, 1e-300) and resid > 0):
         nan = np.full((nj, 2, 6), np.nan)
         return StaticsState(
             NOT_ASSEMBLED if not_assembled else UNBALANCED,
-            message(NOT_ASSEMBLED, residual=fr.residual) if not_assembled else
-            message(UNBALANCED, mismatch=resid / float(np.linalg.norm(b))),
+            message(NOT_ASSEMBLED, residual=fr.residual) if not_assembled else message(UNBALANCED, mismatch=resid / bn),
             np.full(m, np.nan), tuple(driven), np.full(nd, np.nan), nan, nan, nan, np.zeros((nj, 2, 6), bool), W,
             f, lengths, ends, np.full(nj, np.nan), np.zeros((0, nj, 2, 6)), fr.r, fr.A, fr.P, fr.R, fr.residual,
         ), None  # fmt: skip
-    ct = sk.cut_terms(tb, fr.P, fr.R, st.Q, st.L)
-    Zi, Zj, mrows, rod_row, rod_len = ct[5:]
-    x = xs * unscale
-    lam, tau = x[:m], x[m:]
-    wrench = sk.reactions(tb, Zi, Zj, mrows, lam, W)
-    rods = np.flatnonzero(rod_row >= 0)
-    member = np.full(nj, np.nan)
-    member[rods] = -2.0 * lam[rod_row[rods]] * rod_len[rods]
-    at_point, local = sk.at_points(wrench, fr.P, fr.R)
-    zero = np.zeros_like(W)
-    stress = np.array([sk.reactions(tb, Zi, Zj, mrows, v * unscale, zero) for v in null]).reshape(-1, nj, 2, 6)
-    # a component is undetermined when some self-stress state changes it
-    Lsc = engine.length_scale or 1.0
-    und, und_g = np.zeros((nj, 2, 6), bool), np.zeros((nj, 2, 6), bool)
-    tau_und, member_und = np.zeros(nd, bool), np.zeros(nj, bool)
-    for k, v in enumerate(null):
-        glob, loc = sk.at_points(stress[k], fr.P, fr.R)
-        loc[..., 3:] /= Lsc
-        glob[..., 3:] /= Lsc
-        t = v[m:] * unscale[m:] / Lsc if nd else np.zeros(0)  # efforts: torque-like scale
-        size = max(float(np.max(np.abs(loc))), float(np.max(np.abs(t))) if nd else 0.0)
-        if size == 0.0:
-            continue
-        und |= np.abs(loc) > UNDETERMINED_RTOL * size
-        und_g |= np.abs(glob) > UNDETERMINED_RTOL * size
-        member_und[rods] |= np.abs(2.0 * v[rod_row[rods]] * unscale[rod_row[rods]] * rod_len[rods]) > (
-            UNDETERMINED_RTOL * size
-        )
-        if nd:
-            tau_und |= np.abs(t) > UNDETERMINED_RTOL * size
-    wrench_out = wrench.copy()
-    if null.shape[0]:
+    null = Vt[rank:]
+    und = np.zeros((nj, 2, 6), bool)
+    stress = np.zeros((0, nj, 2, 6))
+    if null.shape[0]:  # self-stress: a component is undetermined when some null vector changes it
+        Zi, Zj, mrows, rod_row, rod_len = ct[5:]
+        rods = np.flatnonzero(rod_row >= 0)
+        zero = np.zeros_like(W)
+        stress = np.array([sk.reactions(tb, Zi, Zj, mrows, v * unscale, zero) for v in null]).reshape(-1, nj, 2, 6)
+        Lsc = engine.length_scale or 1.0
+        und_g = np.zeros((nj, 2, 6), bool)
+        tau_und, member_und = np.zeros(nd, bool), np.zeros(nj, bool)
+        for k, v in enumerate(null):
+            glob, loc = sk.at_points(stress[k], fr.P, fr.R)
+            loc[..., 3:] /= Lsc
+            glob[..., 3:] /= Lsc
+            t = v[m:] * unscale[m:] / Lsc if nd else np.zeros(0)  # efforts: torque-like scale
+            size = max(float(np.max(np.abs(loc))), float(np.max(np.abs(t))) if nd else 0.0)
+            if size == 0.0:
+                continue
+            und |= np.abs(loc) > UNDETERMINED_RTOL * size
+            und_g |= np.abs(glob) > UNDETERMINED_RTOL * size
+            member_und[rods] |= np.abs(2.0 * v[rod_row[rods]] * unscale[rod_row[rods]] * rod_len[rods]) > (
+                UNDETERMINED_RTOL * size
+            )
+            if nd:
+                tau_und |= np.abs(t) > UNDETERMINED_RTOL * size
+        wrench_out = wrench.copy()
         local[und] = np.nan
         at_point[und_g] = np.nan
         wrench_out[und.any(axis=2)] = np.nan  # a side with an undetermined component: no global wrench
         tau = np.where(tau_und, np.nan, tau)
         member[member_und] = np.nan
+    else:
+        wrench_out = wrench
     msg = message(OK, self_stress=null.shape[0], undetermined=int(und.sum()))
     ss = StaticsState(OK, msg, lam, tuple(driven), tau, wrench_out, local, at_point, und, W, f, lengths, ends, member,
                       stress, fr.r, fr.A, fr.P, fr.R, fr.residual)  # fmt: skip
-    return ss, _Terms(ct, wrench, As, unscale, cs)
+    return ss, _Terms(W, ct, wrench, U, s, Vt, rank, unscale, engine.col_scale[:nq])
 
 
 def statics_state(
@@ -514,7 +497,6 @@ __all__ = [
     "element_laws",
     "element_rates",
     "element_state",
-    "equilibrium_system",
     "generalized_forces",
     "law_table",
     "load_rates",

@@ -252,6 +252,32 @@ def _mtvacc(A, x, out, s):
 
 
 @kernel
+def _copy(src, dst):
+    """``dst[:] = src`` (1-d, without a temporary)."""
+    for x in range(dst.shape[0]):
+        dst[x] = src[x]
+
+
+@kernel
+def _subtree_into(tb, Ws):
+    """:func:`subtree_sums` in place on ``Ws`` (nb, 6)."""
+    for t in range(tb.tree.shape[0] - 1, -1, -1):
+        p, c = tb.tree[t, T_PARENT], tb.tree[t, T_CHILD]
+        for x in range(6):
+            Ws[p, x] += Ws[c, x]
+
+
+@kernel
+def _subtree_into_k(tb, Ws):
+    """:func:`subtree_sums_k` in place on ``Ws`` (K, nb, 6)."""
+    for t in range(tb.tree.shape[0] - 1, -1, -1):
+        p, c = tb.tree[t, T_PARENT], tb.tree[t, T_CHILD]
+        for k in range(Ws.shape[0]):
+            for x in range(6):
+                Ws[k, p, x] += Ws[k, c, x]
+
+
+@kernel
 def _dot3(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
@@ -275,7 +301,14 @@ def twists(tb, A, P, Tq, X):
     directions ``X`` (K, n_columns)."""
     K = X.shape[0]
     V, U = np.zeros((K, tb.fixed.shape[0], 6)), np.zeros((K, tb.joint.shape[0], 2, 6))
-    w = np.zeros(3)
+    _twists_into(tb, A, P, Tq, X, V, U, np.zeros(3))
+    return V, U
+
+
+@kernel
+def _twists_into(tb, A, P, Tq, X, V, U, w):
+    """:func:`twists` into ``V``, ``U`` (zeroed; ``w``: scratch 3-vector)."""
+    K = X.shape[0]
     for t in range(tb.tree.shape[0]):
         j, par, chi = tb.tree[t, T_JOINT], tb.tree[t, T_PARENT], tb.tree[t, T_CHILD]
         q0, nq = tb.joint[j, J_QCOL], tb.joint[j, J_NQ]
@@ -283,24 +316,23 @@ def twists(tb, A, P, Tq, X):
         ca, cb = J_COL_S_I + a, J_COL_S_I + b
         for k in range(K):
             Ua, Ub = U[k, j, a], U[k, j, b]
-            Ua[:] = V[k, par]
+            _copy(V[k, par], Ua)
             _design_twist(X, k, tb.joint[j, ca], tb.joint[j, ca + 2], A[par], P[j, a], Ua, w, 1.0)
-            Ub[:] = Ua
+            _copy(Ua, Ub)
             for y in range(max(nq, 0)):
                 xq = X[k, q0 + y]
                 for x in range(6):
                     Ub[x] += Tq[t, x, y] * xq
-            V[k, chi] = Ub
+            _copy(Ub, V[k, chi])
             _design_twist(X, k, tb.joint[j, cb], tb.joint[j, cb + 2], A[chi], P[j, b], V[k, chi], w, -1.0)
     for c in range(tb.cut.shape[0]):
         j = tb.cut[c, K_JOINT]
         for s in range(2):
             body = tb.joint[j, J_BODY_I + s]
             for k in range(K):
-                U[k, j, s] = V[k, body]
+                _copy(V[k, body], U[k, j, s])
                 _design_twist(X, k, tb.joint[j, J_COL_S_I + s], tb.joint[j, J_COL_S_I + 2 + s], A[body], P[j, s],
                               U[k, j, s], w, 1.0)  # fmt: skip
-    return V, U
 
 
 @njit
@@ -357,21 +389,28 @@ def element_rates(li, lf, held, r, A, V, qdot, frame_w, R, Q):
     return dW, df, dL
 
 
-@njit
-def contact_rate(radius, centre, axis, sae, Vb):
-    """Velocity (3,) of a wheel load's contact point (the lowest point of the wheel circle
-    ``centre + radius n``, ``n`` along ``-z`` projected onto the wheel plane; in SAE axes the
-    lowest point of the z-mirrored circle) under the wheel body's twist ``Vb`` (6,)."""
-    flip = np.array([1.0, 1.0, -1.0]) if sae else np.ones(3)
-    vc = flip * (Vb[:3] + _cross(Vb[3:], centre))
-    da = flip * _cross(Vb[3:], axis)
-    a = flip * axis
-    g = np.array([0.0, 0.0, -1.0]) + a[2] * a
-    ng = math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
-    n = g / ng
-    dg = da[2] * a + a[2] * da
-    dn = (dg - (dg[0] * n[0] + dg[1] * n[1] + dg[2] * n[2]) * n) / ng
-    return flip * (vc + radius * dn)
+@kernel
+def contact_rate(radius, centre, axis, sae, Vb, out, v):
+    """``out`` (3,): velocity of a wheel load's contact point (the lowest point of the wheel
+    circle ``centre + radius n``, ``n`` along ``-z`` projected onto the wheel plane; in SAE
+    axes the lowest point of the z-mirrored circle) under the wheel body's twist ``Vb`` (6,)
+    (``v``: scratch (4, 3))."""
+    fz = -1.0 if sae else 1.0
+    vc, da, a, dg = v[0], v[1], v[2], v[3]
+    for x in range(3):
+        vc[x], da[x], a[x] = Vb[x], 0.0, axis[x]
+    _xacc(Vb[3:], centre, vc, 1.0)
+    _xacc(Vb[3:], axis, da, 1.0)
+    vc[2], da[2], a[2] = fz * vc[2], fz * da[2], fz * a[2]
+    g0, g1, g2 = a[2] * a[0], a[2] * a[1], -1.0 + a[2] * a[2]
+    ng = math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
+    n0, n1, n2 = g0 / ng, g1 / ng, g2 / ng
+    for x in range(3):
+        dg[x] = da[2] * a[x] + a[2] * da[x]
+    gn = dg[0] * n0 + dg[1] * n1 + dg[2] * n2
+    out[0] = vc[0] + radius * (dg[0] - gn * n0) / ng
+    out[1] = vc[1] + radius * (dg[1] - gn * n1) / ng
+    out[2] = fz * (vc[2] + radius * (dg[2] - gn * n2) / ng)
 
 
 @njit
@@ -380,15 +419,22 @@ def load_rates(body, P, F, M, follows, radius, centre, axis, sae, V):
     force at a material point has ``dM_O = v_P x F + P x dF`` (``dF = omega x F`` in body
     axes); a wheel load's contact point moves as :func:`contact_rate` says."""
     dW = np.zeros(V.shape)
-    vP, dF = np.zeros(3), np.zeros(3)
+    _load_rates_into(body, P, F, M, follows, radius, centre, axis, sae, V, dW, np.zeros((6, 3)))
+    return dW
+
+
+@kernel
+def _load_rates_into(body, P, F, M, follows, radius, centre, axis, sae, V, dW, v):
+    """:func:`load_rates` into ``dW`` (zeroed; ``v``: scratch (6, 3))."""
+    vP, dF = v[0], v[1]
     for n in range(body.shape[0]):
         b = body[n]
         for k in range(V.shape[0]):
             w = V[k, b, 3:]
             if radius[n] > 0.0:
-                vP[:] = contact_rate(radius[n], centre[n], axis[n], sae[n], V[k, b])
+                contact_rate(radius[n], centre[n], axis[n], sae[n], V[k, b], vP, v[2:])
             else:
-                vP[:] = V[k, b, :3]
+                _copy(V[k, b, :3], vP)
                 _xacc(w, P[n], vP, 1.0)
             if follows[n]:
                 dF[:] = 0.0
@@ -398,7 +444,6 @@ def load_rates(body, P, F, M, follows, radius, centre, axis, sae, V):
                 _xacc(w, M[n], dW[k, b, 3:], 1.0)
                 _xacc(P[n], dF, dW[k, b, 3:], 1.0)
             _xacc(vP, F[n], dW[k, b, 3:], 1.0)
-    return dW
 
 
 @kernel
@@ -456,14 +501,38 @@ def rates_rhs(tb, P, R, Tq, Q, L, X, lam, V, U, Pi, d, Pd, Wi, Wj, mrows, W_appl
     multipliers ``dW_i``, ``dW_j`` (K, nc, 6), their ``dd`` (K, nc, 3) and every wrench's rate
     ``dW`` (K, nb, 6) (applied, elements and cut joints) (:mod:`kinprop.engine.statics_rates`)."""
     K, nb, nc = X.shape[0], V.shape[1], tb.cut.shape[0]
-    W_cut, dW_all = np.zeros((nb, 6)), dW_applied.copy()
-    dG = np.zeros((K, nq))
+    W_cut, dW_all, Ws = np.zeros((nb, 6)), dW_applied.copy(), np.zeros((nb, 6))
+    dG, dWs = np.zeros((K, nq)), np.zeros((K, nb, 6))
     dWi_c, dWj_c, ddc = np.zeros((K, nc, 6)), np.zeros((K, nc, 6)), np.zeros((K, nc, 3))
-    dPd, dWi, dWj = np.zeros((MAX_CUT_ROWS, 3)), np.zeros((MAX_CUT_ROWS, 3)), np.zeros((MAX_CUT_ROWS, 3))
-    AI, AJ = np.zeros((MAX_CUT_ROWS, 3)), np.zeros((MAX_CUT_ROWS, 3))
-    f, mi, mj, e = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
-    vPi, vPj, de, dd, s1, s2 = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
-    df, dmi, dmj = np.zeros(3), np.zeros(3), np.zeros(3)
+    _rates_rhs_into(tb, P, R, Tq, Q, L, X, lam, V, U, Pi, d, Pd, Wi, Wj, mrows, W_applied, W_cut, dW_all, Ws, dG,
+                    dWs, dWi_c, dWj_c, ddc, np.zeros((5, MAX_CUT_ROWS, 3)), np.zeros((22, 3)),
+                    np.zeros((4, 3, MAX_Q)), np.zeros((3, 3)))  # fmt: skip
+    return dG, dWi_c, dWj_c, ddc, dW_all
+
+
+@kernel
+def _rates_rhs_into(tb, P, R, Tq, Q, L, X, lam, V, U, Pi, d, Pd, Wi, Wj, mrows, W_applied, W_cut, dW_all, Ws, dG,
+                    dWs, dWi_c, dWj_c, ddc, S3, v3, M3, App):  # fmt: skip
+    """:func:`rates_rhs` into the zeroed outputs (``dW_all`` holding the applied wrenches'
+    rates; ``Ws``, ``dWs``: the subtree sums; ``S3``, ``v3``, ``M3``, ``App``: scratch)."""
+    K, nc = X.shape[0], tb.cut.shape[0]
+    dPd, dWi, dWj, AI, AJ = S3[0], S3[1], S3[2], S3[3], S3[4]
+    f, mi, mj, e, vPi, vPj, de, dd, s1, s2, df = (
+        v3[0],
+        v3[1],
+        v3[2],
+        v3[3],
+        v3[4],
+        v3[5],
+        v3[6],
+        v3[7],
+        v3[8],
+        v3[9],
+        v3[10],
+    )
+    dmi, dmj, dpp, dp, u_loc, w, v, sv, sw = v3[11], v3[12], v3[13], v3[14], v3[15], v3[16], v3[17], v3[18], v3[19]
+    v2 = v3[20:22]
+    ddm, Hm, ddd, dH = M3[0], M3[1], M3[2], M3[3]
     for c in range(nc):
         j, r0, mc = tb.cut[c, K_JOINT], tb.cut[c, K_ROW0], mrows[c]
         bi, bj = tb.joint[j, J_BODY_I], tb.joint[j, J_BODY_J]
@@ -483,7 +552,7 @@ def rates_rhs(tb, P, R, Tq, Q, L, X, lam, V, U, Pi, d, Pd, Wi, Wj, mrows, W_appl
         _xacc(f, Pj, W_cut[bj, 3:], -1.0)
         td = tb.joint[j, J_NQ] > 0  # T-D: the point on body i slides along z''_i
         qc = tb.joint[j, J_QCOL]
-        e[:] = R[j, 0, :, 2]
+        _copy(R[j, 0, :, 2], e)
         r = 0
         for bc in range(tb.cut[c, K_BASIC0], tb.cut[c, K_BASIC1]):  # the rows' axes (global)
             kind, on_j, ax = tb.basic[bc, B_KIND], tb.basic[bc, B_ON_J], tb.basic_axes[bc]
@@ -496,9 +565,9 @@ def rates_rhs(tb, P, R, Tq, Q, L, X, lam, V, U, Pi, d, Pd, Wi, Wj, mrows, W_appl
             r += _rows(kind)
         for k in range(K):
             wi, wj = U[k, j, 0, 3:], U[k, j, 1, 3:]
-            vPi[:] = U[k, j, 0, :3]
+            _copy(U[k, j, 0, :3], vPi)
             _xacc(wi, P[j, 0], vPi, 1.0)
-            vPj[:] = U[k, j, 1, :3]
+            _copy(U[k, j, 1, :3], vPj)
             _xacc(wj, P[j, 1], vPj, 1.0)
             de[:] = 0.0
             _xacc(wi, e, de, 1.0)
@@ -548,13 +617,16 @@ def rates_rhs(tb, P, R, Tq, Q, L, X, lam, V, U, Pi, d, Pd, Wi, Wj, mrows, W_appl
                 dW_all[k, bj, y] += wjc[y]
             if td:
                 dG[k, qc] -= _dot3(df, e) + _dot3(de, f)
-            ddc[k, c] = dd
-    Ws = subtree_sums(tb, W_applied + W_cut)
-    dWs = subtree_sums_k(tb, dW_all)
-    App, dpp = np.zeros((3, 3)), np.zeros(3)
-    ddm, Hm = np.zeros((3, MAX_Q)), np.zeros((3, MAX_Q))
-    ddd, dH, v2 = np.zeros((3, MAX_Q)), np.zeros((3, MAX_Q)), np.zeros((2, 3))
-    dp, u_loc, w, v, sv, sw = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+            _copy(dd, ddc[k, c])
+    for b in range(Ws.shape[0]):
+        for x in range(6):
+            Ws[b, x] = W_applied[b, x] + W_cut[b, x]
+    _subtree_into(tb, Ws)
+    for k in range(K):
+        for b in range(Ws.shape[0]):
+            for x in range(6):
+                dWs[k, b, x] = dW_all[k, b, x]
+    _subtree_into_k(tb, dWs)
     for t in range(tb.tree.shape[0]):
         j, chi = tb.tree[t, T_JOINT], tb.tree[t, T_CHILD]
         q0, nqt = tb.joint[j, J_QCOL], tb.joint[j, J_NQ]
@@ -576,7 +648,7 @@ def rates_rhs(tb, P, R, Tq, Q, L, X, lam, V, U, Pi, d, Pd, Wi, Wj, mrows, W_appl
                     dp[x] += ddm[x, y] * qd[y]
             Uk = U[k, j, 0]
             for y in range(nqt):
-                u_loc[:] = ddd[:, y]
+                _copy(ddd[:, y], u_loc)
                 _xacc(dp, Hm[:, y], u_loc, 1.0)
                 _xacc(dpp, dH[:, y], u_loc, 1.0)
                 w[:], v[:] = 0.0, 0.0
@@ -609,7 +681,6 @@ def rates_rhs(tb, P, R, Tq, Q, L, X, lam, V, U, Pi, d, Pd, Wi, Wj, mrows, W_appl
             dcx = -(X[k, ccol + 1] + 2.0 * x * X[k, ccol + 2] + 3.0 * x * x * X[k, ccol + 3]
                     + 4.0 * x**3 * X[k, ccol + 4])  # fmt: skip
             dG[k, qb] += lr * (d2 * X[k, qb] + dcx)
-    return dG, dWi_c, dWj_c, ddc, dW_all
 
 
 @njit
@@ -618,9 +689,20 @@ def rate_reactions(tb, P, R, U, lam, dlam, wrench, Zi, Zj, mrows, d, ddc, dWi_c,
     (about the origin; at the joints' points in global axes and in joint frame i's axes; the
     rods' tensions (NaN: no rod); the joint points' velocities (K, nj, 2, 3))."""
     K, nj = dlam.shape[0], tb.joint.shape[0]
-    dwrench = np.zeros((K, nj, 2, 6))
-    dW = dW_all.copy()
+    dwrench, vP = np.zeros((K, nj, 2, 6)), np.zeros((K, nj, 2, 3))
+    dat, dloc = np.zeros((K, nj, 2, 6)), np.zeros((K, nj, 2, 6))
     dmember = np.full((K, nj), np.nan)
+    _rate_reactions_into(tb, P, R, U, lam, dlam, wrench, Zi, Zj, mrows, d, ddc, dWi_c, dWj_c, dW_all.copy(), dwrench,
+                         dat, dloc, dmember, vP, np.zeros((3, 3)))  # fmt: skip
+    return dwrench, dat, dloc, dmember, vP
+
+
+@kernel
+def _rate_reactions_into(tb, P, R, U, lam, dlam, wrench, Zi, Zj, mrows, d, ddc, dWi_c, dWj_c, dW, dwrench, dat, dloc,
+                         dmember, vP, v3):  # fmt: skip
+    """:func:`rate_reactions` into the outputs (zeroed; ``dmember`` NaN; ``dW`` the wrenches'
+    rates at fixed multipliers, overwritten; ``v3``: scratch (3, 3))."""
+    K, nj = dlam.shape[0], tb.joint.shape[0]
     for c in range(tb.cut.shape[0]):
         j, r0 = tb.cut[c, K_JOINT], tb.cut[c, K_ROW0]
         bi, bj = tb.joint[j, J_BODY_I], tb.joint[j, J_BODY_J]
@@ -642,25 +724,23 @@ def rate_reactions(tb, P, R, U, lam, dlam, wrench, Zi, Zj, mrows, d, ddc, dWi_c,
                 if kind == DISTANCE:  # the rod's tension -2 lambda |d|
                     dmember[k, j] = -2.0 * (dlam[k, r] * length + lam[r] * _dot3(ddc[k, c], d[c]) / length)
                 r += _rows(kind)
-    dWs = subtree_sums_k(tb, dW)
+    _subtree_into_k(tb, dW)
     for t in range(tb.tree.shape[0]):
         j, chi = tb.tree[t, T_JOINT], tb.tree[t, T_CHILD]
         side = 0 if tb.tree[t, T_REVERSED] else 1
         for k in range(K):
             for y in range(6):
-                dwrench[k, j, side, y] = -dWs[k, chi, y]
-                dwrench[k, j, 1 - side, y] = dWs[k, chi, y]
-    vP = np.zeros((K, nj, 2, 3))
-    dat, dloc = np.zeros((K, nj, 2, 6)), np.zeros((K, nj, 2, 6))
-    G3, s1, s2 = np.zeros(3), np.zeros(3), np.zeros(3)
+                dwrench[k, j, side, y] = -dW[k, chi, y]
+                dwrench[k, j, 1 - side, y] = dW[k, chi, y]
+    G3, s1, s2 = v3[0], v3[1], v3[2]
     for j in range(nj):
         for s in range(2):
             F, MO = wrench[j, s, :3], wrench[j, s, 3:]
-            G3[:] = MO
+            _copy(MO, G3)
             _xacc(P[j, s], F, G3, -1.0)
             for k in range(K):
                 v = vP[k, j, s]
-                v[:] = U[k, j, s, :3]
+                _copy(U[k, j, s, :3], v)
                 _xacc(U[k, j, s, 3:], P[j, s], v, 1.0)
                 dF, dMO = dwrench[k, j, s, :3], dwrench[k, j, s, 3:]
                 out = dat[k, j, s]
@@ -669,9 +749,107 @@ def rate_reactions(tb, P, R, U, lam, dlam, wrench, Zi, Zj, mrows, d, ddc, dWi_c,
                 _xacc(v, F, out[3:], -1.0)
                 _xacc(P[j, s], dF, out[3:], -1.0)
                 wi = U[k, j, 0, 3:]
-                s1[:], s2[:] = out[:3], out[3:]
+                _copy(out[:3], s1)
+                _copy(out[3:], s2)
                 _xacc(wi, F, s1, -1.0)
                 _xacc(wi, G3, s2, -1.0)
                 _mtvacc(R[j, 0], s1, dloc[k, j, s, :3], 1.0)
                 _mtvacc(R[j, 0], s2, dloc[k, j, s, 3:], 1.0)
-    return dwrench, dat, dloc, dmember, vP
+
+
+#: relative singular value below which a direction of [Phi_q^T E_D^T] counts as null
+RANK_RTOL = 1e-10
+
+
+@njit
+def statics_core(tb, r, A, P, R, Tq, Q, L, Phi_q, rs, cs, driven, li, lf, W_applied):
+    """The statics of one evaluated state in one call: element forces and every applied wrench
+    ``W``; the system ``[Phi_q^T  E_D^T]`` with rows and columns scaled as the solver scales
+    them (unknowns ``[lambda / rs ; tau / cs_D]``, right-hand side ``-Q / cs``), its SVD and
+    rank; the minimum-norm multipliers and efforts with the residual of the solve and the
+    size of its right-hand side; the reactions (about the origin, at the joints' points,
+    in joint frame i), the rods' tensions and the cut joints' terms (:func:`cut_terms`)."""
+    m, nq, nd, nb = Phi_q.shape[0], Phi_q.shape[1], driven.shape[0], r.shape[0]
+    n = m + nd
+    f, lengths, ends, W_el = element_forces(li, lf, r, A, Q, P, R, nb)
+    W = W_applied + W_el
+    Qg = generalized_forces(tb, Tq, W, nq)
+    As = np.zeros((nq, n))  # unknowns [lambda / rs ; tau / cs_D]
+    for i in range(m):
+        for c in range(nq):
+            As[c, i] = Phi_q[i, c] * rs[i] / cs[c]
+    unscale = np.zeros(n)
+    unscale[:m] = rs
+    for k in range(nd):
+        As[driven[k], m + k] = 1.0
+        unscale[m + k] = cs[driven[k]]
+    b = -Qg / cs
+    U, s, Vt = np.linalg.svd(As)
+    smax = s[0] if s.size and s[0] > 0 else 1.0
+    rank = 0
+    for x in range(s.size):
+        if s[x] > RANK_RTOL * smax:
+            rank += 1
+    xs = _pinv_solve(U, s, Vt, rank, b)
+    resid, bn = 0.0, 0.0
+    for c in range(nq):
+        e = -b[c]
+        for i in range(n):
+            e += As[c, i] * xs[i]
+        resid += e * e
+        bn += b[c] * b[c]
+    ct = cut_terms(tb, P, R, Q, L)
+    x = xs * unscale
+    lam, tau = x[:m].copy(), x[m:].copy()
+    wrench = reactions(tb, ct[5], ct[6], ct[7], lam, W)
+    rod_row, rod_len = ct[8], ct[9]
+    member = np.full(rod_row.shape[0], np.nan)
+    for j in range(rod_row.shape[0]):
+        if rod_row[j] >= 0:
+            member[j] = -2.0 * lam[rod_row[j]] * rod_len[j]
+    at_point, local = at_points(wrench, P, R)
+    return (W, f, lengths, ends, unscale, U, s, Vt, rank, math.sqrt(resid), math.sqrt(bn), lam, tau, wrench,
+            at_point, local, member, ct)  # fmt: skip
+
+
+@njit
+def _pinv_solve(U, s, Vt, rank, b):
+    """``x = V_r S_r^-1 U_r^T b``: the minimum-norm least-squares solution on the first
+    ``rank`` singular directions."""
+    n = Vt.shape[1]
+    x = np.zeros(n)
+    for k in range(rank):
+        c = 0.0
+        for i in range(U.shape[0]):
+            c += U[i, k] * b[i]
+        c /= s[k]
+        for i in range(n):
+            x[i] += Vt[k, i] * c
+    return x
+
+
+@njit
+def rates_core(tb, r, A, P, R, Tq, Q, L, X, lam, li, lf, held, body, lP, lF, lM, follows, radius, centre, axis, sae,
+               W, ct, U_s, s, Vt, rank, unscale, cs, wrench):  # fmt: skip
+    """The rates of the statics along the state directions ``X`` (K, n_columns) in one call
+    (:mod:`kinprop.engine.statics_rates`), the equilibrium's rate solved on the statics' SVD
+    ``U_s``, ``s``, ``Vt`` of rank ``rank``: ``(dtau, dwrench, dat, dloc, dmember, df, dL, vP, V)``."""
+    K, nq, m = X.shape[0], cs.shape[0], lam.shape[0]
+    Pi, d, Pd, Wi, Wj, Zi, Zj, mrows = ct[0], ct[1], ct[2], ct[3], ct[4], ct[5], ct[6], ct[7]
+    V, U = twists(tb, A, P, Tq, X)
+    qdot = np.ascontiguousarray(X[:, :nq])
+    frame_w = np.ascontiguousarray(U[:, :, 0, 3:])
+    dW_el, df_el, dL_el = element_rates(li, lf, held, r, A, V, qdot, frame_w, R, Q)
+    dW_app = load_rates(body, lP, lF, lM, follows, radius, centre, axis, sae, V) + dW_el
+    dG, dWi_c, dWj_c, ddc, dW_all = rates_rhs(tb, P, R, Tq, Q, L, X, lam, V, U, Pi, d, Pd, Wi, Wj, mrows, W, dW_app,
+                                              nq)  # fmt: skip
+    # [Phi_q^T E_D^T] ydot = -dG, solved as the statics are
+    n = unscale.shape[0]
+    dlam, dtau = np.zeros((K, m)), np.zeros((K, n - m))
+    for k in range(K):
+        y = _pinv_solve(U_s, s, Vt, rank, -dG[k] / cs) * unscale
+        dlam[k] = y[:m]
+        dtau[k] = y[m:]
+    dwrench, dat, dloc, dmember, vP = rate_reactions(tb, P, R, U, lam, dlam, wrench, Zi, Zj, mrows, d, ddc, dWi_c,
+                                                     dWj_c, dW_all)  # fmt: skip
+    return dtau, dwrench, dat, dloc, dmember, df_el, dL_el, vP, V

@@ -99,26 +99,17 @@ def statics_rates(
     held_a = np.zeros(ne, bool) if held is None else np.array(held, dtype=bool).reshape(ne)
     fr = frames if frames is not None else _Frames(engine, state)
     tb, st = engine.tables, fr.state
-    nb, nj, nq, m, nd = tb.fixed.shape[0], tb.joint.shape[0], engine.n_coordinates, engine.n_rows, len(driven)
+    nb, nj, nd = tb.fixed.shape[0], tb.joint.shape[0], len(driven)
     ss, terms = _statics(engine, fr, loads.wrenches(nb), driven, (li, lf))
     if terms is None:
         nan = np.full((K, nj, 2, 6), np.nan)
         return StaticsRates(ss, np.full((K, nd), np.nan), nan, nan, nan, np.full((K, nj), np.nan),
                             np.full((K, ne), np.nan), np.full((K, ne), np.nan), np.full((K, nj, 2, 3), np.nan),
                             np.full((K, nb, 6), np.nan))  # fmt: skip
-    lam = ss.lam
-    V, U = sk.twists(tb, fr.A, fr.P, fr.Tq, X)
-    dW_el, df_el, dL_el = sk.element_rates(li, lf, held_a, fr.r, fr.A, V, X[:, :nq], U[:, :, 0, 3:], fr.R, st.Q)
-    dW_app = sk.load_rates(*loads.arrays(), V) + dW_el  # applied wrenches' rates (loads and elements)
-    Pi, d, Pd, Wi, Wj, Zi, Zj, mrows = terms.cut[:8]
-    dG, dWi_c, dWj_c, ddc, dW_all = sk.rates_rhs(tb, fr.P, fr.R, fr.Tq, st.Q, st.L, X, lam, V, U, Pi, d, Pd, Wi, Wj,
-                                                 mrows, ss.applied, dW_app, nq)  # fmt: skip
-    # [Phi_q^T E_D^T] ydot = -dG, solved as the statics are
-    ys = np.linalg.lstsq(terms.As, -(dG / terms.cs).T, rcond=None)[0].T if K else np.zeros((0, m + nd))
-    y = ys * terms.unscale
-    dlam, dtau = np.ascontiguousarray(y[:, :m]), y[:, m:]
-    dwrench, dat, dloc, dmember, vP = sk.rate_reactions(tb, fr.P, fr.R, U, lam, dlam, terms.wrench, Zi, Zj, mrows, d,
-                                                        ddc, dWi_c, dWj_c, dW_all)  # fmt: skip
+    dtau, dwrench, dat, dloc, dmember, df_el, dL_el, vP, V = sk.rates_core(
+        tb, fr.r, fr.A, fr.P, fr.R, fr.Tq, st.Q, st.L, X, ss.lam, li, lf, held_a, *loads.arrays(), terms.W, terms.cut,
+        terms.U, terms.s, terms.Vt, terms.rank, terms.unscale, terms.cs, terms.wrench,
+    )  # fmt: skip
     und = ss.undetermined
     if und.any():
         dloc[:, und] = np.nan
@@ -129,4 +120,38 @@ def statics_rates(
     return StaticsRates(ss, dtau, dwrench, dat, dloc, dmember, df_el, dL_el, vP, V)
 
 
-__all__ = ["StaticsRates", "statics_rates", "twists"]
+def design_rates(
+    engine: Engine,
+    state: State,
+    loads: PointForces,
+    wrt: Sequence[int],
+    driven: Sequence[int] = (),
+    laws: Sequence[Law] | tuple[Array, Array] = (),
+    held: Sequence[bool] | None = None,
+) -> tuple[StaticsRates, Array]:
+    """The loads of the assembled ``state`` and their exact derivatives with respect to the
+    design columns ``wrt`` (layout columns), the ``driven`` coordinates held: one evaluation,
+    the coordinates' response ``dq/dp = -Phi_q^+ Phi_p`` (minimum norm over the free
+    coordinates, as :func:`kinprop.propagation.sensitivity.design_sensitivity` without
+    weights) and the direct method along ``X = e_p + dq/dp``. Returns the rates and ``X``
+    (len(wrt), n_columns)."""
+    fr = _Frames(engine, state, design=True)
+    J = fr.jacobian()
+    nq = engine.n_coordinates
+    keep = np.ones(nq, bool)
+    keep[list(driven)] = False
+    free = np.flatnonzero(keep)
+    wrt = np.asarray(wrt, dtype=np.int64)
+    X = np.zeros((wrt.size, engine.n_columns))
+    X[np.arange(wrt.size), wrt] = 1.0
+    Jf, Jp = J[:, free], J[:, wrt]
+    try:  # square and regular: the one response
+        if Jf.shape[0] != Jf.shape[1]:
+            raise np.linalg.LinAlgError
+        X[:, free] = -np.linalg.solve(Jf, Jp).T
+    except np.linalg.LinAlgError:
+        X[:, free] = -np.linalg.lstsq(Jf, Jp, rcond=None)[0].T
+    return statics_rates(engine, state, loads, X, driven, laws, held, fr), X
+
+
+__all__ = ["StaticsRates", "design_rates", "statics_rates", "twists"]
