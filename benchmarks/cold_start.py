@@ -5,13 +5,18 @@ of the slider-crank, wall time (and CPU time) of the process.
 
 (h) ``kinprop --help`` and (v) ``kinprop --version``, median of several runs, target <= 0.3 s
 each: they import neither numba nor the library (kinprop.cli loads a command's module only
-when the command runs);
+when the command runs); the one-shot runs below are ``propagate`` of a small model, which the
+command line runs uncompiled whatever the cache (kinprop.jit: numba is not imported);
 (a) with an EMPTY kernel cache (``KINPROP_CACHE_DIR`` set to a fresh temporary directory),
 target <= 15 s: the command line runs this one-shot job uncompiled and starts the cache build
 in the background (kinprop.cli.warmup); (c) how long that background build takes until the
 cache is complete; (b) the same command again with the complete cache (kernels loaded from
-disk), median of several runs, target <= 0.7 s; (d) for reference, the cold run with ``KINPROP_JIT=on`` (compiling
-everything it needs before answering, what the batch commands do). Each run is a new process of
+disk), median of several runs, target <= 0.7 s, and (m) the README's McPherson propagation
+(``kinprop propagate assembled.yaml --set ST.s_i=0.5,1.0,0 --free q`` after ``kinprop assemble
+examples/mcpherson.yaml -o assembled.yaml``), target <= 0.7 s; (k) for reference, (b) with
+``KINPROP_JIT=on`` (numba imported and the compiled kernels loaded from the complete cache);
+(d) the cold run with ``KINPROP_JIT=on`` (compiling everything it needs before answering, what
+the batch commands do). Each run is a new process of
 the ``kinprop`` entry point next to this interpreter (the venv's), so imports are included.
 
 Each figure is the median wall time; the CPU time (user + system) of the same runs is printed
@@ -38,7 +43,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 ARGS = ["propagate", str(ROOT / "examples" / "slider_crank.yaml"), "--set", "J12.s_j=-2.8,0.2,0.1", "--free", "q"]
-TARGETS = {"cold": 15.0, "warm": 0.7, "help": 0.3, "version": 0.3}
+#: the README's McPherson propagation (of the model ``kinprop assemble`` wrote: ``{assembled}``)
+MCPHERSON = ["propagate", "{assembled}", "--set", "ST.s_i=0.5,1.0,0", "--free", "q"]
+TARGETS = {"cold": 15.0, "warm": 0.7, "mcpherson": 0.7, "help": 0.3, "version": 0.3}
 
 
 def kinprop_command(args: list[str] = ARGS) -> list[str]:
@@ -113,8 +120,20 @@ def measure(
             env = {**os.environ, "KINPROP_CACHE_DIR": cache, "KINPROP_JIT": "on"}
             subprocess.run([sys.executable, "-m", "kinprop.cli.warmup"], env=env, check=True)
         warm = [timed(cache) for _ in range(n)]
+        assembled = str(Path(tmp) / "assembled.yaml")
+        timed(cache, args=["assemble", str(ROOT / "examples" / "mcpherson.yaml"), "-o", assembled])
+        mcpherson = [timed(cache, args=[a.format(assembled=assembled) for a in MCPHERSON]) for _ in range(n)]
+        compiled = [timed(cache, jit="on") for _ in range(n)]
     res["warm"], res["warm_min"] = statistics.median(w for w, _ in warm), min(w for w, _ in warm)
     res["warm_cpu"] = statistics.median(c for _, c in warm)
+    res["mcpherson"], res["mcpherson_cpu"] = (
+        statistics.median(w for w, _ in mcpherson),
+        statistics.median(c for _, c in mcpherson),
+    )
+    res["warm_on"], res["warm_on_cpu"] = (
+        statistics.median(w for w, _ in compiled),
+        statistics.median(c for _, c in compiled),
+    )
     if compiled_cold and cold:
         with tempfile.TemporaryDirectory(prefix="kinprop_cold_") as cache:
             res["cold_jit"] = run_once(cache, jit="on")
@@ -134,6 +153,14 @@ def lines(res: dict[str, float]) -> list[str]:
     out.append(
         f"  (b) warm kernel cache:  {res['warm']:.2f} s median (min {res['warm_min']:.2f} s, "
         f"{res['warm_cpu']:.2f} s CPU; target <= {TARGETS['warm']:g} s)"
+    )
+    out.append(
+        f"  (m) README McPherson `kinprop {' '.join(MCPHERSON).format(assembled='assembled.yaml')}`: "
+        f"{res['mcpherson']:.2f} s median ({res['mcpherson_cpu']:.2f} s CPU; target <= {TARGETS['mcpherson']:g} s)"
+    )
+    out.append(
+        f"  (k) (b) compiled, KINPROP_JIT=on (numba and the cached kernels loaded): {res['warm_on']:.2f} s median "
+        f"({res['warm_on_cpu']:.2f} s CPU)"
     )
     if "build" in res:
         out.append(f"  (c) background build of the complete cache: {res['build']:.1f} s after the first run started")

@@ -68,9 +68,9 @@ def run(N: int = 10_000, trials: int = 5, lsq_subset: int = 200, seed: int = 0) 
             row.note = f"timed on {n} variants"
     rows[0].note = "serial (1 thread)"
     rows[2].note = "stacked numpy.linalg.solve over the batch"
-    import numba
+    from kinprop.jit import num_threads
 
-    rows[1].note = f"{numba.get_num_threads()} numba threads"
+    rows[1].note = f"{num_threads()} threads"
     return rows
 
 

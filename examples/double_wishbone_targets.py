@@ -46,7 +46,7 @@ def main(out: Path) -> None:
         print(f"  {row['target']:<38} before {row['before']:+.5f}  achieved {row['achieved']:+.5f} {row['unit']}")
     for k, d in tp.hardpoint_moves().items():
         print(f"  {k:<6} moves by [{d[0]:+.3f}, {d[1]:+.3f}, {d[2]:+.3f}] mm, |d| = {np.linalg.norm(d):.3f} mm")
-    static = tp.configuration_names.index("metric:upright.wheel_centre_dz=0")
+    static = tp.configuration_names.index("travel:upright=0")
     for key, (a, b) in tp.joint_positions(static).items():
         if np.linalg.norm(b - a) > 1e-6:
             print(f"  at 0 mm travel {key:<6} [{a[0]:.3f}, {a[1]:.3f}, {a[2]:.3f}] -> [{b[0]:.3f}, {b[1]:.3f}, "

@@ -3,8 +3,9 @@
 First chooses how the kernels run (``KINPROP_JIT``, :mod:`kinprop.jit`), before any kernel is
 imported: one-shot commands use ``auto`` (compiled when the kernel cache is complete, else
 uncompiled while the cache is built in the background: a first run never waits for a compile
-it does not need); commands that solve many variants compile. A ``KINPROP_JIT`` already set
-is the user's choice and is kept.
+it does not need; ``propagate`` and ``assemble`` of a small model run uncompiled, which is
+faster than importing numba and loading the cache); commands that solve many variants
+compile. A ``KINPROP_JIT`` already set is the user's choice and is kept.
 """
 
 from __future__ import annotations
@@ -15,6 +16,8 @@ from importlib.util import find_spec
 
 #: commands whose work is many solves: compiling first pays for itself
 BATCH_COMMANDS = frozenset({"sweep", "study", "tolerance", "serve"})
+#: commands that solve one model once (``kinprop.jit.one_solve``)
+ONE_SOLVE_COMMANDS = frozenset({"propagate", "assemble"})
 #: the optional libraries a batch command cannot start without (its extra): when one is
 #: missing the command says which extra to install, and nothing is announced before that
 NEEDS = {"sweep": ("pandas",), "study": ("pandas", "pyarrow"), "serve": ("fastapi",)}
@@ -38,6 +41,10 @@ def main() -> None:
             from kinprop.cli.warmup import announce
 
             announce()
+    if command in ONE_SOLVE_COMMANDS and not answers_only:  # read by the rule of ``auto``
+        from kinprop import jit
+
+        jit.one_solve = True
     from kinprop.cli import main as cli_main
 
     cli_main()

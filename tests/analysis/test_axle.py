@@ -213,3 +213,31 @@ def test_road_wheel_steer_as_the_drive_against_the_trapezoids_closed_form():
         assert v[names[1]] == pytest.approx(outer, abs=1e-8)  # the right wheel's steer is +toe
         assert 0 < outer < delta  # the outer wheel turns less (a trapezoid's Ackermann)
         assert v[names[2]] == pytest.approx(s, abs=1e-7)
+
+
+TRAVEL_INPUTS = {"upright_L": "LCA_L", "upright_R": "LCA_R"}
+
+
+def test_roll_centre_migrates_in_heave_and_roll(axle):
+    """The roll centre at a heave travel is on the centre line at the corner's roll-centre
+    height there (the corner metric, another construction); in body roll it is the roll centre
+    of the axle posed by the independent solver's lower-arm angles of both wheels (the right
+    wheel mirrors the left at the opposite roll), mirrored in y between +roll and -roll."""
+    for t in (-30.0, 30.0):
+        rc = roll_centre(axle, "upright_L", "upright_R", TRAVEL_INPUTS, travel=t)
+        corner = outputs_at(axle, [f"metric:upright_L.roll_centre_height@travel={t}"])
+        assert rc["y"] == pytest.approx(0.0, abs=1e-6)
+        assert rc["height"] == pytest.approx(corner[f"metric:upright_L.roll_centre_height@travel={t}"], abs=1e-7)
+    at = {}
+    for phi in (2.0, -2.0):
+        at[phi] = roll_centre(axle, "upright_L", "upright_R", TRAVEL_INPUTS, roll=phi)
+        arms = {"LCA_L.q": _theta_rolled(phi), "LCA_R.q": -_theta_rolled(-phi)}
+        posed = propagate(axle, arms, ["q"], tol=1e-12).after
+        truth = roll_centre(posed, "upright_L", "upright_R", TRAVEL_INPUTS)
+        for k in ("y", "z", "height"):
+            assert at[phi][k] == pytest.approx(truth[k], abs=1e-6), (phi, k)
+    assert abs(at[2.0]["y"]) > 10.0  # it does move off the centre line
+    assert at[2.0]["y"] == pytest.approx(-at[-2.0]["y"], abs=1e-6)
+    assert at[2.0]["height"] == pytest.approx(at[-2.0]["height"], abs=1e-6)
+    with pytest.raises(AddressError, match="not both"):
+        roll_centre(axle, "upright_L", "upright_R", TRAVEL_INPUTS, travel=1.0, roll=1.0)

@@ -4,10 +4,12 @@ central differences of two travel solves."""
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
 import pytest
+import yaml
 from analysis_helpers import EXAMPLES
 from dw_oracle import HMMWV, solve
 from scipy.optimize import brentq
@@ -16,6 +18,7 @@ from kinprop import load_model, sweep
 from kinprop.analysis.drives import outputs_at
 from kinprop.analysis.targets import propagate_targets
 from kinprop.errors import AddressError
+from kinprop.io import model_from_data
 from kinprop.io.commands import sensitivities
 
 pytestmark = pytest.mark.filterwarnings("ignore::kinprop.SingularityWarning")
@@ -122,3 +125,30 @@ def test_an_undriven_drive_joint_follows_the_wheel():
     for k, v in alone.items():
         assert mixed[k] == pytest.approx(v, abs=1e-10)
     assert alone["metric:upright_L.wheel_centre_dz@RACK.q=10"] != 0.0  # steering moves the wheel centre: held arms
+
+
+def test_sensitivity_of_gains_at_a_travel_against_re_solved_files():
+    """d(camber gain at +50 mm), d(caster gain at +50 mm) and d(bump steer at -30 mm) by two
+    hardpoints (the tangent with the travel held, the gains' exact design derivatives there)
+    against central differences (Richardson) of the file re-loaded with the hardpoint moved and
+    its gains evaluated at that travel."""
+    data = yaml.safe_load(FILE.read_text())
+    model = load_model(FILE)
+    of = ["camber_gain@travel=50", "caster_gain@travel=50", "bump_steer@travel=-30"]
+    wrt = [("UBJ", "point", 2), ("TR", "point_i", 2)]
+    sens = sensitivities(model, [f"hardpoint:{'TR.i' if j == 'TR' else j}[z]" for j, _, _ in wrt], of, ("q",), None)
+    assert sens.units_of == ["deg/mm", "deg/mm", "deg/mm"]
+
+    def gains(joint: str, key: str, k: int, dp: float) -> np.ndarray:
+        d = copy.deepcopy(data)
+        d["joints"][joint][key][k] += dp
+        v = outputs_at(model_from_data(d, str(FILE)), of, tol=1e-13)
+        return np.array([v[o] for o in of])
+
+    h = 0.5
+    for col, (joint, key, k) in enumerate(wrt):
+        d1 = (gains(joint, key, k, h) - gains(joint, key, k, -h)) / (2 * h)
+        d2 = (gains(joint, key, k, h / 2) - gains(joint, key, k, -h / 2)) / h
+        truth = (4 * d2 - d1) / 3
+        np.testing.assert_allclose(sens.matrix[:, col], truth, rtol=1e-6, atol=1e-12)
+        assert np.abs(truth).min() > 1e-6  # each gain does change

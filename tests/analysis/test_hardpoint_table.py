@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 import yaml
 from analysis_helpers import EXAMPLES
@@ -14,6 +15,8 @@ from typer.testing import CliRunner
 from kinprop import load_model
 from kinprop.analysis.points import HARDPOINT_GROUPS, hardpoint_table
 from kinprop.cli import app
+from kinprop.engine import compile as compile_engine
+from kinprop.propagation.hardpoints import current_point
 
 
 def test_the_corner_lists_its_file_points_in_the_usual_order():
@@ -53,7 +56,26 @@ def test_an_axle_lists_the_rack_and_both_sides_mirrored_and_check_prints_the_tab
     r = CliRunner().invoke(app, ["check", str(EXAMPLES / "double_wishbone_hardpoints.yaml"), "--json"])
     assert r.exit_code == 0
     assert json.loads(r.stdout)["hardpoints"][0] == {"group": "chassis pickups", "point": "LCA front",
-                                                     "x": 223.266, "y": 307.086, "z": 0.0}  # fmt: skip
+                                                     "x": 223.266, "y": 307.086, "z": 0.0,
+                                                     "address": "hardpoint:LCA.front", "body": "chassis"}  # fmt: skip
     r = CliRunner().invoke(app, ["check", str(EXAMPLES / "double_wishbone_hardpoints.yaml")])
     assert "hardpoints (global, mm)" in r.stdout and "TR inner" in r.stdout
-    assert hardpoint_table(load_model(EXAMPLES / "fourbar.yaml")) == []  # no wheel: no table
+    r = CliRunner().invoke(app, ["check", str(EXAMPLES / "fourbar.yaml"), "--json"])
+    assert json.loads(r.stdout)["hardpoints"] == []  # no wheel: check lists no suspension table
+
+
+def test_every_editable_row_is_the_address_that_moves_it():
+    """The table is the report's and the workbench's too: each row with an address is where
+    that address puts the point (``--set ADDRESS=x,y,z`` with the row's own numbers changes
+    nothing), and the rows of a wheel-less mechanism are its joints."""
+    for name in ("double_wishbone_hardpoints.yaml", "hmmwv_front_axle.yaml", "fourbar.yaml", "stewart.yaml"):
+        model = load_model(EXAMPLES / name)
+        eng = compile_engine(model)
+        rows = hardpoint_table(model, eng)
+        assert rows and all(r["group"] in HARDPOINT_GROUPS for r in rows)
+        for r in rows:
+            if r["address"] is not None:
+                p = current_point(eng, eng.reference, r["address"])
+                np.testing.assert_allclose(p, [r["x"], r["y"], r["z"]], atol=1e-9, err_msg=f"{name}: {r['point']}")
+    rows = hardpoint_table(load_model(EXAMPLES / "fourbar.yaml"))
+    assert [r["address"] for r in rows if r["address"]] == [f"hardpoint:{j}" for j in ("O2", "O4", "A", "B")]

@@ -51,6 +51,28 @@ def test_a_sweep_compiles_once_whatever_its_length(compiles, steps):
     assert compiles[0] == 1
 
 
+def test_a_travel_sweep_compiles_once(compiles):
+    """``kinprop sweep FILE --drive travel=-50:50:5`` (five engines before: the model three times
+    more for its wheel points, and the model with the travel joint): one engine, the model with
+    its travel joint, whose drive joint follows the wheel when the outputs' motions and statics
+    are evaluated, so the rows equal those of the model's own engine."""
+    path = EXAMPLES / "double_wishbone_hardpoints.yaml"
+    outs = ["camber", "toe", "camber_gain", "anti_dive", "motion_ratio:spring", "force:spring"]
+    res = kp.sweep(kp.load_model(path), ["travel=-50:50:5"], outputs=outs)
+    assert res.ok and compiles[0] == 1
+    compiles[0] = 0
+    args = ["sweep", str(path), "--drive", "travel=-50:50:5", "--json"] + [a for o in outs for a in ("--out", o)]
+    cli = CliRunner().invoke(app, args)
+    assert cli.exit_code == 0, cli.output
+    assert compiles[0] == 1
+    # each row against the model's own engine at that step's pose (outputs of the base mechanism)
+    for k, row in res.frame.iterrows():
+        at = kp.propagate(kp.load_model(path), {"LCA.q": row["LCA.q"]}, tol=1e-12).after
+        got = kp.evaluate_outputs(at, outs)
+        for o in outs:
+            assert row[o] == pytest.approx(got[o], rel=1e-8, abs=1e-9), (k, o)
+
+
 def test_sensitivity_tolerance_monte_carlo_targets_compile_once(double_wishbone, compiles):
     m = double_wishbone
     for run in (

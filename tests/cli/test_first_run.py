@@ -72,6 +72,36 @@ def test_a_complete_cache_is_used_without_a_note(tmp_path):
     assert not list(cache.glob("*/building.lock"))
 
 
+def test_a_larger_model_loads_the_compiled_kernels_from_a_complete_cache(tmp_path):
+    """Under ``auto`` one solve of a model above ``kinprop.jit.SMALL_MODEL`` joint coordinates
+    (a 25-link chain) uses the compiled kernels of a complete cache: numba is imported, nothing
+    is announced, no build is started, and the answer is the uncompiled one."""
+    from kinprop.builders import closed_chain_yaml
+    from kinprop.jit import SMALL_MODEL
+
+    if not JIT:
+        pytest.skip("this test process runs the kernels uncompiled (KINPROP_JIT)")
+    chain = tmp_path / "chain.yaml"
+    chain.write_text(closed_chain_yaml(SMALL_MODEL + 5))
+    cache = tmp_path / "cache"
+    folder = cache / kernel_version()
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "complete").write_text("test\n")
+    env = _auto_env(cache) | {"KINPROP_NUMBA_CACHE_DIR": os.environ["NUMBA_CACHE_DIR"]}
+    args = ["propagate", chain, "--set", "D.length=0.6", "--free", "q", "--json"]
+    p = subprocess.run([sys.executable, "-X", "importtime", "-m", "kinprop", *map(str, args)], capture_output=True,
+                       text=True, timeout=300, env=env)  # fmt: skip
+    assert p.returncode == 0, p.stderr[-2000:]
+    lines = p.stderr.splitlines()
+    modules = {line.rsplit("|", 1)[-1].strip() for line in lines if line.startswith("import time:")}
+    assert "numba" in modules
+    assert not [line for line in lines if not line.startswith("import time:")], p.stderr[-2000:]
+    assert not list(cache.glob("*/building.lock"))
+    off = _run(_auto_env(cache) | {"KINPROP_JIT": "off"}, *args)
+    assert off.returncode == 0, off.stderr
+    _close(json.loads(p.stdout), json.loads(off.stdout))
+
+
 #: commands whose JSON must not depend on whether the kernels are compiled
 UNCOMPILED = [
     ["check", ROOT / "examples" / "mcpherson.yaml", "--json"],

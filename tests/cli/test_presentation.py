@@ -106,7 +106,7 @@ def test_help_lists_the_commands_in_a_sessions_order() -> None:
     assert r.exit_code == 0
     listed = [line.split()[0] for line in r.stdout.split("Commands:")[1].splitlines() if line.strip()]
     assert listed == ["examples", "check", "plot", "assemble", "propagate", "sweep", "sensitivity", "tolerance",
-                      "study", "loads", "report", "serve", "import", "convert", "paper"]  # fmt: skip
+                      "study", "loads", "vehicle", "report", "serve", "import", "convert", "paper"]  # fmt: skip
 
 
 def test_curves_fill_a_grid_and_fit_their_data() -> None:

@@ -63,3 +63,58 @@ def test_the_command_table_is_the_commands_own() -> None:
         assert info.callback.__module__ == module, name
         first = inspect.getdoc(info.callback).split("\n\n")[0]
         assert " ".join(first.split()) == text, name
+
+
+def test_one_solve_of_a_small_model_imports_neither_numba_nor_scipy(tmp_path) -> None:
+    """``kinprop propagate`` of the slider-crank with a complete kernel cache runs its kernels
+    uncompiled (kinprop.jit's rule for one solve of a small model): numba and scipy are not
+    imported (``--json`` still imports ``scipy.spatial`` for rotation vectors), and the answer
+    is the solver's (the numbers are compared with the compiled kernels' in
+    tests/cli/test_first_run.py)."""
+    from kinprop.jit import kernel_version
+    from kinprop.resources import examples_dir
+
+    folder = tmp_path / "cache" / kernel_version()
+    folder.mkdir(parents=True)
+    (folder / "complete").write_text("test\n")
+    slider = str(examples_dir() / "slider_crank.yaml")
+    env = {k: v for k, v in os.environ.items() if k not in ("KINPROP_JIT", "NUMBA_DISABLE_JIT")}
+    args = ["propagate", slider, "--set", "J12.s_j=-2.8,0.2,0.1", "--free", "q"]
+    p = subprocess.run(
+        [sys.executable, "-X", "importtime", "-m", "kinprop", *args],
+        capture_output=True,
+        text=True,
+        env=env | {"KINPROP_CACHE_DIR": str(tmp_path / "cache")},
+        timeout=120,
+    )
+    assert p.returncode == 0, p.stderr[-2000:]
+    modules = {line.rsplit("|", 1)[-1].strip() for line in p.stderr.splitlines() if line.startswith("import time:")}
+    assert "kinprop.engine.engine" in modules
+    assert not {m for m in modules if m.split(".")[0] in ("numba", "llvmlite", "scipy")}
+    assert "converged in 7 iterations" in p.stdout and "44.89893" in p.stdout  # J01.q in degrees
+
+
+@pytest.mark.parametrize(
+    ("mode", "one_solve", "size", "warm", "expected"),
+    [
+        ("auto", True, 4, True, "python"),  # the slider-crank: uncompiled even with a complete cache
+        ("auto", True, 20, True, "python"),
+        ("auto", True, 21, True, "compiled"),  # a larger model: the cache pays for itself
+        ("auto", True, 21, False, "python"),  # no complete cache: never wait for a compile
+        ("auto", True, None, True, "compiled"),  # a kernel before any model: the cache's rule
+        ("auto", False, 4, True, "compiled"),  # other commands: compiled when the cache is complete
+        ("auto", False, 4, False, "python"),
+        ("on", True, 4, False, "compiled"),  # KINPROP_JIT overrides the rule
+        ("off", False, 100, True, "python"),
+    ],
+)
+def test_the_rule_of_kinprop_jit(monkeypatch, mode, one_solve, size, warm, expected) -> None:
+    """``kinprop.jit.wanted`` (docs/architecture.md, "Compilation and the cache")."""
+    from kinprop import jit
+
+    monkeypatch.setattr(jit, "MODE", mode)
+    monkeypatch.setattr(jit, "one_solve", one_solve)
+    monkeypatch.setattr(jit, "_model_size", size)
+    monkeypatch.setattr(jit, "is_warm", lambda: warm)
+    assert jit.SMALL_MODEL == 20
+    assert jit.wanted() == expected

@@ -1,6 +1,7 @@
 """Numbers the docs print in Markdown tables and prose agree with the commands (issue 19 item 3).
 
-The numbers of marked tables and paragraphs are checked by tests/docs/test_docs.py (the import
+Every number of the docs' tables and prose is compared with an output or stated by
+tests/docs/test_docs.py (the rule: docs/testing.md#numbers-in-tables-and-prose; the import
 guide's sensitivity table had the tie rod's sign wrong: toe-in for what is toe-out). Checked
 here: the words of that sentence ("0.35 deg of toe-out") and that the docs cite no file outside
 the repository.

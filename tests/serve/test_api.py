@@ -319,6 +319,64 @@ def test_state_describes_the_model(make_client) -> None:
     assert st["before_scene"] is not None and "LCA.q" not in st["changed"] and "UCA.q" in st["changed"]
 
 
+def test_a_suspension_is_driven_by_wheel_travel(make_client) -> None:
+    """The workbench's first drive of a suspension with a wheel-centre reference is the wheel
+    travel, +-50 mm (in the model's length unit); a curve's drive, not a slider; without a
+    wheel there is none."""
+    st = make_client("double_wishbone_hardpoints.yaml").get("/api/state").json()
+    travel = st["drives"][0]
+    assert (travel["spec"], travel["unit"], travel["curve"]) == ("travel", "mm", [-50.0, 50.0])
+    assert [d["spec"] for d in st["sliders"]] == ["LCA"]
+    st = make_client("multilink_rear_axle.yaml").get("/api/state").json()
+    assert st["drives"][0]["spec"] == "travel" and st["drives"][0]["curve"] == pytest.approx([-0.05, 0.05])  # metres
+    assert all(d["spec"] != "travel" for d in make_client("fourbar.yaml").get("/api/state").json()["drives"])
+
+
+@pytest.mark.parametrize(
+    ("name", "edit"),
+    [
+        ("double_wishbone_hardpoints.yaml", ("hardpoint:UBJ", [-53.0352, 715.518, 225.4936])),  # the UBJ 10 mm up
+        ("double_wishbone.yaml", ("UCA.s_i", [-158.0642, 461.8482, 230.091])),  # edits: mechanism, the wheel moves
+        ("double_wishbone.yaml", ("hardpoint:UBJ.j", [-53.0352, 725.518, 215.4936])),
+    ],
+)
+def test_the_travel_curve_after_an_edit_is_the_cli_sweep(make_client, examples: Path, tmp_path: Path, name, edit):
+    """The page's curve after an edit, as the page asks for it (the state's first drive over its
+    default range, the default outputs): the CLI's ``kinprop sweep --drive travel=...`` of the
+    edited design (``kinprop propagate ... -o``), row for row, in equal millimetre steps; and
+    each row the outputs of the edited model propagated to that row's arm angle."""
+    import kinprop as kp
+
+    c = make_client(name)
+    address, value = edit
+    assert c.post("/api/propagate", json={"set": {address: value}}).json()["status"] == "converged"
+    st = c.get("/api/state").json()
+    d, outs = st["drives"][0], st["default_outputs"]
+    spec = f"{d['spec']}={d['curve'][0]!r}:{d['curve'][1]!r}:49"
+    assert spec == "travel=-50.0:50.0:49" and outs == ["metric:upright.camber", "metric:upright.toe"]
+    got = c.post("/api/sweep", json={"drive": [spec], "out": outs, "free": ["q"]}).json()
+    assembled, changed = tmp_path / "assembled.yaml", tmp_path / "changed.yaml"
+    assert cli("assemble", examples / name, "-o", assembled)[0] == 0  # the session starts assembled
+    assert cli("propagate", assembled, "--set", f"{address}={','.join(map(repr, value))}", "-o", changed)[0] == 0
+    want = cli_json("sweep", changed, "--drive", spec, *[a for o in outs for a in ("--out", o)], "--json")
+    assert got["converged"] == want["converged"] == 50
+    travel = [r["travel"] for r in got["rows"]]
+    np.testing.assert_allclose(np.diff(travel), 100.0 / 49, rtol=1e-12)
+    for o in outs:
+        np.testing.assert_allclose([r[o] for r in got["rows"]], [r[o] for r in want["rows"]], rtol=1e-9, atol=1e-12)
+    if address == "hardpoint:UBJ":  # the numbers of the old mismatch: travel -50 mm, and the arm at -10 deg
+        assert got["rows"][0]["metric:upright.camber"] == pytest.approx(1.1711, abs=1e-4)
+        arm = c.post("/api/sweep", json={"drive": ["LCA=-10:10:4"], "out": outs[:1]}).json()["rows"][0]
+        assert arm["metric:upright.camber"] == pytest.approx(1.6302, abs=1e-4)
+    model = kp.load_model(changed)
+    for r in got["rows"][::7]:
+        at = kp.propagate(model, {"LCA.q": r["LCA.q"]}, tol=1e-12).after
+        v = kp.evaluate_outputs(at, [*outs, "metric:upright.wheel_centre_dz"])
+        assert v["metric:upright.wheel_centre_dz"] == pytest.approx(r["travel"], abs=1e-8)
+        for o in outs:
+            assert r[o] == pytest.approx(v[o], abs=1e-9)
+
+
 def test_curve_defaults_without_a_wheel(make_client) -> None:
     """A four-bar's default curve: the rocker (and coupler) angle over the crank angle; the
     McPherson's drive is the rack (the strut's slide is one coordinate of a 5-coordinate joint)."""

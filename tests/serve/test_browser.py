@@ -120,8 +120,8 @@ def test_workbench_in_chromium(live_server, examples: Path, tmp_path: Path) -> N
             current = tmp_path / "current.yaml"
             current.write_text(page.request.get(srv.url + "api/model.yaml?session=" + sid(page)).text())
             drive = state["drives"][0]
-            spec = f"LCA={page.input_value('#drive-from')}:{page.input_value('#drive-to')}:49"
-            assert drive["spec"] == "LCA"
+            spec = f"travel={page.input_value('#drive-from')}:{page.input_value('#drive-to')}:49"
+            assert drive["spec"] == "travel"  # a suspension's default drive: wheel travel in equal steps
             sweep = cli_json("sweep", current, "--drive", spec, "--out", "metric:upright.camber", "--json")
             drawn = page.evaluate("document.getElementById('curves').data[1].y")
             assert len(drawn) == 50
@@ -212,13 +212,13 @@ def test_hardpoints_and_views_in_chromium(live_server, examples: Path, tmp_path:
             # body-frame rows out of the way; the hardpoints in suspension order
             assert page.locator("#body-frames").get_attribute("open") is None
             sections = page.locator("#hardpoints tr.section").all_inner_texts()
-            assert sections == ["chassis pickups", "upright points", "links and steering", "spring and damper", "wheel"]
+            assert sections == ["chassis pickups", "upright points", "steering", "spring/damper", "wheel"]
             editable = page.eval_on_selector_all(
                 "#hardpoints input[data-index='0']", "els => els.map(e => e.dataset.hardpoint)"
             )
             assert editable == [
                 "hardpoint:LCA.front", "hardpoint:LCA.rear", "hardpoint:UCA.front", "hardpoint:UCA.rear",
-                "hardpoint:TR.i", "hardpoint:LBJ", "hardpoint:UBJ", "hardpoint:TR.j",
+                "hardpoint:LBJ", "hardpoint:UBJ", "hardpoint:TR.i", "hardpoint:TR.j",
             ]  # fmt: skip
             # the file's numbers (global, mm), as written
             assert page.input_value('#hardpoints input[data-hardpoint="hardpoint:TR.i"][data-index="2"]') == "54.229"
@@ -250,7 +250,7 @@ def test_hardpoints_and_views_in_chromium(live_server, examples: Path, tmp_path:
             )
             changed = tmp_path / "changed.yaml"
             assert cli("propagate", assembled, "--set", target, "-o", changed)[0] == 0
-            spec = f"LCA={page.input_value('#drive-from')}:{page.input_value('#drive-to')}:49"
+            spec = f"travel={page.input_value('#drive-from')}:{page.input_value('#drive-to')}:49"
             sweep = cli_json("sweep", changed, "--drive", spec, "--out", "metric:upright.camber", "--json")
             base = cli_json("sweep", assembled, "--drive", spec, "--out", "metric:upright.camber", "--json")
             data = page.evaluate("document.getElementById('curves').data.map(t => [t.name, t.y])")

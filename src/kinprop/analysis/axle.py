@@ -30,10 +30,10 @@ from collections.abc import Mapping
 import numpy as np
 
 from kinprop.analysis.context import OutputContext, WheelSpec
-from kinprop.analysis.drives import outputs_at
+from kinprop.analysis.drives import model_at, outputs_at
 from kinprop.analysis.metrics import _radius, contact_point
 from kinprop.analysis.outputs import evaluate_outputs
-from kinprop.engine.units import METRES_PER
+from kinprop.engine.units import METRES_PER, RADIANS_PER, radians_per_angle
 from kinprop.errors import AddressError
 from kinprop.model import Model
 
@@ -47,9 +47,24 @@ def _contact(model: Model, wheel: str) -> np.ndarray:
     return contact_point(centre, ctx.body_point(wheel, "spin_axis") - centre, radius)
 
 
-def roll_centre(model: Model, left: str, right: str, travel_inputs: Mapping[str, str]) -> dict[str, float]:
+def roll_centre(
+    model: Model,
+    left: str,
+    right: str,
+    travel_inputs: Mapping[str, str],
+    *,
+    travel: float | None = None,
+    roll: float | None = None,
+) -> dict[str, float]:
     """Axle roll centre (module docstring): ``{"y", "z", "height"}``; ``travel_inputs`` names
-    each wheel's bump input (``{"upright_L": "LCA_L", ...}``)."""
+    each wheel's bump input (``{"upright_L": "LCA_L", ...}``). At the model's state, or, for
+    its migration, at a heave ``travel`` of both wheels (the length unit) or a body ``roll``
+    (the angle unit): the drives of :mod:`kinprop.analysis.drives`, the height then above the
+    ground line through the moved contact points."""
+    if travel is not None and roll is not None:
+        raise AddressError("roll_centre: give a travel or a roll, not both")
+    if travel is not None or roll is not None:
+        model = model_at(model, f"travel={travel!r}" if travel is not None else f"roll={roll!r}")
     wheels = {w: WheelSpec(travel_input=travel_inputs[w]) for w in (left, right)}
     v = evaluate_outputs(
         model, [f"metric:{w}.{m}" for w in (left, right) for m in ("fvic_y", "fvic_z")], wheels=wheels, units="solver"
@@ -116,7 +131,7 @@ def steering_ratio(
     side = {w: 1.0 if ctx.body_point(w, "wheel_centre")[1] > 0 else -1.0 for w in (left, right)}
     names = {w: f"slope:metric:{w}.toe@{rack}={at - step!r}..{at + step!r}" for w in (left, right)}
     v = outputs_at(model, list(names.values()))
-    per_deg = 1.0 if model.units.get("angle") == "deg" else 180.0 / math.pi  # toe slope -> deg per length
+    per_deg = radians_per_angle(model) / RADIANS_PER["deg"]  # toe slope -> deg per length
     mean = sum(-side[w] * v[n] * per_deg for w, n in names.items()) / 2.0
     return 360.0 / c / abs(mean)
 
@@ -130,7 +145,7 @@ def ackermann(model: Model, inner: str, outer: str, rack: str, travel: float, wh
 
     def steer(w: str) -> float:  # road-wheel angle, positive to the left, from the toe change
         toe0, toe1 = v[f"metric:{w}.toe@{rack}={0.0!r}"], v[f"metric:{w}.toe@{rack}={travel!r}"]
-        return math.radians(-side[w] * (toe1 - toe0))
+        return -side[w] * (toe1 - toe0) * RADIANS_PER["deg"]  # toe is in degrees (a metric)
 
     d_i, d_o = abs(steer(inner)), abs(steer(outer))
     ctx = OutputContext.of(model)

@@ -47,29 +47,30 @@ derivative_scale` takes them to the model's units, as for every output).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+import re
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from kinprop.analysis.context import OutputContext, find_point
-from kinprop.analysis.metrics import is_first_order, wheel_bodies
+from kinprop.analysis.context import OutputContext, find_point, locate_point
+from kinprop.analysis.metrics import wheel_bodies
 from kinprop.analysis.outputs import evaluate_outputs, expand_outputs
-from kinprop.analysis.sensitivity import output_sensitivity_matrix
+from kinprop.analysis.sensitivity import OnBase, output_sensitivity_matrix
 from kinprop.analysis.statics import LOAD_PREFIXES
-from kinprop.analysis.targets import _number
 from kinprop.analysis.units import derivative_scale
 from kinprop.engine import Engine, State
 from kinprop.engine import compile as compile_engine
 from kinprop.engine.units import METRES_PER, RADIANS_PER
 from kinprop.errors import AddressError, ConvergenceError
 from kinprop.model import Design, Model
-from kinprop.model.design import as_coordinates, parse_address
+from kinprop.model.design import parse_address
 from kinprop.model.mechanism import Body, Joint, Mechanism
 from kinprop.propagation.element_points import element_ends, with_element_ends
 from kinprop.spatial import Array
 
 TRAVEL, ROLL, STEER = "travel", "roll", "steer"
+_NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/]*)\s*$")
 #: joint frame whose z'' is the body's x axis (a steer body's forward direction)
 _ALONG_X = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 #: joint frame of a revolute turning about -x (z'' = -x): positive roll lifts the left (+y) side
@@ -110,6 +111,19 @@ class Driven:
     released: Mapping[str, tuple[str, ...]]
     angle: Mapping[str, bool]
     joints: frozenset[str] = field(default_factory=frozenset)
+    #: the augmented model's engine (compiled once, by :func:`augment`)
+    engine: Engine | None = None
+    #: the model's own engine when one was given or needed (a roll drive), else None: then the
+    #: augmented engine evaluates the model's outputs too (:meth:`follower`)
+    base_engine: Engine | None = None
+
+    def follower(self) -> Model:
+        """The augmented model with the model's own inputs only: its drive joints follow the
+        wheels, so its motions, first-order metrics and statics are the model's (a travel or
+        steer joint adds one coordinate and one row, and carries no load). Not for a roll joint,
+        which ties the wheels."""
+        mech = self.model.mechanism
+        return replace(self.model, mechanism=replace(mech, inputs=self.base.mechanism.inputs))
 
     def free(self, free: Sequence[str], drives: Sequence[str]) -> tuple[str, ...]:
         """The free set of a solve driving ``drives``: ``free``, the inputs they release and the
@@ -150,11 +164,16 @@ def wheel_for(model: Model, name: str) -> list[str]:
 
 
 def _reference(model: Model, wheel: str) -> Array:
+    """The global ``wheel_centre_ref`` of ``wheel`` (a fixed body's point: no kinematics)."""
     found = find_point(model, wheel, "wheel_centre_ref", on_wheel=False)
     if found is None:
         raise AddressError(f"wheel travel of {wheel!r} needs its reference: a fixed-body point "
                            f"{wheel}.wheel_centre_ref (or wheel_centre_ref with one wheel)")  # fmt: skip
-    return OutputContext.of(model).body_point(*found)
+    source = locate_point(model, *found)
+    if source[0] == "joint":  # a joint's point on the fixed body: where that joint's frame is
+        return OutputContext.of(model).body_point(*found)
+    b = model.mechanism.body(found[0])
+    return b.r + b.A @ np.asarray(source[2], dtype=float)
 
 
 def _fixed(model: Model) -> Body:
@@ -214,20 +233,25 @@ def drive_joints(model: Model) -> set[str]:
 
 def augment(model: Model, drives: Sequence[str], engine: Engine | None = None) -> Driven:
     """``model`` with the drive joints of ``drives`` (``travel:WHEEL``, ``roll``; module
-    docstring), placed at the model's state."""
-    eng = engine if engine is not None else compile_engine(model)
+    docstring), placed at the model's state, and its engine (:attr:`Driven.engine`, compiled
+    here once). ``engine``: the model's, when the caller has it. Without it the augmented engine
+    serves for the model's own kinematics too (the drive joints add bodies, never move the
+    model's), and for the inputs a drive releases: a travel or steer joint that is not driven
+    follows its wheel (one coordinate, one row), so the model's motions are unchanged; a roll
+    joint ties two wheels, so a roll drive compiles the model for those."""
     mech = model.mechanism
     ground = _fixed(model)
     Ag, rg = ground.A, ground.r
     bodies, joints, inputs = list(mech.bodies), list(mech.joints), list(mech.inputs)
-    design: dict[str, Array] = {}
     addresses: dict[str, tuple[str, ...]] = {}
-    released: dict[str, tuple[str, ...]] = {}
+    released: dict[str, tuple[tuple[str, str], ...]] = {}  # (kind, wheel): resolved once the engine exists
     angle: dict[str, bool] = {}
     added: set[str] = set()
-    ctx = OutputContext.of(model, engine=eng)
     taken = set(mech.body_names) | set(mech.joint_names)
     present = drive_joints(model)
+    holds: list[tuple[str, str, Array]] = []  # (hold joint, wheel, point on the plane body)
+    steers: list[tuple[str, str, str]] = []  # (steer joint, its hold, wheel)
+    fixed: dict[str, Array] = {}  # design of the drive joints that needs no kinematics
 
     def fresh(name: str) -> str:
         if name in taken:
@@ -238,20 +262,15 @@ def augment(model: Model, drives: Sequence[str], engine: Engine | None = None) -
     def hold(name: str, body: str, wheel: str, on_body: Array) -> None:
         """The dot-2 row: ``wheel``'s centre on the plane of ``body`` through ``on_body``, normal z."""
         joints.append(Joint(fresh(name), "dot-2", body, wheel, frozenset({"s_i", "s_j", "C_i"}), cut=True))
-        centre = ctx.body_point(wheel, "wheel_centre")
-        design[f"{name}.s_i"] = on_body
-        design[f"{name}.s_j"] = ctx.kin.A[wheel].T @ (centre - ctx.kin.r[wheel])
-        design[f"{name}.C_i"] = np.eye(3)
+        holds.append((name, wheel, on_body))
         added.add(name)
 
     for d in dict.fromkeys(drives):
-        if d == ROLL and ROLL in present:
-            addresses[d] = (f"{ROLL}.q",)
-            released[d] = tuple(travel_input(model, w, eng) for w in wheel_bodies(model))
-            angle[d] = True
-            continue
         if d == ROLL:
             wheels = wheel_bodies(model)
+            addresses[d], released[d], angle[d] = (f"{ROLL}.q",), tuple(("travel", w) for w in wheels), True
+            if ROLL in present:
+                continue
             if len(wheels) != 2:
                 raise AddressError(f"'roll' drives an axle of two wheels; this model has {len(wheels)}")
             refs = [_reference(model, w) for w in wheels]
@@ -259,53 +278,42 @@ def augment(model: Model, drives: Sequence[str], engine: Engine | None = None) -
             body, joint = fresh("roll_plane"), fresh(ROLL)
             bodies.append(Body(body))
             joints.append(Joint(joint, "revolute", ground.name, body, frozenset({"s_i", "C_i", "s_j", "C_j"}), False))
-            design |= {f"{joint}.s_i": Ag.T @ (centre - rg), f"{joint}.C_i": Ag.T @ _ABOUT_MINUS_X,
-                       f"{joint}.s_j": centre, f"{joint}.C_j": _ABOUT_MINUS_X}  # fmt: skip
+            fixed |= {f"{joint}.s_i": Ag.T @ (centre - rg), f"{joint}.C_i": Ag.T @ _ABOUT_MINUS_X,
+                      f"{joint}.s_j": centre, f"{joint}.C_j": _ABOUT_MINUS_X}  # fmt: skip
             for w, ref in zip(wheels, refs, strict=True):
                 hold(f"{w}_roll_hold", body, w, ref)
             inputs.append(joint)
             added.add(joint)
-            addresses[d] = (f"{joint}.q",)
-            released[d] = tuple(travel_input(model, w, eng) for w in wheels)
-            angle[d] = True
             continue
         if d.startswith(f"{STEER}:"):
             (w,) = wheel_for(model, d)
+            addresses[d], released[d], angle[d] = (f"{w}_steer.q",), (("steer", w),), True
             if f"{w}_steer" in present:
-                addresses[d], released[d], angle[d] = (f"{w}_steer.q",), (steer_input(model, w, eng),), True
                 continue
-            at = ctx.body_point(w, "wheel_centre")
-            axis = ctx.body_point(w, "spin_axis") - at
             body = joint = fresh(f"{w}_steer")
             bodies.append(Body(body))
             joints.append(Joint(joint, "revolute", ground.name, body, frozenset({"s_i", "C_i", "s_j"}), False))
-            design |= {f"{joint}.s_i": Ag.T @ (at - rg), f"{joint}.C_i": Ag.T, f"{joint}.s_j": at}
             hold_name = fresh(f"{w}_steer_hold")  # the spin axis across the steer body's x axis (eq. 1)
             joints.append(Joint(hold_name, "dot-1", body, w, frozenset({"C_i", "C_j"}), cut=True))
-            design |= {f"{hold_name}.C_i": _ALONG_X, f"{hold_name}.C_j": _frame_along(ctx.kin.A[w].T @ axis)}
+            steers.append((joint, hold_name, w))
             inputs.append(joint)
             added |= {joint, hold_name}
-            addresses[d], released[d], angle[d] = (f"{joint}.q",), (steer_input(model, w, eng),), True
             continue
         for w in wheel_for(model, d):
             key = f"{TRAVEL}:{w}"
             if key in addresses:
                 continue
+            addresses[key], released[key], angle[key] = (f"{w}_travel.q",), (("travel", w),), False
             if f"{w}_travel" in present:
-                addresses[key], released[key] = (f"{w}_travel.q",), (travel_input(model, w, eng),)
-                angle[key] = False
                 continue
             ref = _reference(model, w)
             body = joint = fresh(f"{w}_travel")
             bodies.append(Body(body))
             joints.append(Joint(joint, "translational", ground.name, body, frozenset({"s_i", "C_i"}), False))
-            design |= {f"{joint}.s_i": Ag.T @ (np.zeros(3) - rg), f"{joint}.C_i": Ag.T}
+            fixed |= {f"{joint}.s_i": Ag.T @ (np.zeros(3) - rg), f"{joint}.C_i": Ag.T}
             hold(f"{w}_travel_hold", body, w, ref)
             inputs.append(joint)
             added.add(joint)
-            addresses[key] = (f"{joint}.q",)
-            released[key] = (travel_input(model, w, eng),)
-            angle[key] = False
         if d == TRAVEL:
             ws = wheel_for(model, d)
             addresses[d] = tuple(a for w in ws for a in addresses[f"{TRAVEL}:{w}"])
@@ -313,10 +321,56 @@ def augment(model: Model, drives: Sequence[str], engine: Engine | None = None) -
             angle[d] = False
     mechanism = Mechanism(tuple(bodies), tuple(joints), mech.name, tuple(inputs), mech.couplings, mech.edits)
     base_design = {k: np.array(v) for k, v in model.design.items()}
-    aug = Model(mechanism, Design(base_design | design), as_coordinates(dict(model.coordinates)), model.units,
-                model.source, model.elements, model.vehicle, model.loads)  # fmt: skip
-    drv = Driven(aug, model, addresses, released, angle, frozenset(added))
-    return Driven(_with_drive_state(drv, model), model, addresses, released, angle, frozenset(added))
+
+    def with_design(design: Mapping[str, Array]) -> Model:
+        return replace(model, mechanism=mechanism, design=Design(base_design | dict(design)))
+
+    placed = with_design(fixed)  # the model's bodies placed; the drive joints' own frames follow
+    aug_engine = compile_engine(placed)
+    ctx = OutputContext.of(model, engine=engine) if engine is not None else OutputContext.of(placed, engine=aug_engine)
+    design = dict(fixed)
+    for name, wheel, on_body in holds:
+        centre = ctx.body_point(wheel, "wheel_centre")
+        design[f"{name}.s_i"] = on_body
+        design[f"{name}.s_j"] = ctx.kin.A[wheel].T @ (centre - ctx.kin.r[wheel])
+        design[f"{name}.C_i"] = np.eye(3)
+    for joint, hold_name, w in steers:
+        at = ctx.body_point(w, "wheel_centre")
+        axis = ctx.body_point(w, "spin_axis") - at
+        design |= {f"{joint}.s_i": Ag.T @ (at - rg), f"{joint}.C_i": Ag.T, f"{joint}.s_j": at}
+        design |= {f"{hold_name}.C_i": _ALONG_X, f"{hold_name}.C_j": _frame_along(ctx.kin.A[w].T @ axis)}
+    drv = Driven(with_design(design), model, addresses, {}, angle, frozenset(added), aug_engine)
+    aug = _with_drive_state(drv, model)
+    aug_engine = aug_engine.rebased(aug)
+    if engine is None and any(k == ROLL for k in released):
+        engine = compile_engine(model)  # a roll joint ties the wheels: the inputs are found on the model
+    on, eng = (model, engine) if engine is not None else (aug, aug_engine)
+    inputs_of = {"travel": travel_input, "steer": steer_input}
+    found = {d: tuple(inputs_of[kind](on, w, eng) for kind, w in rel) for d, rel in released.items()}
+    return Driven(aug, model, addresses, found, angle, frozenset(added), aug_engine, engine)
+
+
+def base_view(base: Engine, engine: Engine) -> tuple[Callable[[State], State], Array]:
+    """``(view, columns)`` between an augmented model's ``engine`` and its base model's
+    ``base``: ``view(state)`` the base engine's state of an augmented state (the drive joints
+    dropped, nothing solved), ``columns[c]`` the augmented column of base column ``c`` (the same
+    variable by key). A base output's derivative over augmented columns is its derivative over
+    ``columns``, zero along the drive joints' own."""
+    joints = np.array([engine.joint_index[j.name] for j in base.mechanism.joints], np.int64)
+    nj = len(engine.mechanism.joints)
+    q = np.zeros(base.n_coordinates, np.int64)
+    columns = np.zeros(base.n_columns, np.int64)
+    for v in base.layout.variables:
+        w = engine.layout[v.key]
+        columns[v.columns] = np.arange(w.start, w.start + v.size)
+        if v.group == "q":
+            q[v.columns] = columns[v.columns]
+    lengths = np.concatenate([joints, np.arange(nj, engine.default_state().L.size)])
+
+    def view(st: State) -> State:
+        return State(st.Q[..., q], st.S[..., joints, :, :], st.C[..., joints, :, :, :], st.L[..., lengths])
+
+    return view, columns
 
 
 def _frame_along(z: Array) -> Array:
@@ -337,8 +391,12 @@ def steer_angle(axis: Array) -> float:
 def _with_drive_state(drv: Driven, model: Model) -> Model:
     """The augmented model at ``model``'s design and coordinates: the drive coordinates where
     the wheels are (a travel: the wheel centre's height over its reference; roll: 0 when the
-    wheels are at opposite travels, else their mean angle)."""
-    ctx = OutputContext.of(model)
+    wheels are at opposite travels, else their mean angle). The model's kinematics come from
+    the augmented engine (the drive joints move none of its bodies)."""
+    design = {k: np.array(v) for k, v in drv.model.design.items()}
+    design |= {k: np.array(v) for k, v in model.design.items()}
+    merged = drv.model.with_state(Design(design), dict(model.coordinates))
+    ctx = OutputContext.of(merged, engine=drv.engine)
     coords = dict(model.coordinates)
     for d, addrs in drv.addresses.items():
         if d == ROLL:  # opposite travels dz over the track: -tan(roll)
@@ -355,8 +413,6 @@ def _with_drive_state(drv: Driven, model: Model) -> Model:
             w = d[len(TRAVEL) + 1 :]
             dz = ctx.body_point(w, "wheel_centre")[2] - _reference(model, w)[2]
             coords[addrs[0].split(".")[0]] = np.array([dz])
-    design = {k: np.array(v) for k, v in drv.model.design.items()}
-    design |= {k: np.array(v) for k, v in model.design.items()}
     return drv.model.with_state(Design(design), coords)
 
 
@@ -379,23 +435,38 @@ class DrivenOutput:
         return list(dict.fromkeys(k for cfg in self.configs for k, _ in cfg if is_drive(k)))
 
 
-def _condition_key(model: Model, name: str, where: str) -> tuple[str, str]:
-    """``(key, kind)`` of a condition's name: a drive (``travel:W``, ``roll``) or a coordinate
-    address; kind ``length`` or ``angle``."""
+def _number(text: str, where: str) -> tuple[float, str]:
+    """A number with an optional unit (``-1.5deg``, ``50mm``, ``0``): ``(value, unit)``."""
+    m = _NUMBER.match(text)
+    if not m:
+        raise AddressError(f"{where}: {text!r} is not a number with an optional unit (e.g. -1.5deg, 50mm)")
+    return float(m[1]), m[2]
+
+
+def drive_condition(model: Model, name: str) -> str | None:
+    """The drive a condition's name means (``travel``, ``travel:WHEEL``, ``roll``,
+    ``steer:WHEEL``; the wheel-centre height ``metric:WHEEL.wheel_centre_dz`` is that wheel's
+    travel), validated against the model's wheels, or None when it names no drive."""
     name = name.strip()
     wheels = wheel_bodies(model)
     if name in ("wheel_centre_dz", "metric:wheel_centre_dz", "wheel_travel") and len(wheels) == 1:
         name = TRAVEL
     if name.startswith("metric:") and name.endswith((".wheel_centre_dz", ".wheel_travel")):
         name = f"{TRAVEL}:{name[len('metric:') :].rsplit('.', 1)[0]}"
-    if name == TRAVEL or name.startswith(f"{TRAVEL}:"):
+    if not is_drive(name):
+        return None
+    if name != ROLL:
         wheel_for(model, name)
-        return name, "length"
-    if name == ROLL:
-        return name, "angle"
-    if name.startswith(f"{STEER}:"):
-        wheel_for(model, name)
-        return name, "angle"
+    return name
+
+
+def _condition_key(model: Model, name: str, where: str) -> tuple[str, str]:
+    """``(key, kind)`` of a condition's name: a drive (``travel:W``, ``roll``) or a coordinate
+    address; kind ``length`` or ``angle``."""
+    name = name.strip()
+    drive = drive_condition(model, name)
+    if drive is not None:
+        return drive, "length" if drive.startswith(TRAVEL) else "angle"
     try:
         addr = parse_address(name if "." in name else f"{name}.q")
     except Exception:
@@ -407,7 +478,7 @@ def _condition_key(model: Model, name: str, where: str) -> tuple[str, str]:
     return str(addr), "angle" if (addr.index or 0) in angles else "length"
 
 
-def _value(model: Model, kind: str, text: str, where: str) -> float:
+def condition_value(model: Model, kind: str, text: str, where: str) -> float:
     """A condition value (model units unless a unit is written) in solver units."""
     v, unit = _number(text, where)
     if kind == "angle":
@@ -446,7 +517,7 @@ def parse_driven(model: Model, name: str, engine: Engine | None = None) -> Drive
         a_text, _, b_text = rng.partition("..")
         if _number(b_text, where)[1] and not _number(a_text, where)[1]:
             a_text += _number(b_text, where)[1]  # "-50..50mm": the unit once, for both ends
-        a, b = _value(model, kind, a_text, where), _value(model, kind, b_text, where)
+        a, b = condition_value(model, kind, a_text, where), condition_value(model, kind, b_text, where)
         if a == b:
             raise AddressError(f"{where}: the slope's range is empty")
         return DrivenOutput(name, out.strip(), (((k, a),), ((k, b),)), b - a)
@@ -456,7 +527,7 @@ def parse_driven(model: Model, name: str, engine: Engine | None = None) -> Drive
         if ".." in val:
             raise AddressError(f"{where}: a range A..B is a slope's: slope:{out.strip()}@{c}")
         k, kind = _condition_key(model, key, where)
-        cfg.append((k, _value(model, kind, val, where)))
+        cfg.append((k, condition_value(model, kind, val, where)))
     if len({k for k, _ in cfg}) != len(cfg):
         raise AddressError(f"{where}: a condition is given twice")
     return DrivenOutput(name, out.strip(), (tuple(sorted(cfg)),))
@@ -488,9 +559,9 @@ class _Positions:
         drives = list(dict.fromkeys(d for s in self.specs for d in s.drives))
         if ROLL in drives and any(d.startswith(TRAVEL) for d in drives):
             raise AddressError("a roll and a travel condition in one output are not supported")
-        self.driven = augment(model, drives, engine)
-        self.engine = compile_engine(self.driven.model)
         self.base_engine = engine if engine is not None else compile_engine(model)
+        self.driven = augment(model, drives, self.base_engine)
+        self.engine = self.driven.engine
         self.free, self.tol, self.max_iter = tuple(free), tol, max_iter
         self.configs = list(dict.fromkeys(cfg for s in self.specs for cfg in s.configs))
 
@@ -571,8 +642,10 @@ def driven_sensitivity(
     module docstring) with respect to the design addresses ``wrt`` (no ``hardpoint:``; see
     :func:`kinprop.propagation.hardpoints.global_columns`), in solver units: at each drive
     position solved from the model's state, the implicit-function tangent with the drive held
-    (:func:`kinprop.analysis.sensitivity.output_sensitivity_matrix`); a slope's is the
-    difference of its two ends' over the span."""
+    (:func:`kinprop.analysis.sensitivity.output_sensitivity_matrix`), the outputs' derivatives
+    along it the base model's (a first-order metric, ``camber_gain@travel=50``, exact: its
+    velocity analysis by the suspension's own inputs, as :func:`outputs_at` evaluates it); a
+    slope's is the difference of its two ends' over the span."""
     per: dict[tuple, dict[str, Array]] = {}
     columns: list[str] = []
     rows: dict[str, DrivenOutput] = {}
@@ -580,9 +653,7 @@ def driven_sensitivity(
     for calc in DrivenOutputs(model, of, free=free, tol=tol, max_iter=max_iter).parts:
         for s in calc.specs:
             rows[s.name] = s
-            if (s.output.startswith("metric:") or "." not in s.output) and is_first_order(s.output.split(".")[-1]):
-                raise AddressError(f"--of {s.name!r}: derivatives of first-order metrics at a drive position are "
-                                   "not available (their velocity analysis would hold the drive)")  # fmt: skip
+        view, cols = base_view(calc.base_engine, calc.engine)
         held = [k for cfg in calc.configs for k, _ in cfg if not is_drive(k)]
         loose = [k for k in held if k.split(".")[0] not in model.mechanism.inputs]
         if loose:
@@ -595,8 +666,12 @@ def driven_sensitivity(
             names = list(dict.fromkeys(s.output for s in calc.specs if cfg in s.configs))
             drives = [k for k, _ in cfg if is_drive(k)]
             loose_free = calc.driven.free(free, drives)
-            D, out_rows, columns, _ = output_sensitivity_matrix(at, names, wrt, loose_free, weights,
-                                                                engine=calc.engine, units="solver")  # fmt: skip
+            # the tangent with the drive held (the augmented model's), the outputs the base
+            # model's there: a first-order metric moves the suspension by its own inputs
+            base = OnBase(calc.driven.base_of(calc.engine, states[c][0]), calc.base_engine, view, cols)
+            D, out_rows, columns, _ = output_sensitivity_matrix(
+                at, names, wrt, loose_free, weights, engine=calc.engine, units="solver", base=base
+            )
             per[(id(calc), cfg)] = dict(zip(out_rows, np.asarray(D), strict=True))
             for s in calc.specs:
                 if cfg in s.configs:
@@ -608,6 +683,20 @@ def driven_sensitivity(
         end = per[(key, spec.configs[-1])][spec.output]
         out[r] = end if spec.span is None else (end - per[(key, spec.configs[0])][spec.output]) / spec.span
     return out, list(of), columns
+
+
+def model_at(model: Model, condition: str, *, engine: Engine | None = None, tol: float = 1e-10,
+             max_iter: int = 50) -> Model:  # fmt: skip
+    """The model at a drive position, ``condition`` as after an output's ``@`` (``travel=50``,
+    ``roll=2deg``, ``RACK.q=10``): one engine solve from the model's state; the drive joints
+    are not part of the returned model. Raises :class:`ConvergenceError` when it is out of reach."""
+    wheels = wheel_bodies(model)
+    probe = f"metric:{wheels[0]}.camber@{condition}" if wheels else f"{model.mechanism.joints[0].name}.q@{condition}"
+    pos = _Positions(model, [probe], tol=tol, max_iter=max_iter, engine=engine)
+    states, ok = pos.states([model])
+    if not ok[0][0]:
+        raise ConvergenceError(f"{condition!r}: the drive position could not be reached from the model's state")
+    return pos.driven.base_of(pos.engine, states[0][0])
 
 
 def outputs_at(
@@ -631,5 +720,6 @@ def outputs_at(
     return {n: out[n] for n in names}
 
 
-__all__ = ["Driven", "DrivenOutput", "DrivenOutputs", "augment", "driven_sensitivity", "expand_driven",
-           "is_drive", "is_driven", "outputs_at", "parse_driven", "travel_input"]  # fmt: skip
+__all__ = ["Driven", "DrivenOutput", "DrivenOutputs", "augment", "base_view", "condition_value", "drive_condition",
+           "driven_sensitivity", "expand_driven", "is_drive", "is_driven", "model_at", "outputs_at", "parse_driven",
+           "travel_input"]  # fmt: skip

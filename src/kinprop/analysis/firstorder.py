@@ -11,14 +11,17 @@ steering input; a translational-distance joint's own rack coordinate too). "Whee
 ``z`` is the wheel centre's vertical displacement; a gain is
 ``(d quantity / dt) / (dz / dt)`` along that motion: exact, no differencing.
 
-Instant centres use the wheel body's instantaneous screw axis relative to the fixed body,
-written homogeneously so that an axis parallel to a view plane (an instant centre at
-infinity) gives finite line directions: with the axis ``{p + l u}``, a plane through E with
-unit normal n, ``H = (n.u) p + n.(E - p) u`` and weight ``s = n.u`` the intersection is
-``H / s``, and the line from a point F towards it has direction ``w = H - s F`` (for ``s = 0``
-the axis' own direction). Centres at infinity are reported as NaN coordinates and an infinite
-swing-arm length; roll-centre height and the anti percentages stay finite (the lines
-through them are parallel to the axis).
+A view's instant centre (front view: the plane x = x_E, side view: y = y_E, E the contact
+point) is the pole of the wheel body's motion relative to the fixed body in that plane: the
+point X of the plane whose velocity ``v_O + w x X`` is normal to it, so every point F of the
+plane moves across the line F-X (Milliken's construction, exact in 3D: a force at E reaches the
+spring through E's path, virtual work). For a screw of zero pitch X is where the screw axis
+pierces the plane; a screw of large pitch (a MacPherson with large bump steer) moves it
+far from there. Written homogeneously so that a centre at infinity gives finite line
+directions: ``X = H / s`` with ``s = n.w / |w|`` (the side view: ``H = (v_Oz + w_x y_E,
+w_y y_E, w_z y_E - v_Ox) / |w|``), and the line from F towards it has direction
+``H - s F``. Centres at infinity are reported as NaN coordinates and an infinite swing-arm
+length; roll-centre height and the anti percentages stay finite.
 
 The formulas are compiled (:mod:`kinprop.engine.firstorder`, the one implementation): a
 :class:`FirstOrderProgram` holds one wheel's points, parameters and elements as its tables and

@@ -28,7 +28,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg
 
 from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
@@ -118,6 +117,8 @@ def mobility(model: Model, rtol: float = RANK_RTOL, free: Sequence[str] = ("q", 
     if m and rank < m:
         labels = row_names(asm)
         if n:
+            import scipy.linalg  # here: only a model with redundant rows needs the pivoted QR
+
             _, _, piv = scipy.linalg.qr(Jq.T, mode="economic", pivoting=True)
             redundant = [labels[i] for i in sorted(piv[rank:])]
         else:

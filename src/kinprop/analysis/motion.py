@@ -29,7 +29,7 @@ from kinprop.engine import Engine
 from kinprop.engine import compile as compile_engine
 from kinprop.engine.motion import MotionState
 from kinprop.engine.status import Status, message
-from kinprop.engine.units import from_solver_units, to_solver_units
+from kinprop.engine.units import from_solver_units, radians_per_angle, to_solver_units
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.spatial import Array
@@ -129,7 +129,7 @@ class Motion:
 
     def _angle(self) -> float:
         """Model angle units per radian."""
-        return 180.0 / math.pi if self.model.units.get("angle") == "deg" else 1.0
+        return 1.0 / radians_per_angle(self.model)
 
     def rate(self, address: str) -> Array | float:
         """Rate of a coordinate address (``J.q``, ``J.q[k]``), model units per time."""

@@ -22,7 +22,8 @@ exact up to rounding. :func:`derivative_method` names the method of each output.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -48,6 +49,20 @@ from kinprop.spatial import Array
 
 if TYPE_CHECKING:  # pandas (the 'data' extra) is imported only when a frame is built
     import pandas as pd
+
+
+@dataclass(frozen=True)
+class OnBase:
+    """Outputs of a base ``model`` (its ``engine``) evaluated at the states of a model with drive
+    joints (:mod:`kinprop.analysis.drives`): ``view`` maps those states to ``engine``'s,
+    ``columns[c]`` is the augmented column of base column ``c``. The first-order metrics then
+    move the suspension by its own inputs, not with a drive held."""
+
+    model: Model
+    engine: Engine
+    view: Callable[[State], State]
+    columns: Array
+
 
 #: residual norm above which sensitivities are flagged as taken off the constraint manifold
 RESIDUAL_WARN = 1e-6
@@ -88,11 +103,13 @@ def output_sensitivity_matrix(
     wheels: Mapping[str, WheelSpec] | None = None,
     engine: Engine | None = None,
     units: str = "model",
+    base: OnBase | None = None,
 ) -> tuple[Array, list[str], list[str], float]:
     """``(D, output names, design column labels, ||Phi||)`` of :func:`output_sensitivity`,
     as plain arrays and lists (no pandas). ``wrt``, ``free`` and ``weights`` take every address
     a propagation takes: ``hardpoint:J.i`` / ``hardpoint:J.i[z]`` columns are per global length
-    unit (:func:`kinprop.propagation.hardpoints.global_columns`)."""
+    unit (:func:`kinprop.propagation.hardpoints.global_columns`). ``base``: the outputs are the
+    base model's of a model with drive joints (:class:`OnBase`; the tangent is ``model``'s)."""
     model_units = check_units(units)
     engine = engine_for(model, engine)
     state = engine.state_of(model)
@@ -106,12 +123,14 @@ def output_sensitivity_matrix(
     asked = list(wrt)
     wrt = [w for w in asked if not is_element_address(w)]
     element_wrt = [w for w in asked if is_element_address(w)]
-    _, names = output_function(model, of, reference=reference, wheels=wheels, engine=engine)
+    on = base.model if base is not None else model
+    _, names = output_function(on, of, reference=reference, wheels=wheels, engine=base.engine if base else engine)
     D, columns = np.zeros((len(names), 0)), []
     if wrt:
-        D, columns = _design_rows(model, engine, state, names, wrt, free, weights, reference, wheels)
-    if element_wrt:
-        labels, E = _element_sensitivity(model, engine, state, names, element_wrt, reference, wheels)
+        D, columns = _design_rows(model, engine, state, names, wrt, free, weights, reference, wheels, base)
+    if element_wrt:  # no body moves: at the base model's state (with drive joints: its view)
+        at = (model, engine, state) if base is None else (on, base.engine, base.view(state))
+        labels, E = _element_sensitivity(*at, names, element_wrt, reference, wheels)
         D, columns = _in_asked_order(model, asked, np.column_stack([D, E]), columns + labels)
     if model_units and D.size:
         so = np.array([derivative_scale(model, n, engine) for n in names])
@@ -130,10 +149,12 @@ def _design_rows(
     weights: Mapping[str, float] | None,
     reference: Model | None,
     wheels: Mapping[str, WheelSpec] | None,
+    base: OnBase | None = None,
 ) -> tuple[Array, list[str]]:
     """``(D, columns)`` with respect to the design addresses ``wrt`` (solver units, layout
     order): the implicit-function tangent, exact rows where there are, central differences of
-    the output map along it for the rest (module docstring)."""
+    the output map along it for the rest (module docstring); with ``base``, of the base model's
+    outputs along the tangent's base columns."""
     # global hardpoints: wrt their s' columns, then each global component combines them (exact)
     design, combos = global_columns(engine, state, wrt)
     free, weights = free_addresses(engine, free), free_weights(engine, weights)
@@ -141,20 +162,26 @@ def _design_rows(
     directions = np.zeros((engine.n_columns, sens.wrt_columns.size))
     directions[sens.wrt_columns, np.arange(sens.wrt_columns.size)] = 1.0
     directions[sens.free_columns] = sens.matrix
-    exact = first_order_derivatives(model, names, directions, reference=reference, wheels=wheels, engine=engine)
+    on, on_engine, along = model, engine, directions
+    if base is not None:  # the outputs of the base model, along the tangent's base columns
+        on, on_engine, along = base.model, base.engine, directions[base.columns]
+    exact = first_order_derivatives(on, names, along, reference=reference, wheels=wheels, engine=on_engine)
     D = np.zeros((len(names), sens.wrt_columns.size))
     for i, row in exact.items():
         D[i] = row
     loads = [i for i, n in enumerate(names) if is_load_output(n)]
     if loads:  # exact: the differentiated equilibrium (direct method)
-        D[loads] = load_derivatives(model, [names[i] for i in loads], directions.T, engine=engine, reference=reference)
+        D[loads] = load_derivatives(on, [names[i] for i in loads], along.T, engine=on_engine, reference=reference)
     rest = [i for i in range(len(names)) if i not in exact and i not in loads]
     if rest:
-        f, _ = output_function(model, [names[i] for i in rest], reference=reference, wheels=wheels, engine=engine)
+        f, _ = output_function(on, [names[i] for i in rest], reference=reference, wheels=wheels, engine=on_engine)
+
+        def at(st: State) -> Model:
+            return engine.model_of(st, model) if base is None else on_engine.model_of(base.view(st), on)
+
         for k, col in enumerate(sens.wrt_columns):
             h = _step(engine, model, int(col))
-            plus = engine.model_of(engine.retract(state, h * directions[:, k]), model)
-            minus = engine.model_of(engine.retract(state, -h * directions[:, k]), model)
+            plus, minus = (at(engine.retract(state, sg * h * directions[:, k])) for sg in (1.0, -1.0))
             D[rest, k] = (f(plus) - f(minus)) / (2.0 * h)
     columns = list(sens.columns)
     if combos:

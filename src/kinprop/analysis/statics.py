@@ -32,7 +32,6 @@ Sign conventions and units (force unit ``F`` = the model's ``units.force``, leng
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -56,7 +55,7 @@ from kinprop.engine.statics import (
 )
 from kinprop.engine.statics_rates import StaticsRates, statics_rates
 from kinprop.engine.status import Status
-from kinprop.engine.units import address_scale
+from kinprop.engine.units import address_scale, radians_per_angle
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.loads import LoadCase, PointLoad
@@ -191,7 +190,7 @@ class Statics:
 
 def _angle_unit(model: Model) -> float:
     """Radians per unit of the model's angles."""
-    return math.pi / 180.0 if model.units.get("angle") == "deg" else 1.0
+    return radians_per_angle(model)
 
 
 def model_laws(model: Model, engine: Engine, reference: Any, at_pose: bool = False) -> tuple[list[Law], list[bool]]:

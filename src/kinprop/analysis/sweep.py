@@ -50,7 +50,7 @@ from kinprop.analysis.outputs import evaluate_outputs, expand_outputs, output_fu
 from kinprop.analysis.units import derivative_scale, unit_of
 from kinprop.engine import Engine, Solution, State, Status
 from kinprop.engine import compile as compile_engine
-from kinprop.engine.units import changes_to_internal, check_units, from_solver_units, to_solver_units
+from kinprop.engine.units import changes_to_internal, check_units, degrees, from_solver_units, to_solver_units
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.propagation.conditioning import SINGULAR_RTOL, conditioning
@@ -108,7 +108,7 @@ def _coordinate_info(asm: Engine, model: Model, joint: str) -> tuple[int, tuple[
     size = asm.layout[key].size
     tree = joint in asm.topology.tree_joints
     angles = model.mechanism.joint(joint).jtype.angle_indices if tree else ()
-    return size, tuple(angles) if model.units.get("angle") == "deg" else ()
+    return size, tuple(angles) if degrees(model) else ()
 
 
 def _drive_values(text: str, spec: str) -> Array:
@@ -180,7 +180,7 @@ def parse_drive(model: Model, text: str, engine: Engine | None = None) -> Drive:
     if eq and is_drive(name.strip()):  # wheel travel or body roll (kinprop.analysis.drives)
         if name.strip() != ROLL:
             wheel_for(model, name.strip())
-        deg = name.strip().startswith((ROLL, STEER)) and model.units.get("angle") == "deg"
+        deg = name.strip().startswith((ROLL, STEER)) and degrees(model)
         return Drive(name.strip(), 0, _drive_values(text, spec.strip()), deg, 1, name.strip())
     m = _DRIVE.match(text.strip())
     if not m:
@@ -438,21 +438,36 @@ def sweep(
     """
     import pandas as pd
 
-    engine = compile_engine(model)
+    # drives in the designer's terms (wheel travel, steer, roll) need no engine to parse; with one
+    # the augmented model's engine is the sweep's only compile (a roll drive also compiles the model)
+    texts = [d for d in drives if isinstance(d, str)]
+    by_output = [d.partition("=")[0].strip() for d in texts if is_drive(d.partition("=")[0].strip())]
+    by_output += [d.joint for d in drives if not isinstance(d, str) and is_drive(d.joint)]
+    user, drv = model, None
+    if by_output:  # joints of their own, solved with the mechanism
+        drv = augment(model, by_output)
+        engine = drv.engine
+    else:
+        engine = compile_engine(model)
     dr = tuple(parse_drive(model, d, engine) if isinstance(d, str) else d for d in drives)
     if not dr:
         raise AddressError("a sweep needs at least one --drive")
-    by_output = [d.joint for d in dr if is_drive(d.joint)]
     hidden: frozenset[str] = frozenset()
-    user, user_engine, drv = model, engine, None
-    if by_output:  # wheel travel, body roll: joints of their own, solved with the mechanism
-        drv = augment(model, by_output, engine)
+    user_engine = engine
+    if drv is not None:
         released = {r.split(".")[0] for d in by_output for r in drv.released[d]}
         both = [d.joint for d in dr if d.joint in released]
         if both:
             raise AddressError(f"--drive: {both[0]} moves the wheel that {by_output[0]} drives; drive one of them")
-        model, engine, free, hidden = drv.model, compile_engine(drv.model), drv.free(free, by_output), drv.joints
+        model, free, hidden = drv.model, drv.free(free, by_output), drv.joints
+        # outputs: on the model's own engine when the drive needed it (roll), else on the augmented
+        # engine with its drive joints following (the model's motions and statics unchanged)
+        if drv.base_engine is None:
+            user = drv.follower()
+        else:
+            user_engine = drv.base_engine
         dr = tuple(e for d in dr for e in (_drive_joints(drv, d) if is_drive(d.joint) else [d]))
+    on_base = drv is not None and drv.base_engine is not None  # outputs from drv.base_of per step
     n = {d.values.size for d in dr}
     if len(n) != 1:
         raise AddressError(f"--drive: all drives move together and need the same number of values, found {sorted(n)}")
@@ -465,9 +480,10 @@ def sweep(
     names = list(default_outputs(model) if outputs is None else outputs)
     changes = changes_to_internal(model, changes or {}, engine) if check_units(units) else dict(changes or {})
     # outputs are evaluated on the user's model (without drive joints) at each step's state
-    driven = expand_driven(user, [n for n in names if is_driven(n)], user_engine)
+    base, base_engine = (drv.base, drv.base_engine) if drv is not None else (user, user_engine)
+    driven = expand_driven(base, [n for n in names if is_driven(n)], base_engine)
     names = [n for n in names if not is_driven(n)]
-    at = DrivenOutputs(user, driven, free=free, tol=tol, max_iter=max_iter, engine=user_engine) if driven else None
+    at = DrivenOutputs(base, driven, free=free, tol=tol, max_iter=max_iter, engine=base_engine) if driven else None
     fout, expanded = output_function(user, names, engine=user_engine)
     coord_cols = [c for c in coordinate_columns(model, engine) if c[1] not in hidden]
     drive_cols = [d.label for d in dr]
@@ -499,7 +515,7 @@ def sweep(
     def outputs_of(states: State, ok: Array) -> Array | None:
         """Every step's outputs in one compiled call (None: one of them fails at some step)."""
         try:
-            return None if drv is not None else program_batch(program, model, states, ok)
+            return None if on_base else program_batch(program, user if drv is not None else model, states, ok)
         except Exception:  # one output that cannot be evaluated there: never blank the others
             return None
 
@@ -530,7 +546,7 @@ def sweep(
                 val = float(state.Q[qcol[col]])
                 row[col] = val * to_model[col] if deg else val
             # with a drive joint: the outputs of the user's model (no drive joints) at this state
-            view = engine.model_of(state, model) if drv is None else drv.base_of(engine, state)
+            view = drv.base_of(engine, state) if on_base else engine.model_of(state, user if drv else model)
             if values is not None:
                 row.update(zip(expanded, (float(values[i]) * s for i, s in zip(keep, out_scale, strict=True)),
                                strict=True))  # fmt: skip
@@ -542,7 +558,8 @@ def sweep(
                 except Exception:  # one output that cannot be evaluated here: never blank the others
                     row.update(_each_output(view, names, expanded, out_scale, user_engine, message))
             if at is not None:  # outputs at a drive position: from this step, one engine solve each
-                row.update({n: float(v[0]) * driven_scale[n] for n, v in at.values([view]).items()})
+                own = drv.base_of(engine, state) if drv is not None else view
+                row.update({n: float(v[0]) * driven_scale[n] for n, v in at.values([own]).items()})
         rows.append(row)
         if sink is not None:
             sink.write(row)

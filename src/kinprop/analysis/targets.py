@@ -10,9 +10,10 @@ A target spec (CLI ``--target``, Python ``propagate_targets(model, [...])``)::
   (``joint:UBJ.euler[1]``, ``joint:B.displacement``; :mod:`kinprop.propagation.poses`).
 * ``CONDITION`` puts the target in a configuration of its own; conditions hold exactly:
   ``JOINT.q=V`` / ``JOINT.q[k]=V`` holds a coordinate (not free there);
-  ``travel=V`` is the wheel travel (``metric:WHEEL.wheel_centre_dz = V``: the suspension's free
-  coordinates move until the wheel centre is V above its reference); any other ``OUTPUT=V`` is
-  a condition row of its own. Targets with the same conditions share a configuration; a
+  a drive — ``travel=V`` / ``travel:WHEEL=V`` (or ``metric:WHEEL.wheel_centre_dz=V``), ``roll=V``,
+  ``steer:WHEEL=V`` — holds the drive joint of :mod:`kinprop.analysis.drives` at V (the joints
+  ``sweep --drive`` and ``camber@travel=50`` use; the input it releases moves); any other
+  ``OUTPUT=V`` is a condition row of its own. Targets with the same conditions share a configuration; a
   target without conditions lives in the base configuration (every coordinate free).
 * ``slope:OUTPUT@COND=A..B=V``: the slope ``(OUTPUT(B) - OUTPUT(A)) / (B - A)`` over a single
   condition's range (e.g. bump steer ``slope:toe@travel=-50..50=0``), unit output per condition.
@@ -57,6 +58,16 @@ from typing import Any
 import numpy as np
 
 from kinprop.analysis.context import HARD, POINT, find_point, pivot_point
+from kinprop.analysis.drives import (
+    ROLL,
+    TRAVEL,
+    _number,
+    augment,
+    base_view,
+    condition_value,
+    drive_condition,
+    is_drive,
+)
 from kinprop.analysis.firstorder import GAIN_METRICS
 from kinprop.analysis.metrics import (
     ANGLE_METRICS,
@@ -75,6 +86,7 @@ from kinprop.analysis.outputs import (
 )
 from kinprop.analysis.statics import is_load_output, load_derivatives, load_output_unit, load_value
 from kinprop.engine import Engine, State, Status
+from kinprop.engine import compile as compile_engine
 from kinprop.engine.targets import (
     FD_STEP,
     Configuration,
@@ -84,7 +96,7 @@ from kinprop.engine.targets import (
     output_jacobian,
     solve_targets,
 )
-from kinprop.engine.units import METRES_PER, RADIANS_PER, changes_to_internal, check_units
+from kinprop.engine.units import METRES_PER, RADIANS_PER, changes_to_internal, check_units, degrees
 from kinprop.errors import AddressError
 from kinprop.model import Model
 from kinprop.model.design import parse_address
@@ -98,7 +110,7 @@ from kinprop.propagation.element_points import (
     is_element_address,
     with_element_ends,
 )
-from kinprop.propagation.hardpoints import body_rotation, free_addresses, free_weights, resolve_changes
+from kinprop.propagation.hardpoints import body_rotation, free_tie, free_weights, resolve_changes
 from kinprop.propagation.point_jacobians import PointJacobians, PointSpec
 from kinprop.propagation.poses import joint_values
 from kinprop.propagation.propagate import Propagation, engine_for, propagation_of
@@ -106,15 +118,17 @@ from kinprop.spatial import Array
 
 #: force units a load target's value may be written in (when the model's force unit is one of them)
 NEWTONS_PER = {"N": 1.0, "kN": 1000.0, "lbf": 4.4482216152605}
-_NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/]*)\s*$")
 _JOINT_OUT = re.compile(r"^joint:(?P<joint>[^.\s]+)\.(?P<name>[a-z_0-9]+)(\[(?P<k>\d)\])?$")
 
 
 @dataclass(frozen=True)
 class Condition:
-    output: str  # scalar output name, or a coordinate address when ``held``
-    value: float  # internal units
+    output: str  # scalar output name, a coordinate address when ``held``, or a drive when ``drive``
+    value: float  # internal units (a drive's: solver units, a length or radians)
     held: bool
+    #: ``output`` is a drive of :mod:`kinprop.analysis.drives` (``travel:WHEEL``, ``roll``,
+    #: ``steer:WHEEL``): its drive joint is held at ``value``
+    drive: bool = False
 
 
 @dataclass(frozen=True)
@@ -137,6 +151,8 @@ def _kind(model: Model, output: str) -> str:
     """``deg`` (metric angle, degrees), ``rad`` (coordinate/joint angle, radians), ``length``,
     ``gain`` (a first-order angle gain, degrees per length unit), ``force``, ``moment`` (a load
     output in force x length), ``none``."""
+    if is_drive(output):
+        return "length" if output.startswith(TRAVEL) else "rad"
     if is_load_output(output):
         F = model.units.get("force", "force")
         return "force" if load_output_unit(model, output) == F else "moment"
@@ -178,13 +194,6 @@ def _unit_factor(model: Model, kind: str, unit: str, where: str) -> float:
     raise AddressError(f"{where}: unit {unit!r} does not fit this output ({kind}; model length unit {length_unit})")
 
 
-def _number(text: str, where: str) -> tuple[float, str]:
-    m = _NUMBER.match(text)
-    if not m:
-        raise AddressError(f"{where}: {text!r} is not a number with an optional unit (e.g. -1.5deg, 50mm)")
-    return float(m[1]), m[2]
-
-
 def _travel(model: Model, where: str) -> str:
     wheels = wheel_bodies(model)
     if len(wheels) != 1:
@@ -209,7 +218,16 @@ def _condition(model: Model, text: str, where: str, value_text: str | None = Non
     name, val = name.strip(), value_text if value_text is not None else val
     if not name or not val.strip():
         raise AddressError(f"{where}: condition {text!r}: expected NAME=VALUE (e.g. travel=50mm, O2.q=40)")
-    name = _travel(model, where) if name == "travel" else _metric_name(model, name)
+    try:
+        drive = drive_condition(model, name)
+    except AddressError as exc:
+        raise AddressError(f"{where}: {exc}") from None
+    if drive is not None:  # a drive joint held at the value (kinprop.analysis.drives)
+        wheels = wheel_bodies(model)
+        drive = f"{TRAVEL}:{wheels[0]}" if drive == TRAVEL and len(wheels) == 1 else drive
+        kind = "length" if drive.startswith(TRAVEL) else "angle"
+        return Condition(drive, condition_value(model, kind, val, where), True, drive=True)
+    name = _metric_name(model, name)
     kind = _kind(model, name)
     v, unit = _number(val, where)
     v *= _unit_factor(model, kind, unit, where)
@@ -506,7 +524,9 @@ class TargetPropagation:
     """The outcome of :func:`propagate_targets`: the solver's :class:`TargetResult`, the specs,
     and models before/after per configuration. ``propagation`` is the base configuration's
     (the first configuration's when every target has conditions) before/after record, with
-    body poses and joint values."""
+    body poses and joint values. A configuration with a drive condition is solved on a model
+    with drive joints (:mod:`kinprop.analysis.drives`; ``result.engines[k]``); ``base_state``
+    views its states on :attr:`engine`, the model's own."""
 
     model: Model
     specs: tuple[TargetSpec, ...]
@@ -515,6 +535,12 @@ class TargetPropagation:
     configuration_names: tuple[str, ...] = ()
     #: the model with the element points the targets moved (``--free element:...``; None: none)
     designed: Model | None = field(default=None, repr=False)
+    #: per configuration: its engine's state -> :attr:`engine`'s (empty: the same engine)
+    views: tuple[Callable[[State], State], ...] = field(default=(), repr=False)
+
+    def base_state(self, k: int, state: State) -> State:
+        """Configuration ``k``'s ``state`` as a state of :attr:`engine` (the drive joints dropped)."""
+        return self.views[k](state) if self.views else state
 
     @property
     def converged(self) -> bool:
@@ -535,16 +561,16 @@ class TargetPropagation:
         return self.result.met
 
     def before_model(self, k: int = 0) -> Model:
-        return self.engine.model_of(self.result.before[k], self.model)
+        return self.engine.model_of(self.base_state(k, self.result.before[k]), self.model)
 
     def after_model(self, k: int = 0) -> Model:
-        return self.engine.model_of(self.result.after[k], self.designed or self.model)
+        return self.engine.model_of(self.base_state(k, self.result.after[k]), self.designed or self.model)
 
     @cached_property
     def propagation(self) -> Propagation:
         """The model before and the changed design re-assembled at the model's own coordinates
         (only coordinates free), with body poses and joint values."""
-        orig, new = self.engine.state_of(self.model), self.result.after[0]
+        orig, new = self.engine.state_of(self.model), self.base_state(0, self.result.after[0])
         sol = self.engine.solve(State(orig.Q.copy(), new.S.copy(), new.C.copy(), new.L.copy()), ("q",))
         prop = propagation_of(self.engine, self.model, sol, ("q",))
         if self.designed is None:
@@ -577,13 +603,15 @@ class TargetPropagation:
         """One row per target: spec, output, wanted, before, achieved, miss, in the model's
         units (angles in its angle unit, lengths in its length unit; slopes per length unit)."""
         rows = []
-        deg = self.model.units.get("angle") == "deg"
+        deg = degrees(self.model)
         for spec, t in zip(self.specs, self.result.targets, strict=True):
             k, kind = 1.0, _kind(self.model, spec.output)
             if kind == "rad" and deg and spec.slope is None:
                 k = 1.0 / RADIANS_PER["deg"]
             elif kind in ("deg", "gain") and not deg:  # a metric angle (degrees inside) in a radian model
                 k = RADIANS_PER["deg"]
+            if spec.slope is not None and _kind(self.model, spec.slope[0][0].output) == "rad":
+                k *= RADIANS_PER[self.model.units.get("angle", "rad")]  # per radian inside: per model angle unit
             row = {"target": spec.text, "output": spec.output, "unit": self.unit(spec)}
             rows.append(row | {n: t[n] * k for n in ("value", "before", "achieved", "miss")})
         return rows
@@ -615,8 +643,8 @@ class TargetPropagation:
     def joint_positions(self, k: int = 0) -> dict[str, tuple[Array, Array]]:
         """Global joint origins ``J.i``/``J.j`` -> (before, after) in configuration ``k``
         (both designs solved there: where the joints actually sit, model length unit)."""
-        _, _, P0, _ = self.engine.poses(self.result.before[k])
-        _, _, P1, _ = self.engine.poses(self.result.after[k])
+        _, _, P0, _ = self.engine.poses(self.base_state(k, self.result.before[k]))
+        _, _, P1, _ = self.engine.poses(self.base_state(k, self.result.after[k]))
         return {f"{j.name}.{'ij'[s]}": (P0[n, s].copy(), P1[n, s].copy())
                 for n, j in enumerate(self.engine.mechanism.joints) for s in (0, 1)}  # fmt: skip
 
@@ -743,29 +771,121 @@ def propagate_targets(
             span = s.slope[2]
             terms = ((ka, slot(ka, s.output), -1.0 / span), (kb, slot(kb, s.output), 1.0 / span))
             rows.append(Row(s.text, s.value, terms, scale=1.0 / s.weight, bound=s.bound))
-    names = tuple(" & ".join(f"{c.output}={c.value:g}" for c in cs) or "base" for cs in conds)
+    names = tuple(" & ".join(_label(model, c) for c in cs) or "base" for cs in conds)
+    drives = _drive_engines(model, eng, st, conds, coordinates)
 
     def build(m: Model) -> list[Configuration]:
-        return [
-            Configuration(
+        cfgs = []
+        for k, cs in enumerate(conds):
+            cfg = Configuration(
                 names[k],
                 _config_outputs(m, eng, outs[k]),
                 {c.output: [c.value] for c in cs if c.held},
                 _config_jacobian(m, eng, outs[k]) if analytic and not any(map(is_load_output, outs[k])) else None,
-                _config_rates(m, eng, outs[k]) if analytic and any(map(is_load_output, outs[k])) else None,
+                # loads have no partials off the constraint manifold: their rates, also without analytic
+                _config_rates(m, eng, outs[k]) if any(map(is_load_output, outs[k])) else None,
             )
-            for k, cs in enumerate(conds)
-        ]
+            cfgs.append(cfg if drives[k] is None else drives[k].lift(cfg, cs))  # type: ignore[union-attr]
+        return cfgs
 
     external = _element_design(model, eng, start, labels, moves, outs, build, ext_weights) if labels else None
+    if external is not None and any(d is not None for d in drives):  # its partials on the base engine's states
+        base_partials = external.partials
+        views = [(lambda x: x) if d is None else d.view for d in drives]
+        external = replace(external, partials=lambda k, state, e: base_partials(k, views[k](state), e))
     opts = {"tol": tol, "target_tol": target_tol, "max_iter": max_iter}
-    res = solve_targets(eng, st, build(model) if external is None else [], rows, free_addresses(eng, free),
-                        coordinates=coordinates, weights=free_weights(eng, weights), external=external,
-                        **opts)  # fmt: skip
+    addresses, tie = free_tie(eng, st, free)
+    res = solve_targets(eng, st, build(model) if external is None else [], rows, addresses, coordinates=coordinates,
+                        weights=free_weights(eng, weights), external=external, tie=tie, **opts)  # fmt: skip
     designed = None
     if external is not None and res.external is not None:
         designed = _element_model(model, eng, start, labels, res.external)
-    return TargetPropagation(model, specs, res, eng, names, designed)
+    return TargetPropagation(model, specs, res, eng, names, designed,
+                             tuple((lambda x: x) if d is None else d.view for d in drives))  # fmt: skip
+
+
+def _label(model: Model, c: Condition) -> str:
+    """A condition as a configuration's name: ``travel:W=50``, ``roll=2`` (model units), ``J.q=V``."""
+    v = c.value
+    if c.drive and _kind(model, c.output) == "rad":
+        v /= RADIANS_PER[model.units.get("angle", "rad")]
+    return f"{c.output}={v:g}"
+
+
+@dataclass(frozen=True)
+class _DriveEngine:
+    """The engine of the configurations that hold drives (:mod:`kinprop.analysis.drives`, the
+    drive joints of ``sweep --drive`` and ``camber@travel=50``): the augmented model's engine,
+    its start, and the view of its states on the base engine, where the outputs are evaluated."""
+
+    driven: Any  # kinprop.analysis.drives.Driven
+    engine: Engine
+    start: State
+    view: Callable[[State], State]
+    columns: Array  # base column -> augmented column
+    coordinates: tuple[str, ...]
+
+    def lift(self, cfg: Configuration, conditions: Sequence[Condition]) -> Configuration:
+        """``cfg`` (outputs on the base engine) as a configuration of the augmented engine: its
+        drives held at their values, the inputs they release and the other drive joints free."""
+        view, cols = self.view, self.columns
+        inv = np.full(self.engine.n_columns, -1, np.int64)
+        inv[cols] = np.arange(cols.size)
+        held = {k: v for k, v in cfg.held.items()}
+        drives = [c.output for c in conditions if c.drive]
+        for c in conditions:
+            if c.drive:
+                del held[c.output]
+                held |= {a: [c.value] for a in self.driven.addresses[c.output]}
+        jac, rates, outputs = cfg.jacobian, cfg.rates, cfg.outputs
+
+        def jacobian(st: State, columns: Array) -> Array:
+            b = inv[np.asarray(columns, np.int64)]
+            ok = b >= 0
+            G0 = jac(view(st), b[ok])  # type: ignore[misc]
+            G = np.zeros((G0.shape[0], b.size))
+            G[:, ok] = G0
+            return G
+
+        return Configuration(
+            cfg.name,
+            lambda st: outputs(view(st)),
+            held,
+            jacobian if jac is not None else None,
+            (lambda st, X: rates(view(st), X[:, cols])) if rates is not None else None,  # type: ignore[misc]
+            self.engine,
+            self.start,
+            self.driven.free(self.coordinates, drives),
+        )
+
+
+def _drive_engines(model: Model, engine: Engine, start: State, conds: Sequence[Sequence[Condition]],
+                   coordinates: Sequence[str]) -> list[_DriveEngine | None]:  # fmt: skip
+    """Per configuration, the drive engine it is solved by (None: the base engine). The roll
+    drive and the travel drives both set the wheels' heights, so configurations with a roll
+    condition share one augmented model (roll, and steer drives) and all the others another
+    (travel and steer drives; none: the base engine)."""
+    family = [ROLL in {c.output for c in cs if c.drive} for cs in conds]
+    drives = [any(c.drive for c in cs) for cs in conds]
+    for cs in conds:
+        ds = {c.output for c in cs if c.drive}
+        if ROLL in ds and any(d.startswith(TRAVEL) for d in ds):
+            raise AddressError("--target: a roll and a travel condition in one configuration are not supported "
+                               "(both set the wheels' heights)")  # fmt: skip
+    at = engine.model_of(start, model)
+    out: list[_DriveEngine | None] = [None] * len(conds)
+    for fam in (False, True):
+        ks = [k for k, f in enumerate(family) if f == fam and drives[k]]
+        ds = list(dict.fromkeys(c.output for k in ks for c in conds[k] if c.drive))
+        if not ds:
+            continue
+        drv = augment(at, ds, engine)
+        eng = compile_engine(drv.model)
+        view, cols = base_view(engine, eng)
+        one = _DriveEngine(drv, eng, eng.state_of(drv.model), view, cols, tuple(coordinates))
+        for k in ks:
+            out[k] = one
+    return out
 
 
 def _element_model(model: Model, engine: Engine, start: State, labels: Sequence[str], values: Array) -> Model:

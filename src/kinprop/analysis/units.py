@@ -11,7 +11,7 @@ from __future__ import annotations
 from kinprop.analysis.metrics import METRIC_ALIASES, METRICS, is_angle_valued, is_first_order, metric_unit
 from kinprop.analysis.statics import is_load_output, load_output_unit
 from kinprop.engine import Engine
-from kinprop.engine.units import RADIANS_PER, address_scale, address_unit
+from kinprop.engine.units import RADIANS_PER, address_scale, address_unit, degrees
 from kinprop.model import Model
 
 
@@ -91,7 +91,7 @@ def derivative_scale(model: Model, name: str, engine: Engine | None = None) -> f
         return scale / per
     if is_metric(name):
         angle_metric = is_angle_valued(name.split(".")[-1])
-        return RADIANS_PER["deg"] if (angle_metric and model.units.get("angle") != "deg") else 1.0
+        return RADIANS_PER["deg"] if (angle_metric and not degrees(model)) else 1.0
     return address_scale(model, name, engine)
 
 

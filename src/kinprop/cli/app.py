@@ -90,6 +90,11 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "Joint reactions, member forces (tension positive), spring and damper forces (positive pushing apart) "
         "and the efforts that hold the inputs, at the model's assembled pose.",
     ),
+    "vehicle": (
+        "kinprop.cli.vehicle",
+        "Vehicle report: wheelbase, CG height, brake and drive split, and each axle's anti geometry, roll centre, "
+        "roll steer and camber and steering ratio.",
+    ),
     "report": (
         "kinprop.cli.report",
         "Write a self-contained HTML report: the global hardpoints and the default curves.",

@@ -59,11 +59,12 @@ def announce() -> None:
     if jit.is_warm():
         return
     err = Console(stderr=True, highlight=False)
-    if not jit.JIT and jit.MODE == "auto":
+    compiled = jit.wanted() == "compiled"  # known without choosing (and importing numba) now
+    if not compiled and jit.MODE == "auto":
         if start_background_build():
             err.print("kinprop: first run of this version: its kernels are being compiled in the background "
                       "(about a minute, once); this run uses them uncompiled.", soft_wrap=True)  # fmt: skip
-    elif jit.JIT:
+    elif compiled:
         err.print("kinprop: first run of this version: compiling the kernels this command needs "
                   "(up to a minute, once) ...", soft_wrap=True)  # fmt: skip
 

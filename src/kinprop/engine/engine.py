@@ -27,7 +27,7 @@ from kinprop.engine.motion import MotionState, motion_state
 from kinprop.engine.status import message, notes
 from kinprop.engine.units import METRES_PER, UnitTable
 from kinprop.errors import AddressError, ConvergenceError
-from kinprop.jit import get_num_threads, set_parallel_chunksize
+from kinprop.jit import note_model, num_threads
 from kinprop.kinematics import kernels
 from kinprop.kinematics.layout import VariableLayout, build_layout, column_labels
 from kinprop.kinematics.tables import RowBlock, Tables, build_tables, row_blocks
@@ -292,13 +292,14 @@ class Engine:
         self.row_blocks: tuple[RowBlock, ...] = row_blocks(mechanism, self.topology)
         self.n_rows = sum(b.rows.stop - b.rows.start for b in self.row_blocks)
         self.n_columns = self.layout.n
+        self.n_coordinates = sum(v.size for v in self.layout.group("q"))
+        note_model(self.n_coordinates)  # before the first kernel call: how kernels run may depend on it
         self.tables: Tables = build_tables(mechanism, self.topology, self.layout, self.row_blocks)
         self.nnz = int(kernels.count_entries(self.tables))
         self.joint_index = {j.name: k for k, j in enumerate(mechanism.joints)}
         #: slot of each coupling's c0 in the state's ``L`` (after the joints' lengths)
         self.coupling_slot = {c.name: len(mechanism.joints) + N_COEF * k for k, c in enumerate(mechanism.couplings)}
         self.body_index = {b.name: k for k, b in enumerate(mechanism.bodies)}
-        self.n_coordinates = sum(v.size for v in self.layout.group("q"))
         #: which coordinate components are angles or Euler parameters, for every unit
         #: conversion (:mod:`kinprop.engine.units`), resolved once here
         self.unit_table: UnitTable = UnitTable.of(mechanism, self.topology)
@@ -893,13 +894,8 @@ class Engine:
         assembled = int(np.linalg.norm(self.residual(base) * self.row_scale) < cfg.tol) if shared else -1
         args = (self.tables, plan, self.nnz, starts.Q, starts.S, starts.C, starts.L, targets.Q, targets.S, targets.C,
                 targets.L, st.Q, st.S, st.C, st.L, assembled, self.row_scale, self.col_scale, cfg, out)  # fmt: skip
-        if (N >= 256 if threads is None else threads) and N:
-            nth = get_num_threads()  # one chunk per thread at least; up to 16, of 64 variants or more
-            before = set_parallel_chunksize(1)  # chunks handed out one at a time (follow_batch_threaded)
-            try:
-                newton.follow_batch_threaded(*args, max(min(nth, N), min(16 * nth, N // 64)))
-            finally:
-                set_parallel_chunksize(before)
+        if (N >= 256 if threads is None else threads) and N > 1:
+            _batch_in_threads(args, N)
         else:
             newton.follow_batch(*args)
         return BatchSolution(st, out[:, 0].astype(np.int64), out[:, 1].astype(np.int64), out[:, 4], out[:, 2],
@@ -949,6 +945,30 @@ class Engine:
         ``state`` from the driven coordinates' ``rates`` (``{"O2.q": 1.0}``, solver units);
         status ``singular`` (NaN rates) when they do not determine the motion."""
         return motion_state(self, state, rates, accelerations)
+
+
+def _batch_in_threads(args: tuple, N: int) -> None:
+    """:func:`kinprop.solver.newton.follow_batch` over contiguous chunks of the variants on a
+    pool of threads (the kernel releases the GIL): one chunk per thread at least, up to 16 per
+    thread of 64 variants or more, handed out one at a time, so a thread that finishes early
+    takes the next and a core slowed by other work does not hold up the batch. Views of the
+    batch arrays along their leading axis keep one compiled signature of the kernel."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    nth = num_threads()
+    chunks = max(min(nth, N), min(16 * nth, N // 64))
+    bounds = [(c * N // chunks, (c + 1) * N // chunks) for c in range(chunks)]
+    # sliced per chunk: the starts (args 3-6) unless one is shared, targets and ends (7-14), out
+    sliced = [k for k in range(3, 15) if k >= 7 or args[3].shape[0] > 1] + [len(args) - 1]
+
+    def run(b: tuple[int, int]) -> None:
+        part = list(args)
+        for k in sliced:
+            part[k] = args[k][b[0] : b[1]]
+        newton.follow_batch(*part)
+
+    with ThreadPoolExecutor(max_workers=nth) as pool:
+        list(pool.map(run, bounds))
 
 
 def compile(model: Model | Mechanism) -> Engine:

@@ -148,8 +148,9 @@ def wheel_first_order(wheel, params, pts, body_of, V, elements, stiffness, out) 
         out[M_PATCH_DX] = E[0] - ref[0]
     out[M_HALF_TRACK_GAIN] = side * vE[1] * per
     out[M_PATCH_DX_GAIN] = vE[0] * per
-    # the wheel's screw axis relative to the fixed body, homogeneous (the module docstring of
-    # kinprop.analysis.firstorder): a point p on it and its direction u, or a pure translation
+    # each view's instant centre: the pole of the wheel's motion in the view plane through E (the
+    # point of the plane whose velocity is normal to it), homogeneous (the module docstring of
+    # kinprop.analysis.firstorder); a pure translation puts it at infinity
     v_O = (V[b, 0], V[b, 1], V[b, 2])
     nw, nv = dot(w, w) ** 0.5, dot(vc, vc) ** 0.5
     sc = max(1.0, dot(centre, centre).real ** 0.5)
@@ -158,11 +159,12 @@ def wheel_first_order(wheel, params, pts, body_of, V, elements, stiffness, out) 
         if translation:  # the centre at infinity across the contact point's velocity
             H = (0.0 * vE[0], -vE[2], vE[1]) if view == 0 else (vE[2], 0.0 * vE[0], -vE[0])
             s = 0.0 * dz
-        else:
-            u = scale(w, 1.0 / nw)
-            p = scale(cross(w, v_O), 1.0 / nw**2)
-            s = u[view]
-            H = add(scale(p, s), u, E[view] - p[view])
+        elif view == 0:  # v_O + w x X with no y, z part at x = x_E
+            s = w[0] / nw
+            H = scale((E[0] * w[0], w[1] * E[0] - v_O[2], v_O[1] + w[2] * E[0]), 1.0 / nw)
+        else:  # no x, z part at y = y_E
+            s = w[1] / nw
+            H = scale((v_O[2] + w[0] * E[1], E[1] * w[1], w[2] * E[1] - v_O[0]), 1.0 / nw)
         c0, c1 = (1, 2) if view == 0 else (0, 2)
         first = M_FVIC_Y if view == 0 else M_SVIC_X
         if abs(s.real) >= PARALLEL_TOL:

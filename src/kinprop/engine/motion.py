@@ -428,7 +428,7 @@ def velocity_solve(tb, plan, Q, S, C, L, rates, need, rows, cols, row_scale, buf
         c = cols[k]
         if c < nq and rates[c] != 0.0:
             Phi[rows[k]] += vals[k] * rates[c]
-    if newton.newton_step(plan, Phi, vals, buf, False) == 0:
+    if newton.newton_step(plan, Phi, vals, buf, np.bool_(False)) == 0:
         return NEEDS_SVD
     dx = buf[newton.B_DX]
     for c in range(nq):

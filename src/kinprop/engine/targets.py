@@ -18,12 +18,16 @@ step is the weighted minimum-norm solution of the linearised rows, with the hard
 
     y_h = -pinv(H_y) H,    N = I - pinv(H_y) H_y,    y = y_h + N pinv(T_y N) (-T - T_y y_h)
 
-the minimum-norm step to the least-squares compromise of the targets. The rows' Jacobians over
+the minimum-norm step to the least-squares compromise of the targets (``y`` in metres and
+radians over sqrt(weight): :attr:`Engine.si_scale`), its targets' part a trust-region
+(Levenberg-Marquardt) step: ``pinv(T_y N)`` damped to the radius, a step taken only when the
+miss falls, the design's total change within the mechanism's size (``REACH``), so an
+unreachable target ends at the least-squares best within reach. The rows' Jacobians over
 ``z`` eliminate the coordinates by the implicit-function theorem at each assembly,
 ``dq_k/dz = -Phi_q^+ Phi_z`` (the engine's analytic ``Phi_x``, Table 1), the design step is
 applied on the manifold (:meth:`Engine.retract`: additive for q, s', l; exponential map for C)
-and the configurations re-assembled by the engine; a step is halved only when an assembly fails
-or the residual grows tenfold.
+and the configurations re-assembled by the engine; the conditions alone (the "before" solve)
+take Newton steps halved only when an assembly fails or the residual grows tenfold.
 
 A configuration's output rows use its ``jacobian`` when given — :mod:`kinprop.analysis.targets`
 gives analytic ones for points, hardpoints, distances, coordinates, design variables and the
@@ -72,6 +76,17 @@ BLOWUP = 10.0
 STALL = 1e-9
 #: a left singular vector component at least this large names a target in a conflict
 CONFLICT_WEIGHT = 0.1
+#: the trust region of the design step (SI: metres and radians over sqrt(weight)): the first
+#: radius and the largest, and the largest total design change, as fractions of the
+#: mechanism's size (:attr:`Engine.length_scale`, at least one metre)
+RADIUS_START, RADIUS_MAX, REACH = 1.0, 1.0, 1.0
+#: a step is taken when the residual falls by at least this fraction of the linear model's
+#: predicted fall; the radius doubles above ``GOOD`` (when the step used it), shrinks below ``POOR``
+ACCEPT, POOR, GOOD = 1e-4, 0.25, 0.75
+#: a least-squares compromise is stationary when the part of the targets' miss ``r`` that the
+#: linear model can remove is at most ``GTOL |r|`` (``|U^T r|``, ``U`` the range of the targets'
+#: Jacobian on the conditions' null space): the full step would lower ``|r|^2`` by ``GTOL^2``
+GTOL = 1e-8
 
 OutputMap = Callable[[State], Array]
 
@@ -91,6 +106,13 @@ class Configuration:
     #: equilibrium, which has no partials off the constraint manifold); when given, it is used
     #: instead of ``jacobian``
     rates: Callable[[State, Array], Array] | None = None
+    #: the configuration's own engine (a model with drive joints, :mod:`kinprop.analysis.drives`:
+    #: the same design variables by address); None: :func:`solve_targets`' engine
+    engine: Engine | None = None
+    #: its starting state in that engine (None: :func:`solve_targets`' ``start``)
+    start: State | None = None
+    #: its free coordinates (groups, addresses; minus ``held``); None: :func:`solve_targets`'
+    coordinates: tuple[str, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -170,6 +192,8 @@ class TargetResult:
     row_jacobians: tuple[Array, Array, int] | None = None
     #: the :class:`ExternalDesign` variables' values at the end (None: none were free)
     external: Array | None = None
+    #: each configuration's engine (``before``/``after`` are states of these)
+    engines: tuple[Engine, ...] = ()
 
     @property
     def converged(self) -> bool:
@@ -224,6 +248,31 @@ def output_jacobian(engine: Engine, f: OutputMap, state: State, columns: Array) 
     return G
 
 
+def _same_columns(engine: Engine, other: Engine, cols: Array) -> Array:
+    """``engine``'s layout columns ``cols`` in ``other``'s layout (the same variables by key)."""
+    if other is engine:
+        return cols
+    out = np.empty(cols.size, np.int64)
+    for n, c in enumerate(cols.tolist()):
+        v = next(v for v in engine.layout.variables if v.start <= c < v.start + v.size)
+        out[n] = other.layout[v.key].start + c - v.start
+    return out
+
+
+def _response(engine: Engine, J: Array, inner: Array, zc: Array) -> Array:
+    """``dq/dz = -Phi_q^+ Phi_z`` of the coordinates ``inner`` to the columns ``zc``: with
+    freedom left (mobility), the least change in metres and radians, as the engine's assembly
+    takes it (:meth:`Engine.weights_for`), so the linear model is the assembly's in any unit."""
+    if not zc.size:
+        return np.zeros((inner.size, 0))
+    Js = J * engine.row_scale[:, None]
+    metric = engine.weights_for(inner, None)
+    if metric is None:
+        return -np.linalg.lstsq(Js[:, inner], Js[:, zc], rcond=None)[0]
+    d = np.sqrt(metric)
+    return -d[:, None] * np.linalg.lstsq(Js[:, inner] * d, Js[:, zc], rcond=None)[0]
+
+
 def _pinv(A: Array, rcond: float) -> Array:
     return np.linalg.pinv(A, rcond=rcond) if A.size else A.T.copy()
 
@@ -241,15 +290,52 @@ def _design_change(engine: Engine, a: State, b: State, pcols: Array) -> dict[str
     return out
 
 
-def _step(Hy: Array, h: Array, Ty: Array, t: Array) -> Array:
+def _step(Hy: Array, h: Array, Ty: Array, t: Array, radius: float = np.inf, sv_floor: float = 0.0
+          ) -> tuple[Array, float]:  # fmt: skip
     """The hierarchical minimum-norm step (module docstring): the hard rows first, the target
-    rows in what they leave free, in the scaled unknowns ``y``."""
+    rows in what they leave free, in the scaled unknowns ``y``; the targets' part damped
+    (Levenberg-Marquardt) to at most ``radius`` long, without the directions whose singular
+    value is below ``sv_floor`` (they change no target). Also ``|U^T r| / |r|`` of the targets'
+    linear least-squares problem ``A v = r`` there (0: stationary, a compromise; 1: consistent)."""
     Hp = _pinv(Hy, RCOND_HARD)
     yh = -Hp @ h
     if not t.size:
-        return yh
+        return yh, 0.0
     Nm = np.eye(Hy.shape[1]) - Hp @ Hy
-    return yh + Nm @ (_pinv(Ty @ Nm, RCOND_TARGET) @ (-t - Ty @ yh))
+    A, r = Ty @ Nm, -t - Ty @ yh
+    U, sv, Vt = np.linalg.svd(A, full_matrices=False)
+    keep = sv > max(RCOND_TARGET * sv.max(initial=0.0), sv_floor, 1e-300)
+    U, sv, Vt = U[:, keep], sv[keep], Vt[keep]
+    c = U.T @ r
+    rn = float(np.linalg.norm(r))
+    cosine = float(np.linalg.norm(c)) / rn if rn > 0 else 0.0
+    return yh + Vt.T @ _damped(sv, c, radius), cosine
+
+
+def _damped(sv: Array, c: Array, radius: float) -> Array:
+    """The coefficients ``sv c / (sv^2 + mu)`` of the damped least-squares step along the right
+    singular vectors, with the smallest ``mu >= 0`` that makes it at most ``radius`` long."""
+    if not sv.size:
+        return c * 0.0
+    v = c / sv
+    if float(np.linalg.norm(v)) <= radius:
+        return v
+    # |v(mu)| falls with mu, and is at most |sv c| / mu: bisection on log(mu) below that bound
+    lo, hi = (np.log(float(np.linalg.norm(sv * c)) / radius) + d for d in (-70.0, 0.0))
+    while hi - lo > 1e-10:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if float(np.linalg.norm(sv * c / (sv**2 + np.exp(mid)))) > radius else (lo, mid)
+    return sv * c / (sv**2 + np.exp(hi))
+
+
+def _within(total: Array, y: Array, reach: float) -> float:
+    """The largest ``a`` in [0, 1] with ``|total + a y| <= reach``."""
+    if float(np.linalg.norm(total + y)) <= reach:
+        return 1.0
+    a, b, c = float(y @ y), 2.0 * float(total @ y), float(total @ total) - reach**2
+    if a <= 0.0 or c >= 0.0:
+        return 0.0
+    return max(0.0, min(1.0, (-b + np.sqrt(b * b - 4.0 * a * c)) / (2.0 * a)))
 
 
 def solve_targets(
@@ -265,6 +351,7 @@ def solve_targets(
     target_tol: float = 1e-6,
     max_iter: int = 60,
     external: ExternalDesign | None = None,
+    tie: Array | None = None,
 ) -> TargetResult:
     """The minimum-(weighted-)norm change of the ``free`` design columns (groups ``s C l`` or
     design addresses; shared by every configuration) that meets the target ``rows`` with every
@@ -272,38 +359,55 @@ def solve_targets(
     free coordinates (minus its ``held`` ones); the declared inputs a condition drives are
     unknowns of the outer iteration. ``tol`` bounds ``||Phi||`` and the conditions (relative to
     the engine's round-off floor), ``target_tol`` the target residuals (row units over
-    ``scale``). Every assembly is the engine's solve (:meth:`Engine.solve`). ``external``:
-    free variables outside the state (:class:`ExternalDesign`; then ``configurations`` are
-    ``external.configurations(external.start)``)."""
+    ``scale``). Every assembly is the engine's solve (:meth:`Engine.solve`) — a configuration's
+    own (:attr:`Configuration.engine`, e.g. with drive joints) when it has one; ``free``
+    addresses name the same variables in every engine. ``external``: free variables outside
+    the state (:class:`ExternalDesign`; then ``configurations`` are
+    ``external.configurations(external.start)``). ``tie``: the design unknowns are ``y`` with
+    ``d(free columns) = tie @ y`` (one column of ``tie`` per unknown, e.g. a global hardpoint
+    component that writes the s' columns of both its bodies together; its unknown is a length,
+    weight 1) instead of the free columns themselves."""
     e0 = np.zeros(0) if external is None else np.asarray(external.start, dtype=float).ravel()
     ne = e0.size
     built: dict[bytes, Sequence[Configuration]] = {}
     if external is not None:
         configurations = built[e0.tobytes()] = external.configurations(e0.copy())
     pcols = engine.columns(free) if free else np.zeros(0, np.int64)
+    P = np.eye(pcols.size) if tie is None else np.asarray(tie, dtype=float)
+    if P.shape[0] != pcols.size:
+        raise ValueError(f"tie: {P.shape[0]} rows for {pcols.size} free design columns")
+    # each unknown's weight and SI factor: a column's own, a tied global coordinate's 1 and metres
+    alone = [np.flatnonzero(P[:, j]) for j in range(P.shape[1])]
+    own = [a[0] if a.size == 1 and P[a[0], j] == 1.0 else -1 for j, a in enumerate(alone)]
     qset = set(engine.columns(["q"]).tolist())
     if set(pcols.tolist()) & qset:
         raise AddressError("targets: --free names design variables (hardpoints, s, C, l); coordinates move anyway")
     goals, inner, driven = [], [], []
+    engs = [cfg.engine or engine for cfg in configurations]
+    starts = [start if cfg.start is None else cfg.start for cfg in configurations]
+    pc = [_same_columns(engine, eng, pcols) for eng in engs]  # the free design columns in each engine
     conditioned = {int(k) for r in rows if r.hard for k, _, _ in r.terms}
     for n, cfg in enumerate(configurations):
-        st, _, keys = engine.apply(start, cfg.held)
+        eng, coords = engs[n], coordinates if cfg.coordinates is None else cfg.coordinates
+        st, _, keys = eng.apply(starts[n], cfg.held)
         goals.append(st)
-        inner.append(engine.columns(coordinates, keys))
-        # the declared inputs are held, unless a condition of this configuration drives them
-        # (e.g. wheel travel sets the lower arm's angle): then they are outer unknowns
-        drives = n in conditioned and "q" in coordinates
-        driven.append(np.setdiff1d(engine.columns([*coordinates, "inputs"], keys), inner[-1]) if drives
+        inner.append(eng.columns(coords, keys))
+        # the declared inputs are held, unless a condition row of this configuration drives them
+        # (e.g. a point's height sets the lower arm's angle): then they are outer unknowns
+        drives = n in conditioned and "q" in coords
+        driven.append(np.setdiff1d(eng.columns([*coords, "inputs"], keys), inner[-1]) if drives
                       else np.zeros(0, np.int64))  # fmt: skip
     wfull = np.ones(engine.n_columns)
     for sel, w in (weights or {}).items():
         if not (float(w) > 0 and np.isfinite(float(w))):
             raise AddressError(f"weight for {sel!r} must be positive, found {w}")
         wfull[engine.columns([sel])] = float(w)
+    tie_w = np.array([wfull[pcols[i]] if i >= 0 else 1.0 for i in own])
+    tie_si = np.array([engine.si_scale[pcols[i]] if i >= 0 else engine.unit for i in own])
     hard = [r for r in rows if r.hard]
     soft = [r for r in rows if not r.hard]
     bounded = any(r.bound for r in soft)
-    floor = max(tol, engine.roundoff_floor(start))
+    floor = max(tol, *(eng.roundoff_floor(st) for eng, st in zip(engs, starts, strict=True)))
     solve_tol = min(tol, 1e-10)
     uoffs = np.cumsum([0] + [d.size for d in driven])
 
@@ -321,7 +425,7 @@ def solve_targets(
     def assemble(froms: Sequence[State], targets: Sequence[State]) -> list[Solution]:
         """Every configuration re-assembled by the engine at ``targets``' design and driven
         inputs, followed from ``froms`` on their branch."""
-        return [engine.solve(a, inner[k], target=b, tol=solve_tol) for k, (a, b) in enumerate(zip(froms, targets,
+        return [engs[k].solve(a, inner[k], target=b, tol=solve_tol) for k, (a, b) in enumerate(zip(froms, targets,
                 strict=True))]  # fmt: skip
 
     def residuals(sts: Sequence[State], with_design: bool, e: Array) -> tuple[Array, Array, list[Array]]:
@@ -339,24 +443,28 @@ def solve_targets(
         target residuals there (a bound row with zero residual holds: its row is zero)."""
         npc = pcols.size if with_design else 0
         nx = ne if with_design else 0
-        n = int(uoffs[-1]) + npc + nx
+        n = int(uoffs[-1]) + (P.shape[1] if with_design else 0) + nx
         cfgs = configs(e)
         reduced = []
         for k, st in enumerate(sts):
-            zc = np.concatenate([driven[k], pcols[:npc]])
-            _, J = engine.evaluate(st)
-            dq = -np.linalg.lstsq(J[:, inner[k]], J[:, zc], rcond=None)[0] if zc.size else np.zeros((inner[k].size, 0))
+            eng = engs[k]
+            zc = np.concatenate([driven[k], pc[k][:npc]])
+            _, J = eng.evaluate(st)
+            dq = _response(eng, J, inner[k], zc)
             cols = np.concatenate([inner[k], zc])
             cfg = cfgs[k]
             if cfg.rates is not None:  # along the tangent directions e_z + dq/dz
-                X = np.zeros((zc.size, engine.n_columns))
+                X = np.zeros((zc.size, eng.n_columns))
                 X[np.arange(zc.size), zc] = 1.0
                 X[:, inner[k]] = dq.T
                 red = np.asarray(cfg.rates(st, X), float)
             else:
-                G = cfg.jacobian(st, cols) if cfg.jacobian is not None else output_jacobian(engine, cfg.outputs, st,
+                G = cfg.jacobian(st, cols) if cfg.jacobian is not None else output_jacobian(eng, cfg.outputs, st,
                                                                                             cols)  # fmt: skip
                 red = G[:, : inner[k].size] @ dq + G[:, inner[k].size :]
+            if npc:  # over the design unknowns: d(columns) = P dy
+                nu_k = driven[k].size
+                red = np.hstack([red[:, :nu_k], red[:, nu_k:] @ P])
             if nx:  # the external variables move no coordinate: their partials alone
                 red = np.hstack([red, np.asarray(external.partials(k, st, e), float)])  # type: ignore[union-attr]
             reduced.append(red)
@@ -381,27 +489,51 @@ def solve_targets(
         the shared design moved (:meth:`Engine.retract`), its other coordinates as they are."""
         out = []
         for k, st in enumerate(sts):
-            dx = np.zeros(engine.n_columns)
+            dx = np.zeros(engs[k].n_columns)
             dx[driven[k]] = dz[uoffs[k] : uoffs[k + 1]]
             if with_design and pcols.size:
-                dx[pcols] = dz[uoffs[-1] : uoffs[-1] + pcols.size]
-            out.append(engine.retract(st, dx))
+                dx[pc[k]] = P @ dz[uoffs[-1] : uoffs[-1] + P.shape[1]]
+            out.append(engs[k].retract(st, dx))
         return out
+
+    limited = [False]  # the last design iteration ended on the design-change limit (REACH)
+
+    def metric(with_design: bool) -> Array:
+        """``dz = sw y`` over the outer unknowns: ``y`` in metres and radians over sqrt(weight),
+        so that a model in mm and in m take the same steps (:attr:`Engine.si_scale`)."""
+        wp, sp = tie_w, tie_si
+        w = np.concatenate([np.ones(int(uoffs[-1]))] + ([wp, wext] if with_design else []))
+        si = np.concatenate([engs[k].si_scale[driven[k]] for k in range(len(engs))]
+                            + ([sp, np.full(ne, engine.unit)] if with_design else []))  # fmt: skip
+        return np.sqrt(w) / si
+
+    size = max(1.0, (engine.length_scale or 1.0) * engine.unit)  # the mechanism's size, metres
+    # a direction along which a change of the mechanism's size moves the targets less than a
+    # thousandth of their tolerance changes none (round-off, e.g. caster by a tie-rod point)
+    flat = 1e-3 * target_tol / size
 
     def iterate(sols: list[Solution], with_design: bool, e: Array) -> tuple[list[Solution], Array, int, bool,
                                                                               list[float]]:  # fmt: skip
         """Gauss-Newton on the conditions and targets over ``z``; every configuration stays an
-        engine assembly (a step whose assembly fails or that blows a residual up is halved)."""
+        engine assembly. With targets, a trust-region (Levenberg-Marquardt) step in SI units
+        over sqrt(weight): taken only when the miss falls, the radius shrinking when an assembly
+        fails or the linear model is poor; the design's total change at most ``REACH`` times
+        the mechanism's size. Without (the conditions alone): halved when an assembly fails or
+        the residual blows up tenfold."""
         hist: list[float] = []
-        w = np.concatenate([np.ones(int(uoffs[-1]))] + ([wfull[pcols], wext] if with_design else []))
-        sw = np.sqrt(w)
-        nx = ne if with_design else 0
+        nu, nx = int(uoffs[-1]), ne if with_design else 0
+        sw = metric(with_design)
+        radius, total, reach = RADIUS_START * size, np.zeros(sw.size - nu), REACH * size
         h, t, _ = residuals([s.state for s in sols], with_design, e)
+        lm = with_design and t.size > 0
         for it in range(max_iter + 1):
             hist.append(float(np.sqrt(h @ h + t @ t)))
             sts = [s.state for s in sols]
             Hj, Tj = jacobians(sts, with_design, e, t)
-            dz = sw * _step(Hj * sw, h, Tj * sw, t)
+            if not (np.all(np.isfinite(Hj)) and np.all(np.isfinite(Tj))):
+                break  # an output's derivative is not finite there: not converged
+            y, cosine = _step(Hj * sw, h, Tj * sw, t, sv_floor=flat)
+            dz = sw * y
             hn = float(np.linalg.norm(h))
             # a small step is done unless it still changes the targets (a miss closed by a step
             # of a rotation column, radians, is a tiny dz too)
@@ -409,31 +541,63 @@ def solve_targets(
                 not t.size or float(np.max(np.abs(Tj @ dz), initial=0.0)) < target_tol * 1e-3)  # fmt: skip
             # with bounds the compromise is approached linearly: stalled (relative 1e-9) is done
             stalled = bounded and with_design and it > 0 and hist[-2] - hist[-1] <= STALL * hist[-1]
-            if hn < floor and (
-                small or stalled or t.size == 0 or float(np.max(np.abs(t), initial=0.0)) < target_tol * 1e-3
-            ):
+            met = t.size > 0 and float(np.max(np.abs(t), initial=0.0)) < target_tol * 1e-3
+            if hn < floor and (small or stalled or cosine <= GTOL or t.size == 0 or met):
+                if met and lm:  # one more full step, kept when it lowers the miss
+                    trial = assemble(sts, moved(sts, dz, with_design))
+                    e2 = e + dz[dz.size - nx :] if nx else e
+                    if all(s.converged for s in trial):
+                        h2, t2, _ = residuals([s.state for s in trial], with_design, e2)
+                        if float(h2 @ h2 + t2 @ t2) < float(h @ h + t @ t) and float(np.linalg.norm(h2)) < floor:
+                            return trial, e2, it + 1, True, [*hist, float(np.sqrt(h2 @ h2 + t2 @ t2))]
                 return sols, e, it, True, hist
             if it == max_iter or not np.all(np.isfinite(dz)):
                 break
-            # full steps (the conditions, off at second order after a design step, are re-closed
-            # by the next); halved when an assembly fails or the residual blows up tenfold
-            lam, tn = 1.0, float(np.linalg.norm(t))
-            for _ in range(8):
-                trial = assemble(sts, moved(sts, lam * dz, with_design))
-                e2 = e + lam * dz[dz.size - nx :] if nx else e
+            merit, taken = float(h @ h + t @ t), False
+            for _ in range(30 if lm else 8):
+                if lm:  # the trust-region step, kept inside the design-change limit
+                    y = _step(Hj * sw, h, Tj * sw, t, radius, flat)[0]
+                    a = _within(total, y[nu:], reach)
+                    if a <= 1e-9:  # on the limit and pulled outwards: the best within it
+                        limited[0] = hn < floor
+                        return sols, e, it, hn < floor, hist
+                    y = a * y
+                    dz = sw * y
+                trial = assemble(sts, moved(sts, dz, with_design))
+                e2 = e + dz[dz.size - nx :] if nx else e
                 if all(s.converged for s in trial):
                     h2, t2, _ = residuals([s.state for s in trial], with_design, e2)
-                    h2n, t2n = float(np.linalg.norm(h2)), float(np.linalg.norm(t2))
-                    # with bounds (a non-smooth residual) a step must not make it larger
-                    grow = 1.0 if bounded and with_design else BLOWUP
-                    grew = np.hypot(h2n, t2n) > grow * np.hypot(hn, tn) + np.sqrt(floor)
-                    if np.isfinite(h2n + t2n) and not grew:
-                        break
-                lam *= 0.5
-            else:
-                if bounded and with_design and hn < floor:  # no step lowers the residual: a compromise
+                    new = float(h2 @ h2 + t2 @ t2)
+                    if lm and np.isfinite(new):
+                        lh, lt = h + Hj @ dz, t + Tj @ dz
+                        pred = merit - float(lh @ lh + lt @ lt)
+                        rho = (merit - new) / pred if pred > 0 else -1.0
+                        step = float(np.linalg.norm(y[nu:])) if y.size > nu else float(np.linalg.norm(y))
+                        if rho > GOOD and step >= 0.99 * radius:
+                            radius = min(2.0 * radius, RADIUS_MAX * size)
+                        elif rho < POOR:
+                            radius = max(0.5 * step, 1e-300)
+                        if rho > ACCEPT:
+                            taken = True
+                            break
+                    elif not lm:
+                        # with bounds (a non-smooth residual) a step must not make it larger
+                        grow = 1.0 if bounded and with_design else BLOWUP
+                        if np.isfinite(new) and np.sqrt(new) <= grow * np.sqrt(merit) + np.sqrt(floor):
+                            taken = True
+                            break
+                elif lm:
+                    radius = 0.5 * float(np.linalg.norm(y[nu:] if y.size > nu else y))
+                if not lm:
+                    dz = 0.5 * dz
+                if lm and radius <= 1e-12 * size:
+                    break
+            if not taken:
+                if with_design and hn < floor:  # no step, however short, lowers the miss: a compromise
                     return sols, e, it, True, hist
                 break
+            if lm:
+                total = total + y[nu:]
             sols, h, t, e = trial, h2, t2, e2
         return sols, e, max_iter, False, hist
 
@@ -441,7 +605,7 @@ def solve_targets(
     if np.any(~(wext > 0) | ~np.isfinite(wext)):
         raise AddressError(f"the external variables' weights must be positive, found {wext.tolist()}")
     # 1. every configuration with the starting design (the "before" curves)
-    first = assemble([start] * len(goals), goals)
+    first = assemble(starts, goals)
     if all(s.converged for s in first):
         before_sols, _, it0, ok0, _ = iterate(first, False, e0)
     else:
@@ -453,7 +617,7 @@ def solve_targets(
         return TargetResult(Status.NOT_CONVERGED, "not assembled: a configuration could not be reached with "
                             "the starting design (its conditions or Phi did not converge)", it0, tuple(rows),
                             tuple(configurations), tuple(before), tuple(before), vb, np.full_like(vb, np.nan),
-                            float("nan"), {}, solutions=tuple(before_sols))  # fmt: skip
+                            float("nan"), {}, solutions=tuple(before_sols), engines=tuple(engs))  # fmt: skip
     # 2. the design change
     after_sols, e1, it, ok, hist = iterate(list(before_sols), True, e0)
     after = [s.state for s in after_sols]
@@ -461,18 +625,19 @@ def solve_targets(
     configurations = configs(e1)
     va = _row_values(rows, outs)
     # Solution.residual's figure (scaled ||Phi||, metres) over all configurations, and the conditions'
-    phi = float(np.linalg.norm(np.concatenate([engine.residual(s) * engine.row_scale for s in after])))
+    phi = float(np.linalg.norm(np.concatenate([e.residual(s) * e.row_scale for e, s in zip(engs, after, strict=True)])))
     hard_res = float(np.hypot(phi, np.linalg.norm(h)))
     conflicts: list[tuple[tuple[str, float], ...]] = []
     final = None
     if t.size:
         Hj, Tj = jacobians(after, True, e1, t)
+    if t.size and np.all(np.isfinite(Hj)) and np.all(np.isfinite(Tj)):
         final = (Hj, Tj, int(uoffs[-1]))
-        sw = np.sqrt(np.concatenate([np.ones(int(uoffs[-1])), wfull[pcols], wext]))
+        sw = metric(True)
         Hy, Ty = Hj * sw, Tj * sw
         TN = Ty @ (np.eye(sw.size) - _pinv(Hy, RCOND_HARD) @ Hy)
         U, sv, _ = np.linalg.svd(TN)
-        rank = int(np.sum(sv > RCOND_TARGET * max(sv.max(initial=0.0), 1e-300))) if sv.size else 0
+        rank = int(np.sum(sv > max(RCOND_TARGET * sv.max(initial=0.0), flat, 1e-300))) if sv.size else 0
         for m in range(rank, U.shape[1]):
             u = U[:, m]
             if abs(u @ t) > target_tol:
@@ -491,13 +656,17 @@ def solve_targets(
         names = "; ".join(" vs ".join(n for n, _ in g) for g in conflicts) or "none identified"
         msg = (f"targets cannot all be met: least-squares compromise after {it} iterations, worst miss {worst:.3g}; "
                f"conflicting: {names}")  # fmt: skip
-    change = _design_change(engine, before[0], after[0], pcols)
+        if limited[0]:  # the miss still falls outwards: the best within the limit of a design change
+            msg = (f"targets cannot be met within a design change of {REACH * size:.3g} m (the mechanism's size; "
+                   f"metres and radians over sqrt(weight)): the best there after {it} iterations, worst miss "
+                   f"{worst:.3g}")  # fmt: skip
+    change = _design_change(engs[0], before[0], after[0], pc[0])
     if external is not None:
         change |= {name: np.array([e1[k] - e0[k]]) for k, name in enumerate(external.names)}
     return TargetResult(Status.CONVERGED if ok else Status.NOT_CONVERGED, msg, it0 + it, tuple(rows),
                         tuple(configurations), tuple(before), tuple(after), vb, va, hard_res, change,
                         tuple(conflicts), tuple(hist), pcols, met, tuple(after_sols), final,
-                        None if external is None else np.array(e1))  # fmt: skip
+                        None if external is None else np.array(e1), tuple(engs))  # fmt: skip
 
 
 __all__ = ["Configuration", "ExternalDesign", "OutputMap", "Row", "TargetResult", "output_jacobian", "solve_targets"]

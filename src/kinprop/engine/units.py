@@ -107,8 +107,15 @@ def tree_coordinates(q: object, angles: tuple[int, ...] | list[int], angle_unit:
     return out
 
 
-def _degrees(model: Model) -> bool:
+def degrees(model: Model) -> bool:
+    """Whether the model declares its angles in degrees (``units.angle``): the one place that
+    reads the model's angle unit."""
     return model.units.get("angle") == "deg"
+
+
+def radians_per_angle(model: Model) -> float:
+    """Radians per unit of the model's angles (:data:`RADIANS_PER`)."""
+    return RADIANS_PER["deg"] if degrees(model) else 1.0
 
 
 def _angle_mask(model: Model, address: str, size: int, engine: HasUnits | None = None) -> np.ndarray:
@@ -157,14 +164,14 @@ def _coef_scale(model: Model, address: str, size: int) -> np.ndarray | None:
     if addr.field != "coef" or addr.joint not in couplings:
         return None
     c = couplings[addr.joint]
-    F = coef_factors(model.mechanism.joint(c.joint_a), model.mechanism.joint(c.joint_b), _degrees(model))[0]
+    F = coef_factors(model.mechanism.joint(c.joint_a), model.mechanism.joint(c.joint_b), degrees(model))[0]
     return np.full(size, F[addr.index]) if addr.index is not None and addr.index < F.size else np.resize(F, size)
 
 
 def _convert(model: Model, address: str, value: object, engine: HasUnits | None, to_solver: bool) -> np.ndarray:
     """Angles (and coupling coefficients) of ``address``: model units <-> solver units."""
     v = np.array(value, dtype=float)
-    if not _degrees(model):
+    if not degrees(model):
         return v
     flat = v.reshape(-1)
     coef = _coef_scale(model, address, flat.size)
@@ -257,7 +264,7 @@ def address_scale(model: Model, name: str, engine: HasUnits | None = None) -> fl
     """Factor from solver units to the model's units of an address's value or of a derivative
     by it: ``180/pi`` for a joint angle or a ``C`` column (per radian of body-frame rotation)
     in a degree model, else 1."""
-    if not _degrees(model) or name.startswith(("point:", "hardpoint:", "distance:", "element:")):
+    if not degrees(model) or name.startswith(("point:", "hardpoint:", "distance:", "element:")):
         return 1.0
     if name.startswith("body:"):
         return 180.0 / math.pi if name.endswith(BODY_ANGLES) else 1.0
@@ -281,7 +288,7 @@ ANGLE_VALUES = ("angle", "angle_1", "angle_2", "rotation_vector")
 def joint_values_to_model_units(model: Model, values: Mapping[str, Mapping[str, object]]) -> dict[str, dict]:
     """``{JOINT: {name: value}}`` joint values (radians) -> the model's angle unit; distances and
     translations are in the length unit either way, Euler parameters have no unit."""
-    k = 1.0 / RADIANS_PER["deg"] if _degrees(model) else 1.0
+    k = 1.0 / RADIANS_PER["deg"] if degrees(model) else 1.0
     out: dict[str, dict] = {}
     for j, vals in values.items():
         out[j] = {
@@ -311,8 +318,10 @@ __all__ = [
     "changes_to_model_units",
     "check_units",
     "coef_factors",
+    "degrees",
     "from_solver_units",
     "joint_values_to_model_units",
+    "radians_per_angle",
     "to_solver_units",
     "tree_coordinates",
 ]

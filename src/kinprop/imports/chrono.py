@@ -43,6 +43,7 @@ from typing import Any
 
 import numpy as np
 
+from kinprop.engine.units import RADIANS_PER
 from kinprop.errors import ModelError, Problem
 from kinprop.io.hardpoints import model_from_hardpoints
 from kinprop.model import Model
@@ -93,7 +94,7 @@ class _Reader:
         if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
             self.problems.append(Problem(key, f"expected a number (degrees), found {v!r}", self.file))
             return 0.0
-        return math.radians(float(v))
+        return float(v) * RADIANS_PER["deg"]
 
 
 def _l(v: Array) -> list[float]:

@@ -59,11 +59,12 @@ def check_json(model: Model, rep: MobilityReport, evaluated_at: str) -> dict[str
     for j in mech.joints:
         at_body[j.body_i].append(j.name)
         at_body[j.body_j].append(j.name)
+    hardpoints = hardpoint_table(model, asm)
     return {
         "model": model.source,
         "name": mech.name,
         "units": dict(model.units),
-        "hardpoints": hardpoint_table(model),
+        "hardpoints": hardpoints if any(r["group"] == "wheel" for r in hardpoints) else [],  # a suspension's
         "bodies": [
             {
                 "name": b.name,

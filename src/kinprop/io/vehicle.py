@@ -19,15 +19,17 @@ height and brake and drive split. :func:`anti_geometry` gives the usual four num
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from kinprop.analysis.context import WheelSpec
+from kinprop.analysis.axle import roll_centre, roll_gradients, steering_ratio
+from kinprop.analysis.context import OutputContext, WheelSpec
 from kinprop.analysis.drives import travel_input
 from kinprop.analysis.metrics import wheel_bodies
 from kinprop.analysis.outputs import evaluate_outputs
-from kinprop.errors import ModelError, Problem
+from kinprop.errors import AddressError, ModelError, Problem
 from kinprop.io.files import load_model
 from kinprop.io.loader import build_or_report, parse_document, read_text
 from kinprop.io.schema import VehicleFile
@@ -73,17 +75,22 @@ def load_vehicle(path: str | Path) -> VehicleModel:
         found = type(data).__name__
         raise ModelError([Problem("vehicle", f"expected a mapping at the top level, found {found}", file)])
 
+    if not {"front", "rear"} & data.keys() and {"bodies", "joints"} & data.keys():
+        why = "expected a vehicle file (vehicle:, front:, rear: axle files); this is a model file (bodies, joints)"
+        raise ModelError([Problem("front", f"{why}: name it from a vehicle file's front: or rear:", file)])
+
     def build(spec: VehicleFile, file: str) -> Any:
         return spec
 
     spec: VehicleFile = build_or_report(data, VehicleFile, build, file)
     vehicle = Vehicle(**spec.vehicle.model_dump())
     axles = {}
-    for axle in ("front", "rear"):
-        where = path.parent / getattr(spec, axle)
-        if not where.is_file():
-            raise ModelError([Problem(axle, f"no axle model file {str(where)!r}", file)])
-        axles[axle] = _axle(load_model(where), vehicle, spec.units.length, axle, file)
+    where = {a: Path(os.path.normpath(path.parent / getattr(spec, a))) for a in ("front", "rear")}
+    missing = [Problem(a, f"no axle model file {str(p)!r}", file) for a, p in where.items() if not p.is_file()]
+    if missing:
+        raise ModelError(missing)
+    for axle, p in where.items():
+        axles[axle] = _axle(load_model(p), vehicle, spec.units.length, axle, file)
     return VehicleModel(spec.name, vehicle, spec.units.model_dump(exclude_none=True), axles["front"], axles["rear"])
 
 
@@ -100,4 +107,56 @@ def anti_geometry(vehicle: VehicleModel) -> dict[str, float]:
     return out
 
 
-__all__ = ["VehicleModel", "anti_geometry", "load_vehicle"]
+def _sides(model: Model) -> tuple[str, str]:
+    """The axle's (left, right) wheel bodies (the left one at y > 0, ISO 8855)."""
+    wheels = wheel_bodies(model)
+    if len(wheels) != 2:
+        raise AddressError(f"an axle has two wheel bodies; this one has {len(wheels)}: {', '.join(wheels) or 'none'}")
+    y = {w: float(OutputContext.of(model).body_point(w, "wheel_centre")[1]) for w in wheels}
+    left, right = sorted(wheels, key=lambda w: -y[w])
+    return left, right
+
+
+def vehicle_summary(vehicle: VehicleModel) -> dict[str, Any]:
+    """What a designer reads off a vehicle (``kinprop vehicle``): its parameters (the file's
+    units) and per axle the wheels, the track (between the wheel centres), the anti percentages
+    (:func:`anti_geometry`), the axle roll-centre height
+    (:func:`kinprop.analysis.axle.roll_centre`), roll steer and roll camber of each wheel
+    (deg/deg, :func:`kinprop.analysis.axle.roll_gradients`) and, for an axle with a rack and a
+    ``rack_travel_per_turn``, the steering ratio; lengths in the vehicle file's unit."""
+    unit = vehicle.units.get("length", "m")
+    v = vehicle.vehicle
+    out: dict[str, Any] = {
+        "name": vehicle.name,
+        "units": {"length": unit},
+        "wheelbase": v.wheelbase,
+        "cg_height": v.cg_height,
+        "brake_front": v.brake_front,
+        "drive_front": v.drive_front,
+        "brakes": v.brakes,
+        "drive": v.drive,
+        "rack_travel_per_turn": v.rack_travel_per_turn,
+    }
+    anti = anti_geometry(vehicle)
+    for axle in ("front", "rear"):
+        model: Model = getattr(vehicle, axle)
+        k = _METRES[model.units.get("length", "m")] / _METRES[unit]  # axle unit -> the vehicle's
+        left, right = _sides(model)
+        ctx = OutputContext.of(model)
+        track = abs(float(ctx.body_point(left, "wheel_centre")[1] - ctx.body_point(right, "wheel_centre")[1]))
+        inputs = {w: travel_input(model, w) for w in (left, right)}
+        rc = roll_centre(model, left, right, inputs)
+        roll = roll_gradients(model, left, right)
+        a: dict[str, Any] = {"source": model.source, "wheels": {"left": left, "right": right}, "track": track * k}
+        a |= {n.split(".", 1)[1]: x for n, x in anti.items() if n.startswith(f"{axle}.")}
+        a["roll_centre_height"] = rc["height"] * k
+        a["roll_steer"] = {w: roll[f"roll_steer:{w}"] for w in (left, right)}
+        a["roll_camber"] = {w: roll[f"roll_camber:{w}"] for w in (left, right)}
+        rack = "RACK.q" if "RACK" in model.mechanism.joint_names else None
+        steer = rack is not None and model.vehicle is not None and model.vehicle.rack_travel_per_turn is not None
+        a["steering_ratio"] = steering_ratio(model, left, right, rack) if steer else None  # type: ignore[arg-type]
+        out[axle] = a
+    return out
+
+
+__all__ = ["VehicleModel", "anti_geometry", "load_vehicle", "vehicle_summary"]

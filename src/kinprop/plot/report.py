@@ -1,6 +1,5 @@
 """What the workbench and the report show of a model by default, and the report itself.
 
-* :func:`hardpoint_rows` — the global hardpoints in the order a suspension designer reads them;
 * :func:`slider_joints` — the independent inputs (a slider each), :func:`coordinate_components`
   — every drivable coordinate with its default curve range, :func:`default_curve_outputs`;
 * :func:`report_html` — one self-contained HTML file: the hardpoint table and the default
@@ -17,15 +16,13 @@ import numpy as np
 import scipy.linalg
 
 from kinprop.analysis.metrics import metric_names
-from kinprop.analysis.points import joint_hardpoints, named_points, snapshot
+from kinprop.analysis.points import hardpoint_table
 from kinprop.analysis.sweep import sweep
 from kinprop.engine import compile as compile_engine
-from kinprop.engine.units import angle_indices
-from kinprop.errors import AddressError
+from kinprop.engine.units import RADIANS_PER, angle_indices, degrees
 from kinprop.io.commands import sweep_inputs, sweep_json
 from kinprop.model import Model
 from kinprop.plot.scene import build_scene, scale
-from kinprop.propagation.hardpoints import parse_global, pivots
 
 
 def _xyz(v: Any) -> list[float]:
@@ -72,7 +69,7 @@ def slider_joints(model: Model) -> tuple[str, ...]:
 def coordinate_components(model: Model, sliders: tuple[str, ...] = ()) -> list[dict[str, Any]]:
     """Every joint coordinate a sweep can drive (not Euler parameters), in model units;
     ``slider_ok`` for the ``sliders`` joints (:func:`slider_joints`)."""
-    deg = model.units.get("angle") == "deg"
+    deg = degrees(model)
     size = scale([build_scene(model)])
     out = []
     for joint, q in model.coordinates.items():
@@ -86,10 +83,14 @@ def coordinate_components(model: Model, sliders: tuple[str, ...] = ()) -> list[d
             if k in euler:
                 continue
             angle = k in angles
-            value = math.degrees(q[k]) if angle and deg else float(q[k])
+            value = float(q[k]) / RADIANS_PER["deg"] if angle and deg else float(q[k])
             unit = ("deg" if deg else "rad") if angle else model.units.get("length", "")
             if angle:
-                half, wide = (CURVE_DEG, SLIDER_DEG) if deg else (math.radians(CURVE_DEG), math.radians(SLIDER_DEG))
+                half, wide = (
+                    (CURVE_DEG, SLIDER_DEG)
+                    if deg
+                    else (CURVE_DEG * RADIANS_PER["deg"], SLIDER_DEG * RADIANS_PER["deg"])
+                )
             else:
                 half, wide = CURVE_FRACTION * size, SLIDER_FRACTION * size
             spec = joint if q.size == 1 else f"{joint}[{k}]"
@@ -128,70 +129,6 @@ def default_curve_outputs(model: Model, drives: list[dict[str, Any]]) -> list[st
     return [f"hardpoint:{j.name}.j[z]" for j in model.mechanism.joints][:1]
 
 
-#: the design table's hardpoint sections, in the order a suspension designer reads them
-SECTIONS = ("chassis pickups", "upright points", "links and steering", "spring and damper", "wheel")
-
-
-def hardpoint_rows(model: Model) -> list[dict[str, Any]]:
-    """The global hardpoints, by section (:data:`SECTIONS`): each joint's ``hardpoint:``
-    addresses that an edit accepts (a revolute's two chassis pivots, a ball joint, a link's
-    two ends), in the model's length unit, then the force elements' ends and the moving bodies'
-    named points (read-only: ``address`` None). An edit of a row is ``kinprop propagate --set
-    ADDRESS=x,y,z`` with the file's reading of hardpoint edits (``edits:``)."""
-    mech = model.mechanism
-    asm = compile_engine(model)
-    snap = snapshot(model, asm)
-    fixed = {b.name for b in mech.bodies if b.fixed}
-    hp = joint_hardpoints(model)
-    rows: list[dict[str, Any]] = []
-
-    def valid(address: str) -> bool:
-        try:
-            parse_global(asm, address)
-        except AddressError:
-            return False
-        return True
-
-    for j in mech.joints:
-        piv = pivots(asm, j.name)
-        if piv is not None:
-            for name, p in piv[1].items():
-                rows.append({"section": SECTIONS[0], "label": f"{j.name} {name} pivot",
-                             "address": f"hardpoint:{j.name}.{name}", "body": (j.body_i, j.body_j)[piv[0]],
-                             "value": _xyz(p)})  # fmt: skip
-            continue
-        on_fixed = [b in fixed for b in (j.body_i, j.body_j)]
-        if j.jtype.name == "distance" or not valid(f"hardpoint:{j.name}"):
-            for k, side in enumerate("ij"):
-                address = f"hardpoint:{j.name}.{side}"
-                if not valid(address):
-                    continue
-                body = (j.body_i, j.body_j)[k]
-                section = SECTIONS[0] if on_fixed[k] else SECTIONS[2]
-                end = "inner" if on_fixed[k] else "outer" if any(on_fixed) else ("i", "j")[k]
-                rows.append({"section": section, "label": f"{j.name} {end} ({body})", "address": address,
-                             "body": body, "value": hp[f"{j.name}.{side}"]})  # fmt: skip
-            continue
-        section = SECTIONS[0] if any(on_fixed) else SECTIONS[1]
-        rows.append({"section": section, "label": f"{j.name} ({j.jtype.name})", "address": f"hardpoint:{j.name}",
-                     "body": f"{j.body_i}/{j.body_j}", "value": hp[f"{j.name}.i"]})  # fmt: skip
-    for e in model.elements:
-        for k, (body, p) in enumerate(((e.body_i, e.s_i), (e.body_j, e.s_j))):
-            g = snap.r[body] + snap.A[body] @ np.asarray(p, dtype=float)
-            rows.append({"section": SECTIONS[3], "label": f"{e.name} {('i', 'j')[k]} ({body})", "address": None,
-                         "body": body, "value": _xyz(g)})  # fmt: skip
-    points = named_points(model)
-    for b in mech.bodies:
-        if b.fixed:
-            continue
-        for name, _ in b.points:
-            if b.joint_point(name) is None:
-                rows.append({"section": SECTIONS[4], "label": f"{b.name}.{name}", "address": None, "body": b.name,
-                             "value": points[f"{b.name}.{name}"]})  # fmt: skip
-    order = {s: k for k, s in enumerate(SECTIONS)}
-    return sorted(rows, key=lambda r: order[r["section"]])  # stable: joint order inside a section
-
-
 def default_curves(model: Model, steps: int = 49) -> dict[str, Any] | None:
     """The default charts' data: a sweep of the first input (:func:`slider_joints`) over its
     default range with :func:`default_curve_outputs`, as ``kinprop sweep --json`` prints it
@@ -218,7 +155,7 @@ def _cell(x: Any) -> str:
 
 def report_html(model: Model, title: str) -> str:
     """One self-contained HTML page (plotly.js inline, no network): the model's global
-    hardpoints (:func:`hardpoint_rows`) and its default charts (:func:`default_curves`), one
+    hardpoints (:func:`kinprop.analysis.points.hardpoint_table`) and its default charts (:func:`default_curves`), one
     panel per output, with the curves' numbers in a table below (full precision)."""
     import plotly.graph_objects as go
     from plotly.subplots import make_subplots
@@ -227,14 +164,14 @@ def report_html(model: Model, title: str) -> str:
     parts = [f"<h1>{html.escape(title)}</h1>", f"<p>{html.escape(model.mechanism.name)}; lengths in {unit}</p>"]
     parts.append('<h2>Hardpoints (global)</h2><table id="hardpoints"><tr><th>hardpoint</th><th>address</th>'
                  f"<th>body</th><th>x [{unit}]</th><th>y [{unit}]</th><th>z [{unit}]</th></tr>")  # fmt: skip
-    section = None
-    for r in hardpoint_rows(model):
-        if r["section"] != section:
-            section = r["section"]
-            parts.append(f'<tr class="section"><th colspan="6">{html.escape(section)}</th></tr>')
-        cells = [r["label"], r["address"] or "", r["body"]]
-        parts.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells)
-                     + "".join(f"<td>{_cell(x)}</td>" for x in r["value"]) + "</tr>")  # fmt: skip
+    group = None
+    for r in hardpoint_table(model):
+        if r["group"] != group:
+            group = r["group"]
+            parts.append(f'<tr class="section"><th colspan="6">{html.escape(str(group))}</th></tr>')
+        cells = [r["point"], r["address"] or "", r["body"]]
+        parts.append("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in cells)
+                     + "".join(f"<td>{_cell(r[c])}</td>" for c in "xyz") + "</tr>")  # fmt: skip
     parts.append("</table>")
     curves = default_curves(model)
     if curves is not None:

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -34,7 +34,12 @@ from kinprop.engine import Engine, State
 from kinprop.errors import AddressError
 from kinprop.spatial import Array, exp_so3, log_so3
 
-GLOBAL = re.compile(r"^(?P<kind>hardpoint|axis):(?P<joint>[^\s.\[\]=]+)(\.(?P<side>[^\s.\[\]=]+))?$")
+#: the one grammar of global addresses: ``hardpoint:J[.i|.j|.PIVOT][[x|y|z]]``, ``axis:J[.i|.j]``
+GLOBAL = re.compile(
+    r"^(?P<kind>hardpoint|axis):(?P<joint>[^\s.\[\]=]+)(\.(?P<side>[^\s.\[\]=]+))?(\[(?P<c>[^\]]*)\])?$"
+)
+#: a global component's index
+_AXIS = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
 _FIELDS = {"hardpoint": "s", "axis": "C"}
 #: edit readings (:attr:`kinprop.model.Mechanism.edits`)
 DESIGN, MECHANISM = "design", "mechanism"
@@ -44,9 +49,9 @@ PIVOT_TYPES = ("revolute", "cylindrical")
 
 @dataclass(frozen=True)
 class GlobalAddress:
-    """A parsed ``hardpoint:J[.i|.j|.PIVOT]`` or ``axis:J[.i|.j]`` address."""
+    """A parsed ``hardpoint:J[.i|.j|.PIVOT][[c]]`` or ``axis:J[.i|.j]`` address."""
 
-    text: str
+    text: str  # the whole point's address (without a component)
     kind: str  # "hardpoint" | "axis"
     joint: str
     sides: tuple[int, ...]  # 0 = i, 1 = j
@@ -54,6 +59,8 @@ class GlobalAddress:
     pivot: str | None = None
     #: the design fields it writes besides the sides' s' (pivots, re-derived lengths)
     extra: tuple[str, ...] = ()
+    #: the one global coordinate named (``hardpoint:TR.i[z]`` -> 2), or None for the whole point
+    component: int | None = None
 
     def fields(self) -> list[str]:
         """The design addresses it writes (``J.s_i``, ``J.C_j``, ``J.length``, ...)."""
@@ -92,13 +99,20 @@ def _edits(engine: Engine, edits: str | None) -> str:
 
 def parse_global(engine: Engine, address: str, edits: str | None = None) -> GlobalAddress:
     """Parse and check a global address against the engine's mechanism."""
-    text = address.strip()
-    m = GLOBAL.match(text)
+    m = GLOBAL.match(address.strip())
     if not m:
         raise AddressError(
-            f"{address!r}: expected hardpoint:JOINT, hardpoint:JOINT.i|j, hardpoint:JOINT.PIVOT, axis:JOINT or "
-            "axis:JOINT.i|j"
+            f"{address!r}: expected hardpoint:JOINT, hardpoint:JOINT.i|j, hardpoint:JOINT.PIVOT (each with an "
+            "optional [x|y|z]), axis:JOINT or axis:JOINT.i|j"
         )
+    text = address.strip().partition("[")[0]
+    component = None
+    if m["c"] is not None:
+        if m["kind"] == "axis":
+            raise AddressError(f"{address!r}: an axis is a direction; give all of {text}=x,y,z")
+        if m["c"] not in _AXIS:
+            raise AddressError(f"{address!r}: expected a component [x], [y] or [z], found [{m['c']}]")
+        component = _AXIS[m["c"]]
     joint = m["joint"]
     if joint not in engine.joint_index:
         raise AddressError(
@@ -125,7 +139,7 @@ def parse_global(engine: Engine, address: str, edits: str | None = None) -> Glob
                 f"{address!r}: moving a pivot with edits={mode!r} writes {', '.join(extra)}; joint {joint!r} has no "
                 f"{', '.join(x.split('.', 1)[1] for x in missing)} (a hardpoint file with edits: design defines them)"
             )
-        return GlobalAddress(text, "hardpoint", joint, (f,), side_text, tuple(extra))
+        return GlobalAddress(text, "hardpoint", joint, (f,), side_text, tuple(extra), component)
     sides = (0, 1) if side_text is None else (0 if side_text == "i" else 1,)
     g = GlobalAddress(text, m["kind"], joint, sides)
     fields = jt.fields
@@ -136,9 +150,8 @@ def parse_global(engine: Engine, address: str, edits: str | None = None) -> Glob
         raise AddressError(f"{address!r}: joint {joint!r} has no {names} design variable; name the side it has")
     extra = (f"{joint}.length",) if mode == DESIGN and g.kind == "hardpoint" and "length" in fields else ()
     # a tree joint whose body j frame is the joint frame (no s_j / C_j): body j follows the joint
-    return GlobalAddress(
-        text, g.kind, joint, tuple(s for s, f in zip(g.sides, g.fields(), strict=True) if f not in missing), None, extra
-    )
+    kept = tuple(s for s, f in zip(g.sides, g.fields(), strict=True) if f not in missing)
+    return GlobalAddress(text, g.kind, joint, kept, None, extra, component)
 
 
 def body_rotation(engine: Engine, state: State, joint: int, side: int) -> Array:
@@ -167,6 +180,42 @@ def min_rotation(a: Array, b: Array) -> Array:
     return exp_so3(c / s * np.arctan2(s, cos))
 
 
+def whole_points(
+    engine: Engine, state: State, changes: Mapping[str, Any], edits: str | None = None
+) -> dict[str, tuple[GlobalAddress | None, Any]]:
+    """``changes`` keyed by whole addresses: a global address's components
+    (``hardpoint:TR.i[z]=54``) merged into its whole point, the others taken from the current
+    assembly of ``state``; non-global addresses map to ``(None, value)``."""
+    out: dict[str, tuple[GlobalAddress | None, Any]] = {}
+    parts: dict[str, dict[int, float]] = {}
+    given: dict[str, str] = {}
+    for address, value in changes.items():
+        if not is_global(address):
+            out[address] = (None, value)
+            continue
+        g = parse_global(engine, address, edits)
+        if g.text in given and (g.component is None or given[g.text] == g.text):
+            raise AddressError(f"{address!r}: {g.text} is already given by {given[g.text]!r}; give it once")
+        given.setdefault(g.text, address.strip())
+        if g.component is None:
+            out[g.text] = (g, _vector(address, value))
+            continue
+        c = np.asarray(value, dtype=float).ravel()
+        if c.size != 1 or not np.isfinite(c[0]):
+            raise AddressError(f"{address!r}: expected one finite global coordinate, found {c.size} numbers")
+        if g.component in parts.setdefault(g.text, {}):
+            raise AddressError(f"{address!r}: that component is given twice")
+        parts[g.text][g.component] = float(c[0])
+        if g.text not in out:
+            out[g.text] = (replace(g, component=None), current_point(engine, state, g.text))
+    for base, comps in parts.items():
+        v = np.array(out[base][1], dtype=float)
+        for c, x in comps.items():
+            v[c] = x
+        out[base] = (out[base][0], v)
+    return out
+
+
 def resolve_changes(
     engine: Engine, state: State, changes: Mapping[str, Any], edits: str | None = None
 ) -> dict[str, Any]:
@@ -181,13 +230,11 @@ def resolve_changes(
     moved: dict[tuple[int, int], Array] = {}  # new global joint points, (joint, side)
     lengths: set[int] = set()
     pivot_moves: dict[str, dict[str, Array]] = {}
-    for address, value in changes.items():
-        if not is_global(address):
-            out[address] = value
+    for address, (g, v) in whole_points(engine, state, changes, mode).items():
+        if g is None:
+            out[address] = v
             continue
-        g = parse_global(engine, address, mode)
         k = engine.joint_index[g.joint]
-        v = _vector(address, value)
         if g.pivot is not None:
             pivot_moves.setdefault(g.joint, {})[g.pivot] = v
             continue
@@ -270,26 +317,91 @@ def pivot_updates(engine: Engine, changes: Mapping[str, Any]) -> dict[str, dict[
     """``{fixed body: {JOINT.PIVOT: body-frame point}}`` of the pivots ``changes`` move: the
     stored pivots a propagation's result carries."""
     out: dict[str, dict[str, Array]] = {}
-    for address, value in changes.items():
-        if not is_global(address):
-            continue
-        g = parse_global(engine, address)
-        if g.pivot is None:
+    if not any(is_global(a) for a in changes):
+        return out
+    for g, v in whole_points(engine, engine.reference, changes).values():  # pivots: fixed, any state
+        if g is None or g.pivot is None:
             continue
         j = engine.mechanism.joint(g.joint)
         body = engine.mechanism.body(j.body_i if g.sides[0] == 0 else j.body_j)
-        v = _vector(address, value)
         out.setdefault(body.name, {})[f"{g.joint}.{g.pivot}"] = body.A.T @ (v - body.r)
     return out
 
 
 def free_addresses(engine: Engine, selectors: Sequence[str]) -> tuple[str, ...]:
     """Free-set selectors with ``hardpoint:J[.i|.j]`` / ``axis:J[.i|.j]`` replaced by the design
-    addresses they move (``J.s_i``, ``J.C_j``, ...); groups and addresses pass through."""
+    addresses they move (``J.s_i``, ``J.C_j``, ...), a component (``hardpoint:TR.i[z]``) by the
+    design columns a change of it writes at the model's assembly (:func:`component_columns`);
+    groups and addresses pass through."""
     out: list[str] = []
     for sel in selectors:
-        out += parse_global(engine, sel).fields() if is_global(sel) else [sel]
+        if not is_global(sel):
+            out.append(sel)
+            continue
+        g = parse_global(engine, sel)
+        out += g.fields() if g.component is None else component_columns(engine, engine.reference, sel)
     return tuple(dict.fromkeys(out))
+
+
+def component_columns(engine: Engine, state: State, address: str) -> list[str]:
+    """The design column labels (``TR.s_i[2]``, ``TR.length``, a pivot's ``UCA.C_i[k]``) that a
+    change of one global component (``hardpoint:TR.i[z]``) writes at ``state``. A joint's point
+    on a body whose frame is turned from the global axes would need a combination of ``s'``
+    columns: that is refused (name the body-frame columns ``J.s_i[k]`` instead)."""
+    g = parse_global(engine, address)
+    if g.component is None:
+        raise AddressError(f"{address!r}: expected a component, e.g. {address.strip()}[z]")
+    fields, M, _ = hardpoint_map(engine, state, g.text)
+    rows = [lab for f in fields for lab in _labels(engine, f)]
+    col = np.abs(M[:, g.component])
+    hit = [lab for lab, x in zip(rows, col, strict=True) if x > 1e-8 * max(1.0, float(col.max()))]
+    if g.pivot is None:
+        for fld in g.fields()[: len(g.sides)]:
+            mine = [lab for lab in hit if lab.startswith(fld + "[")]
+            if len(mine) > 1:
+                raise AddressError(
+                    f"{address!r}: the body frame of {fld} is turned from the global axes, so this global "
+                    f"coordinate moves {', '.join(mine)} together; free those columns (or the whole {g.text})"
+                )
+    return hit
+
+
+def free_tie(engine: Engine, state: State, selectors: Sequence[str]) -> tuple[tuple[str, ...], Array | None]:
+    """``(addresses, tie)`` of a target solve's free set (:func:`kinprop.engine.targets.solve_targets`):
+    :func:`free_addresses`, and the columns that must move together. A component of a point two
+    moving bodies share (``hardpoint:UBJ[z]``: ``UBJ.s_i[2]`` and ``UBJ.s_j[2]``) is one unknown,
+    its global coordinate: both bodies' s' move by the same global step, so no body moves at
+    the assembly the point is given at (freed one by one, the loop would close by turning an arm,
+    moving the point in x and y too). ``tie`` is None when there is no such component."""
+    addresses = free_addresses(engine, selectors)
+    cols = engine.columns(addresses) if addresses else np.zeros(0, np.int64)
+    labels = engine.column_labels
+    pos = {labels[c]: i for i, c in enumerate(cols.tolist())}
+    tied: list[Array] = []
+    used: set[int] = set()
+    for sel in selectors:
+        if not is_global(sel):
+            continue
+        g = parse_global(engine, sel)
+        if g.component is None or g.pivot is not None:
+            continue
+        fields, M, _ = hardpoint_map(engine, state, g.text)
+        rows = [lab for f in fields for lab in _labels(engine, f)]
+        col = M[:, g.component]
+        big = 1e-8 * max(1.0, float(np.abs(col).max()))
+        entries = {lab: float(x) for lab, x in zip(rows, col, strict=True) if ".s_" in lab and abs(x) > big}
+        if len({lab.split("[")[0] for lab in entries}) < 2:
+            continue  # a point on one moving body: its columns are the unknowns themselves
+        t = np.zeros(cols.size)
+        for lab, x in entries.items():
+            t[pos[lab]] = x
+            used.add(pos[lab])
+        tied.append(t)
+    if not tied:
+        return addresses, None
+    eye = np.eye(cols.size)
+    rest = [eye[:, i] for i in range(cols.size) if i not in used]
+    return addresses, np.column_stack(tied + rest)
 
 
 def free_weights(engine: Engine, weights: Mapping[str, float] | None) -> dict[str, float] | None:
@@ -352,10 +464,6 @@ def hardpoint_map(engine: Engine, state: State, address: str) -> tuple[list[str]
     return fields, np.column_stack(cols), [f"{g.text}[{c}]" for c in "xyz"]
 
 
-_COMPONENT = re.compile(r"^(?P<base>hardpoint:[^\s\[\]=]+)\[(?P<c>[xyz012])\]$")
-_AXIS = {"x": 0, "y": 1, "z": 2, "0": 0, "1": 1, "2": 2}
-
-
 def _labels(engine: Engine, field: str) -> list[str]:
     """Column labels of one design field (``J.s_i[0..2]``, ``J.C_i[0..2]``, ``J.length``)."""
     return [c for c in engine.column_labels if c == field or c.startswith(field + "[")]
@@ -369,15 +477,14 @@ def global_columns(engine: Engine, state: State, wrt: Sequence[str]) -> tuple[li
     design: list[str] = []
     combos: dict[str, dict[str, float]] = {}
     for w in wrt:
-        m = _COMPONENT.match(w.strip())
-        base = m["base"] if m else w.strip()
-        if not (is_global(base) and base.startswith("hardpoint:")):
+        if not w.strip().startswith("hardpoint:"):
             design.append(w)
             continue
-        fields, M, labels = hardpoint_map(engine, state, base)
+        g = parse_global(engine, w)
+        fields, M, labels = hardpoint_map(engine, state, g.text)
         design += fields
         rows = [lab for f in fields for lab in _labels(engine, f)]
-        comps = [_AXIS[m["c"]]] if m else [0, 1, 2]
+        comps = [g.component] if g.component is not None else [0, 1, 2]
         for c in comps:
             coef: dict[str, float] = {}
             for r, lab in enumerate(rows):
@@ -391,14 +498,14 @@ def global_plan(engine: Engine, state: State, addresses: Sequence[str], values: 
     factors) replaced by the design component columns they set, per sample (exact, at
     ``state``'s assembly; the other components of that point stay where they are)."""
     values = np.atleast_2d(np.asarray(values, dtype=float))
-    keep = [k for k, a in enumerate(addresses) if not _COMPONENT.match(a.strip())]
+    parsed = {k: parse_global(engine, a) for k, a in enumerate(addresses) if a.strip().startswith("hardpoint:")}
+    keep = [k for k in range(len(addresses)) if k not in parsed or parsed[k].component is None]
     addrs = [addresses[k] for k in keep]
     cols = [values[:, k] for k in keep]
     groups: dict[str, list[tuple[int, int]]] = {}
-    for k, a in enumerate(addresses):
-        m = _COMPONENT.match(a.strip())
-        if m:
-            groups.setdefault(m["base"], []).append((k, _AXIS[m["c"]]))
+    for k, g in parsed.items():
+        if g.component is not None:
+            groups.setdefault(g.text, []).append((k, g.component))
     for base, comps in groups.items():
         g = parse_global(engine, base)
         p0 = current_point(engine, state, base)
@@ -428,6 +535,7 @@ __all__ = [
     "GlobalAddress",
     "current_point",
     "free_addresses",
+    "free_tie",
     "free_weights",
     "global_columns",
     "global_plan",

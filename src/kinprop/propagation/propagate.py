@@ -31,6 +31,7 @@ from kinprop.engine.units import (
     check_units,
     from_solver_units,
     joint_values_to_model_units,
+    radians_per_angle,
 )
 from kinprop.errors import AddressError, SingularityWarning
 from kinprop.model.model import Model
@@ -170,7 +171,7 @@ def variable_rows(prop: Propagation) -> list[dict[str, Any]]:
         if v.group == "C":
             Cb, Ca = prop.before.design[v.key], prop.after.design[v.key]
             ang = 0.0 if np.array_equal(Ca, Cb) else float(np.linalg.norm(log_so3(Ca @ Cb.T)))
-            ang = float(np.degrees(ang)) if angle == "deg" else ang
+            ang /= radians_per_angle(model)
             rows.append(
                 {"variable": v.key, "unit": angle, "before": [0.0], "after": [ang], "change": ang, "role": role}
             )

@@ -9,13 +9,14 @@ from typing import Any
 
 import numpy as np
 
+from kinprop.analysis.context import find_point
 from kinprop.analysis.metrics import wheel_bodies
 from kinprop.analysis.outputs import output_names
-from kinprop.analysis.points import joint_hardpoints, named_points
+from kinprop.analysis.points import hardpoint_table, joint_hardpoints, named_points
 from kinprop.analysis.units import unit_of
-from kinprop.engine.units import from_solver_units
+from kinprop.engine.units import METRES_PER, from_solver_units
 from kinprop.model import Model
-from kinprop.plot.report import coordinate_components, default_curve_outputs, hardpoint_rows
+from kinprop.plot.report import coordinate_components, default_curve_outputs
 from kinprop.plot.scene import Scene, bounds, build_scene, scale
 from kinprop.plot.style import AXIS, FADED_ALPHA, MARKERS, POINT, segment_colour
 from kinprop.serve.session import Session
@@ -147,6 +148,24 @@ def status_text(changes: dict[str, Any], result: dict[str, Any]) -> str:
     return "  ·  ".join(parts)
 
 
+#: the wheel-travel drive's default curve: +-50 mm, in the model's length unit
+TRAVEL_CURVE_M = 0.05
+
+
+def travel_drive(model: Model) -> list[dict[str, Any]]:
+    """The wheel-travel drive (``travel``, :mod:`kinprop.analysis.drives`: equal length steps of
+    the wheel centres' height over their ``wheel_centre_ref``, both wheels of an axle in heave)
+    of a suspension whose wheels have that reference, as a drive entry of the page; else none."""
+    wheels = wheel_bodies(model)
+    if not wheels or not all(find_point(model, w, "wheel_centre_ref", on_wheel=False) for w in wheels):
+        return []
+    length = model.units.get("length", "m")
+    half = TRAVEL_CURVE_M / METRES_PER.get(length, 1.0)
+    return [{"spec": "travel", "address": "travel", "joint": "", "type": "wheel travel", "angle": False,
+             "unit": length, "value": 0.0, "curve": [-half, half], "slider": [-half, half], "slider_ok": False,
+             "size": 1}]  # fmt: skip
+
+
 def state_json(
     session: Session, label: str, sliders: tuple[str, ...] = (), hardpoint_style: bool = False
 ) -> dict[str, Any]:
@@ -157,7 +176,7 @@ def state_json(
     if last is not None:
         scenes.append(build_scene(last.before))
     lo, hi = bounds(scenes)
-    comps = coordinate_components(model, sliders)
+    comps = travel_drive(model) + coordinate_components(model, sliders)  # a suspension's default: wheel travel
     res = session.result_json
     return {
         "model": label,
@@ -165,7 +184,7 @@ def state_json(
         "units": dict(model.units),
         "variables": variables_json(model, session),
         "hardpoint_style": hardpoint_style,
-        "hardpoint_rows": hardpoint_rows(model),
+        "hardpoint_rows": hardpoint_table(model),
         "status_line": session.status_line(),
         "coordinates": {k: _xyz(v) for k, v in model.coordinates.items()},
         "hardpoints": joint_hardpoints(model),

@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from kinprop.jit import GELSD, JIT, LAPACK_INT, inlined, kernel, njit, prange
+from kinprop.jit import COMPILED, GELSD, LAPACK_INT, inlined, kernel, njit
 from kinprop.kinematics.kernels import (
     VEC_CALLER,
     W_FRAME_R,
@@ -156,8 +156,8 @@ def _lstsq(M, m, n, b, sv, rank):
     least ``max(m, n)`` long) holds the right side on entry and the minimum-norm least-squares
     solution in ``b[:n]`` on exit. ``sv``, ``rank``: scratch. Returns LAPACK's info (0: ok).
     Called through numba's own LAPACK binding, so it allocates nothing numba counts;
-    uncompiled (``NUMBA_DISABLE_JIT``), through ``numpy.linalg.lstsq`` (the same routine)."""
-    if not JIT:
+    uncompiled (:mod:`kinprop.jit`), through ``numpy.linalg.lstsq`` (the same routine)."""
+    if not COMPILED:
         b[:n] = np.linalg.lstsq(M[: m * n].reshape((n, m)).T, b[:m], rcond=None)[0]
         return 0
     return GELSD(_KIND_D, m, n, 1, M.ctypes, max(m, 1), b.ctypes, max(m, n, 1), sv.ctypes,
@@ -656,7 +656,7 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf, re
                 opt = kkt_step(tb, plan, Q, S, C, L, ref, buf, it > 0)
                 sign = 0
             else:
-                sign = newton_step(plan, Phi, vals, buf, True)
+                sign = newton_step(plan, Phi, vals, buf, np.bool_(True))
                 o2 = 0.0
                 for i in range(nf):
                     o2 += (dx[i] / plan.sqrt_weights[i]) ** 2
@@ -677,7 +677,7 @@ def solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, tol, history, buf, re
             status = NO_FREE
             break
         if not stepped:
-            sign = newton_step(plan, Phi, vals, buf, False)
+            sign = newton_step(plan, Phi, vals, buf, np.bool_(False))
         if not polishing:
             sign1 = sign
             if it == 0:
@@ -766,7 +766,7 @@ def optimality(tb, plan, Q, S, C, L, ref, buf):
         return 0.0
     evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, none, none)
     displacement(tb, plan.free, Q, S, C, L, ref, buf[B_U], ws)
-    newton_step(plan, Phi, vals, buf, True)
+    newton_step(plan, Phi, vals, buf, np.bool_(True))
     o2, dx = 0.0, buf[B_DX]
     for i in range(nf):
         o2 += (dx[i] / plan.sqrt_weights[i]) ** 2
@@ -780,7 +780,7 @@ def _sign_at(tb, plan, Q, S, C, L, buf):
     if plan.free.shape[0] == 0:
         return 0
     evaluate(tb, Q, S, C, L, ws, Phi, vals, plan.need, none, none)
-    return newton_step(plan, Phi, vals, buf, False)
+    return newton_step(plan, Phi, vals, buf, np.bool_(False))
 
 
 @kernel
@@ -836,7 +836,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
         # not assembled (estimates): assemble at the start's own design first (the assembly the
         # estimates point at; flagged when det changed sign on the way), then follow the change
         st, it, nr, _, _, s0, s1, _ = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, history, buf,
-                                            ref, False, cfg.max_iter)  # fmt: skip
+                                            ref, np.bool_(False), cfg.max_iter)  # fmt: skip
         flags |= FROM_ESTIMATES
         if s0 != 0 and s1 != 0 and s0 != s1:
             flags |= SIGN_FLIP
@@ -908,7 +908,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
                     mm_into(E, C0[j, side], C[j, side])
         hist = history[min(its0, history.shape[0]) :]  # after the assembly's residuals
         st, it, nr, _, jump, s0, s1, _ = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol, hist, buf,
-                                               ref, False, cfg.max_iter)  # fmt: skip
+                                               ref, np.bool_(False), cfg.max_iter)  # fmt: skip
         last = st
         its += it
         hlen = min(its0, history.shape[0]) + it + 1
@@ -956,7 +956,7 @@ def follow(tb, plan, Q, S, C, L, Q1, S1, C1, L1, assembled, row_scale, col_scale
             copy_state(Q, S, C, L, Qs, Ss, Cs, Ls)
             h0 = min(max(hlen - 1, 0), history.shape[0])
             st, it, nr, _, _, _, _, opt = solve(tb, plan, Q, S, C, L, row_scale, col_scale, cfg, cfg.tol,
-                                                history[h0:], buf, ref, True, cfg.max_iter)  # fmt: skip
+                                                history[h0:], buf, ref, np.bool_(True), cfg.max_iter)  # fmt: skip
             its += it
             hlen = h0 + it + 1
             if st == CONVERGED and not (nrigid > 0 and flipped(tb, ws[W_FRAME_R], rs)):
@@ -996,7 +996,7 @@ def _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, ass
     fbuf = follow_buffers(tb, Q[0], S[0], C[0], L[0])
     hist = np.zeros(0)
     shared = Q.shape[0] == 1
-    sign = UNKNOWN_SIGN
+    sign = np.int64(UNKNOWN_SIGN)  # not the literal: one signature of follow
     if shared and assembled == 1 and cfg.branch:
         sign = _sign_at(tb, plan, Q[0], S[0], C[0], L[0], buf)
     for v in range(v0, v1):
@@ -1013,21 +1013,7 @@ def follow_batch(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, asse
     """:func:`follow` for every variant of a leading batch axis (see :func:`_follow_range`);
     ``out[v]`` = (status, iterations, fraction, sub-steps, residual, flags, optimality residual)."""
     _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, assembled, row_scale, col_scale, cfg,
-                  out, 0, Q1.shape[0])  # fmt: skip
-
-
-@njit(parallel=True)
-def follow_batch_threaded(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, assembled, row_scale,
-                          col_scale, cfg, out, chunks):  # fmt: skip
-    """:func:`follow_batch` split into ``chunks`` contiguous chunks over numba's threads. Call it
-    under ``set_parallel_chunksize(1)`` (as ``Engine.solve_batch`` does; set inside, it would
-    make the function uncacheable) so that the chunks are handed out one at a time: a thread
-    that finishes early takes the next, and a core slowed by other work does not hold up the
-    batch as an equal split per thread would."""
-    N = Q1.shape[0]
-    for c in prange(chunks):
-        _follow_range(tb, plan, nnz, Q, S, C, L, Q1, S1, C1, L1, Qo, So, Co, Lo, assembled, row_scale, col_scale,
-                      cfg, out, c * N // chunks, (c + 1) * N // chunks)  # fmt: skip
+                  out, np.int64(0), Q1.shape[0])  # fmt: skip
 
 
 @njit
@@ -1044,7 +1030,7 @@ def follow_sequence(tb, plan, nnz, Q, S, C, L, set_cols, values, row_scale, col_
     hist = np.zeros(0)
     Qg, Sg, Cg, Lg = Q.copy(), S.copy(), C.copy(), L.copy()
     Q1 = Q.copy()
-    sign = UNKNOWN_SIGN  # det sign at the last good step: the next step's reference
+    sign = np.int64(UNKNOWN_SIGN)  # det sign at the last good step: the next step's reference
     for s in range(values.shape[0]):
         Q1[:] = Q
         for i in range(set_cols.shape[0]):

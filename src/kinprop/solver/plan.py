@@ -20,10 +20,9 @@ from graphlib import TopologicalSorter
 from typing import NamedTuple
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
 
 from kinprop.spatial import Array
+from kinprop.topology.graph import connected_components
 
 #: square components up to this size are solved dense (exact min-norm even when singular)
 DENSE_MAX = 24
@@ -80,7 +79,12 @@ class Plan(NamedTuple):
 
 def _order_square(rows: Array, cols: Array, r_loc: Array, c_loc: Array) -> list[tuple[Array, Array]] | None:
     """Block-triangular diagonal blocks (rows, cols) of a square component, dependencies first;
-    None when it has no perfect structural matching."""
+    None when it has no perfect structural matching. (scipy, imported here: only components
+    larger than :data:`DENSE_MAX` come here, none of a one-shot job's small models.)"""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components as strong_components
+    from scipy.sparse.csgraph import maximum_bipartite_matching
+
     n = cols.size
     pat = sp.csr_matrix((np.ones(r_loc.size), (r_loc, c_loc)), shape=(n, n))
     match = maximum_bipartite_matching(pat, perm_type="column")  # row -> column
@@ -90,7 +94,7 @@ def _order_square(rows: Array, cols: Array, r_loc: Array, c_loc: Array) -> list[
     dep = c_loc != match[r_loc]
     src, dst = c_loc[dep], match[r_loc[dep]]
     g = sp.csr_matrix((np.ones(src.size), (src, dst)), shape=(n, n))
-    n_blocks, label = connected_components(g, directed=True, connection="strong")
+    n_blocks, label = strong_components(g, directed=True, connection="strong")
     order = TopologicalSorter({b: () for b in range(n_blocks)})
     for a, b in np.unique(np.stack([label[src], label[dst]], axis=1), axis=0).tolist():
         if a != b:
@@ -133,9 +137,7 @@ def build_plan(
     er, ef = rows[on], fidx[cols[on]]
     blocks: list[tuple[Array, Array]] = []
     if m and nf:
-        pat = sp.csr_matrix((np.ones(er.size), (er, ef)), shape=(m, nf))
-        graph = sp.bmat([[None, pat], [pat.T, None]]).tocsr()
-        ncomp, labels = connected_components(graph, directed=False)
+        ncomp, labels = connected_components(m + nf, er, m + ef)  # rows, then the free columns
         rlab, clab = labels[:m], labels[m:]
         for comp in range(ncomp):
             rws, cls = np.flatnonzero(rlab == comp), np.flatnonzero(clab == comp)

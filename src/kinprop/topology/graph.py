@@ -9,9 +9,10 @@ the coupling row) are kept in the tree. Each cut joint closes a loop whose junct
 lowest common ancestor of its two bodies: case 1 when the pair is still joined by a tree joint,
 case 2 otherwise (eqs. 44-51).
 
-The graph work is scipy's (``scipy.sparse.csgraph``: Kruskal's spanning tree, connected
-components); the tree is then oriented from the world breadth first, each body's children in
-the order the spanning tree took their joints (cheapest first).
+The graph work is Kruskal's spanning tree and connected components by union-find (plain
+Python: the results scipy's ``csgraph`` gives, without importing scipy); the tree is then
+oriented from the world breadth first, each body's children in the order the spanning tree took
+their joints (cheapest first).
 """
 
 from __future__ import annotations
@@ -20,8 +21,6 @@ from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
 from kinprop.errors import ModelError, Problem
 from kinprop.model.mechanism import Mechanism
@@ -93,29 +92,52 @@ def _loop_paths(
     )
 
 
+def _root(parent: list[int], a: int) -> int:
+    """Union-find root of ``a`` (path halving)."""
+    while parent[a] != a:
+        parent[a] = parent[parent[a]]
+        a = parent[a]
+    return a
+
+
+def connected_components(n_nodes: int, u: np.ndarray, v: np.ndarray) -> tuple[int, np.ndarray]:
+    """Connected components of the undirected graph with edges ``u[k] - v[k]``: their count
+    and each node's label, components numbered in the order of their lowest node (scipy's
+    ``csgraph.connected_components`` numbering)."""
+    parent = list(range(n_nodes))
+    for a, b in zip(np.asarray(u).tolist(), np.asarray(v).tolist(), strict=True):
+        ra, rb = _root(parent, a), _root(parent, b)
+        if ra != rb:
+            parent[max(ra, rb)] = min(ra, rb)  # a root is its component's lowest node so far
+    label = np.empty(n_nodes, dtype=np.int32)
+    count = 0
+    for a in range(n_nodes):
+        r = _root(parent, a)
+        if r == a:
+            label[a], count = count, count + 1
+        else:
+            label[a] = label[r]  # r < a: labelled already
+    return count, label
+
+
 def _spanning_tree(n_nodes: int, edges: list[tuple[int, int, str, float]]) -> dict[int, list[tuple[int, str]]]:
     """Minimum spanning forest of a multigraph given as ``(u, v, key, weight)`` edges with
-    distinct weights (so the forest is unique): each node's tree neighbours with the joining
-    edge's key, cheapest edge first. Of parallel edges only the cheapest can be a tree edge;
-    the weights are shifted to be positive (scipy reads a zero as no edge; a spanning forest
-    has the same number of edges whatever the shift)."""
+    distinct weights (so the forest is unique; Kruskal's): each node's tree neighbours with the
+    joining edge's key, cheapest edge first. Of parallel edges only the cheapest can be a tree
+    edge."""
     best: dict[tuple[int, int], tuple[float, str]] = {}
     for u, v, key, w in edges:
         pair = (min(u, v), max(u, v))
         if u != v and (pair not in best or w < best[pair][0]):
             best[pair] = (w, key)
     adjacent: dict[int, list[tuple[int, str]]] = {k: [] for k in range(n_nodes)}
-    if not best:
-        return adjacent
-    (us, vs), (ws, keys) = zip(*best, strict=True), zip(*best.values(), strict=True)
-    ws = np.array(ws)
-    shifted = ws - ws.min() + 1.0
-    tree = minimum_spanning_tree(sp.csr_matrix((shifted, (us, vs)), shape=(n_nodes, n_nodes))).tocoo()
-    weight = dict(zip(zip(us, vs, strict=True), zip(ws, keys, strict=True), strict=True))
-    taken = sorted((weight[min(a, b), max(a, b)], int(a), int(b)) for a, b in zip(tree.row, tree.col, strict=True))
-    for (_, key), a, b in taken:
-        adjacent[a].append((b, key))
-        adjacent[b].append((a, key))
+    parent = list(range(n_nodes))
+    for (a, b), (_, key) in sorted(best.items(), key=lambda item: item[1]):
+        ra, rb = _root(parent, a), _root(parent, b)
+        if ra != rb:
+            parent[ra] = rb
+            adjacent[a].append((b, key))
+            adjacent[b].append((a, key))
     return adjacent
 
 
@@ -158,8 +180,7 @@ def build_topology(mech: Mechanism) -> Topology:
     grounded: set[str] = set()
     if len(reach) - 1 < len(mech.body_names):  # reach holds WORLD
         ij = np.array([(node[j.body_i], node[j.body_j]) for j in mech.joints], dtype=np.int64).reshape(-1, 2)
-        full = sp.csr_matrix((np.ones(len(ij)), (ij[:, 0], ij[:, 1])), shape=(len(names), len(names)))
-        _, label = connected_components(full, directed=False)
+        _, label = connected_components(len(names), ij[:, 0], ij[:, 1])
         fixed = {label[node[b.name]] for b in mech.bodies if b.fixed}
         grounded = {b for b in mech.body_names if label[node[b]] in fixed}
     for b in mech.body_names:

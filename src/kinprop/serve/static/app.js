@@ -145,14 +145,14 @@ function renderHardpoints() {
   const rows = [];
   let section = null;
   for (const h of state.hardpoint_rows) {
-    if (h.section !== section) {
-      section = h.section;
+    if (h.group !== section) {
+      section = h.group;
       rows.push(el("tr", { class: "section" }, [el("th", { colspan: 5, text: section })]));
     }
     const tr = el("tr", { "data-address": h.address || "", class: state.changes.includes(h.address) ? "role-set" : "",
       title: h.address ? `${h.address} (global, ${state.units.length || ""})` : "follows the bodies (read-only)" });
-    tr.append(el("td", { class: "addr", text: h.label }), el("td", { text: h.body }));
-    h.value.forEach((x, k) => {
+    tr.append(el("td", { class: "addr", text: h.point }), el("td", { text: h.body }));
+    [h.x, h.y, h.z].forEach((x, k) => {
       const td = el("td");
       if (h.address) {
         const inp = el("input", { type: "number", step: "any", value: fmt(x), "data-hardpoint": h.address, "data-index": k,
@@ -175,10 +175,10 @@ function editHardpoint(h, k, inp) {
   const x = Number(inp.value);
   if (inp.value.trim() === "" || !Number.isFinite(x)) {
     showError([`${h.address}: expected a number, found ${JSON.stringify(inp.value)}`]);
-    inp.value = fmt(h.value[k]);
+    inp.value = fmt([h.x, h.y, h.z][k]);
     return;
   }
-  const value = h.value.slice();
+  const value = [h.x, h.y, h.z];
   value[k] = x;
   $("wrt").value = h.address;
   run(() => propagate({ [h.address]: value }, freeSet(), true, inp));
