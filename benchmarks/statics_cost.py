@@ -1,8 +1,10 @@
 """Cost of the loads at one pose of the shipped double wishbone (issue 21, "Speed"): the
 kinetostatics (reactions, member and element forces, input effort), the same with their exact
-design derivatives with respect to 20 hardpoint coordinates (the state response included) and
-the exact reduced stiffness, against one compiled position re-solve; CPU time of the calling
-process (the machine is shared), the median of several repeats after a warm-up. Then a 51-point
+design derivatives with respect to 20 hardpoint coordinates (the state response included: on
+the engine, ``design_rates``, one evaluation, the input held; and by name, the free-coordinate
+sensitivity then the rates) and the exact reduced stiffness, against one compiled position
+re-solve; CPU time of the calling process (the machine is shared), the median of several
+repeats after a warm-up. Then a 51-point
 wheel-travel sweep (the lower arm over -6..6 deg) with every force of the ``bump_3g`` case as
 outputs (every joint's reaction magnitude, the tie rod's tension, the springs' forces, the
 input effort) against the same sweep with the positions only (the hardpoints' z).
@@ -22,7 +24,7 @@ import numpy as np
 import kinprop as kp
 from kinprop.analysis.statics import applied_points, input_columns, model_laws
 from kinprop.engine.statics import reduced_stiffness, statics_state
-from kinprop.engine.statics_rates import statics_rates
+from kinprop.engine.statics_rates import design_rates, statics_rates
 from kinprop.propagation.sensitivity import design_sensitivity
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -51,7 +53,9 @@ def main() -> None:
     # 20 hardpoint coordinates: the s' of the ball joints, the tie rod's ends and the arms' pivots
     wrt = ["LBJ.s_i", "UBJ.s_i", "UBJ.s_j", "TR.s_i", "TR.s_j", "UCA.s_i", "LCA.s_i"]
 
-    def with_derivatives() -> None:
+    wrt_cols = design_sensitivity(model, wrt, ["q"], engine=eng, units="solver").wrt_columns[:20]
+
+    def by_name() -> None:
         sens = design_sensitivity(model, wrt, ["q"], engine=eng, units="solver")
         X = np.zeros((20, eng.n_columns))
         X[np.arange(20), sens.wrt_columns[:20]] = 1.0
@@ -62,7 +66,8 @@ def main() -> None:
         "position re-solve (compiled)": lambda: eng.propagate({"LCA.q": 0.01}, free=["q"], start=st),
         "statics_state (engine)": lambda: statics_state(eng, st, W, cols, laws),
         "kp.statics (by name)": lambda: kp.statics(model, "braking_1g", engine=eng),
-        "statics + d/d(20 hardpoints)": with_derivatives,
+        "statics + d/d(20 hardpoints)": lambda: design_rates(eng, st, pf, wrt_cols, cols, laws, held),
+        "  the same by name (sensitivity)": by_name,
         "reduced_stiffness (engine)": lambda: reduced_stiffness(eng, st, pf, cols, laws),
     }
     times = {name: statistics.median(_time(f) for _ in range(args.repeats)) for name, f in cases.items()}

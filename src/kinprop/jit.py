@@ -35,7 +35,16 @@ from typing import Any
 import platformdirs
 
 #: packages whose sources are compiled into the kernels
-_KERNEL_SOURCES = ("spatial.py", "jit.py", "joints", "constraints", "kinematics", "solver", "engine/outputs.py")
+_KERNEL_SOURCES = (
+    "spatial.py",
+    "jit.py",
+    "joints",
+    "constraints",
+    "kinematics",
+    "solver",
+    "engine/outputs.py",
+    "engine/statics_kernels.py",
+)
 
 
 @cache

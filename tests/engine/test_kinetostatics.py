@@ -322,3 +322,35 @@ def test_design_rates_match_central_differences_of_re_solved_models(rm) -> None:
     scale = max(1.0, float(np.max(np.abs(fd[:, known]))))
     err = np.abs(got[:, known] - fd[:, known])
     assert np.max(err) < 3e-7 * scale, (engine.column_labels[design[np.argmax(err.max(axis=1))]], np.max(err) / scale)
+
+
+@pytest.mark.parametrize("rm", RANDOM[:8], ids=lambda rm: f"seed{rm.seed}")
+def test_design_rates_are_the_rates_along_the_held_input_response(rm) -> None:
+    """``design_rates`` (one evaluation, the coordinates' response inside) gives the direction
+    ``e_p + dq/dp`` with the inputs held (an independent least-squares solve on the engine's
+    Jacobian here) and the rates of :func:`statics_rates` along it (checked against central
+    differences of re-solved models above)."""
+    from kinprop.engine.statics_rates import design_rates, statics_rates
+
+    engine = kp.compile(rm.model)
+    st = engine.state_of(rm.model)
+    cols = _drivable(engine, st)
+    if not cols or len(engine.mechanism.bodies) < 3:
+        pytest.skip("no drivable coordinates")
+    rng = np.random.default_rng(500 + rm.seed)
+    r, A, _, _ = engine.poses(st)
+    loads, _, laws = _random_point_forces(rng, engine, np.array(r), np.array(A))
+    nq = engine.n_coordinates
+    design = nq + rng.choice(engine.n_columns - nq, size=min(5, engine.n_columns - nq), replace=False)
+    free = np.array([c for c in range(nq) if c not in cols], np.int64)
+    J = engine.evaluate(st)[1]
+    X = np.eye(engine.n_columns)[design]
+    X[:, free] = -np.linalg.lstsq(J[:, free], J[:, design], rcond=None)[0].T
+    got, Xg = design_rates(engine, st, loads, design, cols, laws)
+    assert np.allclose(Xg, X, rtol=1e-9, atol=1e-9 * max(1.0, float(np.max(np.abs(X)))))
+    ref = statics_rates(engine, st, loads, X, cols, laws)
+    for name in ("efforts", "at_point", "local", "member", "element_force"):
+        a, b = getattr(got, name), getattr(ref, name)
+        assert np.array_equal(np.isnan(a), np.isnan(b))
+        scale = max(1.0, float(np.nanmax(np.abs(b))) if np.isfinite(b).any() else 1.0)
+        assert np.nanmax(np.abs(a - b), initial=0.0) < 1e-7 * scale, name

@@ -2,9 +2,9 @@
 
 The first command-line run with an empty kernel cache (kinprop.jit) runs its job uncompiled
 and starts this module in a background process, which compiles every kernel entry point
-(single solves, batches serial and threaded, sequences, poses, sensitivities, the statics'
-cut-joint rows) into the cache and then writes the cache's completion marker; later runs load
-the compiled kernels. A lock file keeps concurrent first runs from starting more than one build.
+(single solves, batches serial and threaded, sequences, poses, sensitivities, the statics and
+their rates) into the cache and then writes the cache's completion marker; later runs load the
+compiled kernels. A lock file keeps concurrent first runs from starting more than one build.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 from rich.console import Console
 
@@ -68,6 +69,21 @@ def announce() -> None:
                   "(up to a minute, once) ...", soft_wrap=True)  # fmt: skip
 
 
+def _statics_rates(model: Any, engine: Any) -> None:
+    """Compile the statics' rates (design derivatives) and the reduced stiffness."""
+    from kinprop.analysis.statics import input_columns, model_laws
+    from kinprop.engine.statics import PointForces, reduced_stiffness
+    from kinprop.engine.statics_rates import design_rates
+
+    st = engine.state_of(model)
+    loads = PointForces.empty()
+    cols, _ = input_columns(engine, model.mechanism.inputs)
+    laws, held = model_laws(model, engine, st)
+    design_rates(engine, st, loads, [engine.n_coordinates], cols, laws, held)
+    if cols:
+        reduced_stiffness(engine, st, loads, cols, laws)
+
+
 def build() -> None:
     """Compile every kernel entry point into the cache and write its completion marker."""
     import numpy as np
@@ -82,7 +98,9 @@ def build() -> None:
         engine = kp.compile(model)
         kp.propagate(model, change, engine=engine)
         kp.mobility(model)
-        kp.statics(kp.assemble(model, engine=engine).after, engine=engine)  # the cut rows' partials
+        assembled = kp.assemble(model, engine=engine).after
+        kp.statics(assembled, engine=engine)  # the statics' compiled call
+        _statics_rates(assembled, engine)  # their rates' compiled call and the reduced stiffness
         sol = engine.propagate(change, ("q", "s"))
         engine.kinematics(sol.state)
         engine.retract(sol.state, np.zeros(engine.n_columns))

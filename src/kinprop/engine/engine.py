@@ -355,6 +355,15 @@ class Engine:
             raise AssertionError(f"the kernel emitted {k} Jacobian entries, the count says {self.nnz}")
         return rows, cols
 
+    @cached_property
+    def dense_pattern(self) -> tuple[Array, Array, Array]:
+        """``(q, flat_q, flat)``: which Jacobian entries are in q columns, their flat index in
+        the dense ``Phi_q`` (n_rows, n_q), and every entry's flat index in the dense ``Phi_x``
+        (n_rows, n_columns) (duplicates add: ``np.bincount``)."""
+        rows, cols = self.pattern
+        q = cols < self.n_coordinates
+        return q, rows[q] * self.n_coordinates + cols[q], rows * self.n_columns + cols
+
     @property
     def row_labels(self) -> list[str]:
         return [f"{b.joint}:{lab}" for b in self.row_blocks for lab in b.labels]

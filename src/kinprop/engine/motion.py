@@ -165,11 +165,10 @@ class _Frames:
         need[: engine.n_columns if design else nq] = 1  # layout: q first; ``design``: the s', C twists too
         dummy = np.zeros(0, np.int64)
         kernels.evaluate(tb, st.Q, st.S, st.C, st.L, ws, Phi, vals, need, dummy, dummy)
-        rows, cols = engine.pattern
-        q = cols < nq
         self.residual = float(np.linalg.norm(Phi * engine.row_scale))
-        self.Phi_q = np.zeros((engine.n_rows, nq))
-        np.add.at(self.Phi_q, (rows[q], cols[q]), vals[q])
+        q, flat_q, _ = engine.dense_pattern
+        self.Phi_q = np.bincount(flat_q, weights=vals[q], minlength=engine.n_rows * nq).reshape(engine.n_rows, nq)
+        self._vals = vals if design else None
         slots = (
             kernels.W_BODY_R,
             kernels.W_BODY_A,
@@ -178,8 +177,17 @@ class _Frames:
             kernels.W_TWIST_Q,
             kernels.W_TWIST_D,
         )
-        self.r, self.A, self.P, self.R, self.Tq, self.Td = (np.array(ws[k]) for k in slots)
+        self.r, self.A, self.P, self.R, self.Tq, self.Td = (ws[k] for k in slots)  # this evaluation's own arrays
         self.state = st
+        self._engine = engine
+
+    def jacobian(self) -> Array:
+        """``Phi_x`` (n_rows, n_columns) dense over every layout column (a ``design`` evaluation)."""
+        if self._vals is None:
+            raise ValueError("the design columns were not evaluated (design=False)")
+        eng = self._engine
+        flat = eng.dense_pattern[2]
+        return np.bincount(flat, weights=self._vals, minlength=eng.n_rows * eng.n_columns).reshape(eng.n_rows, -1)
 
 
 def _driven_rows(engine: Engine, driven: Mapping[str, Any]) -> tuple[list[int], list[float]]:

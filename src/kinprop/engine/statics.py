@@ -37,33 +37,20 @@ in equilibrium with no load; a reported component that any of them changes is *u
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from kinprop.constraints.basic import DISTANCE, ROWS, basic_rows
-from kinprop.engine.motion import _Frames, cross3, motion_state, spatial_cross
+from kinprop.engine import statics_kernels as sk
+from kinprop.engine.motion import _Frames, motion_state, spatial_cross
 from kinprop.engine.status import Status, message
-from kinprop.joints.composite import TD_CODE
 from kinprop.kinematics.tables import (
-    B_KIND,
-    B_ON_J,
     J_BODY_I,
     J_BODY_J,
-    J_CODE,
     J_NQ,
     J_QCOL,
-    K_BASIC0,
-    K_BASIC1,
-    K_JOINT,
-    K_ROW0,
-    T_CHILD,
-    T_JOINT,
-    T_PARENT,
-    T_REVERSED,
 )
 from kinprop.model.elements import Element, TorsionSpring
 from kinprop.spatial import Array
@@ -72,7 +59,7 @@ if TYPE_CHECKING:
     from kinprop.engine.engine import Engine, State
 
 #: relative singular value below which a direction of [Phi_q^T E_D^T] counts as null
-RANK_RTOL = 1e-10
+RANK_RTOL = sk.RANK_RTOL
 #: relative size above which a self-stress state changes a component (undetermined)
 UNDETERMINED_RTOL = 1e-7
 OK, UNBALANCED, NOT_ASSEMBLED = Status.OK, Status.UNBALANCED, Status.NOT_ASSEMBLED
@@ -167,108 +154,68 @@ class StaticsState:
         return self.P[j, side]
 
 
-def _cut_rows(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, c: int) -> tuple[Array, ...]:
-    """``(P_i, d, Phi_d, Phi_wi, Phi_wj)`` of cut joint ``c`` from the compiled basic-constraint
-    rows (``P_i`` slid along ``z''_i`` by a T-D joint's own coordinate, ``d = P_j - P_i``)."""
-    tb = engine.tables
-    j = tb.cut[c, K_JOINT]
-    Pi = fr_P[j, 0].copy()
-    if tb.joint[j, J_CODE] == TD_CODE:
-        Pi = Pi + fr_R[j, 0, :, 2] * Q[tb.joint[j, J_QCOL]]
-    d = fr_P[j, 1] - Pi
-    kinds = [tb.basic[b, B_KIND] for b in range(tb.cut[c, K_BASIC0], tb.cut[c, K_BASIC1])]
-    m = sum(ROWS[k] for k in kinds)
-    Phi, Pd, Wi, Wj, Pl = np.zeros(m), np.zeros((m, 3)), np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m)
-    r = 0
-    for b in range(tb.cut[c, K_BASIC0], tb.cut[c, K_BASIC1]):
-        r += basic_rows(tb.basic[b, B_KIND], tb.basic[b, B_ON_J], tb.basic_axes[b], d, fr_R[j, 0], fr_R[j, 1],
-                        L[j], r, Phi, Pd, Wi, Wj, Pl)  # fmt: skip
-    return Pi, d, Pd, Wi, Wj
+def law_table(laws: Sequence[Law]) -> tuple[Array, Array]:
+    """The element laws as the compiled loops' tables ``(li, lf)``
+    (:mod:`kinprop.engine.statics_kernels`)."""
+    li, lf = np.zeros((len(laws), 5), np.int64), np.zeros((len(laws), 9))
+    for k, e in enumerate(laws):
+        if isinstance(e, TorsionLaw):
+            li[k] = (1, e.body_i, e.body_j, e.joint, e.col)
+            lf[k, 6:] = (e.k, e.theta0, e.T0)
+        else:
+            li[k] = (0, e.body_i, e.body_j, -1, -1)
+            lf[k] = (*e.s_i, *e.s_j, e.k, e.L0, e.f0)
+    return li, lf
 
 
-def _skew(p: Array) -> Array:
-    """``S`` with ``a x p = a S`` for row vectors ``a``."""
-    x, y, z = float(p[0]), float(p[1]), float(p[2])
-    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-
-
-def cut_arms(Pi: Array, d: Array, Pd: Array, Wi: Array, Wj: Array) -> tuple[Array, Array]:
-    """``(Z_i, Z_j)`` (m, 6): a cut joint's rows' partials with respect to the twists of its
-    bodies (module docstring), from :func:`_cut_rows`."""
-    return np.hstack([-Pd, Pd @ _skew(Pi) + Wi]), np.hstack([Pd, Wj - Pd @ _skew(Pi + d)])
+def _tables(laws: Sequence[Law] | tuple[Array, Array]) -> tuple[Array, Array]:
+    """``(li, lf)`` of laws given as laws or already as tables."""
+    if isinstance(laws, tuple) and len(laws) == 2 and isinstance(laws[0], np.ndarray):
+        return laws
+    return law_table(laws)  # type: ignore[arg-type]
 
 
 def _cut_partials(engine: Engine, fr_P: Array, fr_R: Array, Q: Array, L: Array, c: int) -> tuple[Array, Array]:
     """``(Z_i, Z_j)`` (m, 6) of cut joint ``c`` (module docstring)."""
-    return cut_arms(*_cut_rows(engine, fr_P, fr_R, Q, L, c))
+    ct = sk.cut_terms(engine.tables, fr_P, fr_R, Q, L)
+    m = ct[7][c]
+    return ct[5][c, :m], ct[6][c, :m]
 
 
 def distance_rows(engine: Engine, P: Array, R: Array, Q: Array) -> list[tuple[int, int, float]]:
     """``(joint, row, |d|)`` of every cut joint's distance row (its rod's length now)."""
-    tb = engine.tables
-    out = []
-    for c in range(tb.cut.shape[0]):
-        j, r = tb.cut[c, K_JOINT], tb.cut[c, K_ROW0]
-        Pi = P[j, 0] + (R[j, 0, :, 2] * Q[tb.joint[j, J_QCOL]] if tb.joint[j, J_CODE] == TD_CODE else 0.0)
-        for b in range(tb.cut[c, K_BASIC0], tb.cut[c, K_BASIC1]):
-            kind = tb.basic[b, B_KIND]
-            if kind == DISTANCE:
-                out.append((int(j), int(r), float(np.linalg.norm(P[j, 1] - Pi))))
-            r += ROWS[kind]
-    return out
+    rod_row, rod_len = sk.cut_terms(engine.tables, P, R, Q, np.zeros(engine.tables.joint.shape[0]))[8:]
+    return [(int(j), int(rod_row[j]), float(rod_len[j])) for j in np.flatnonzero(rod_row >= 0)]
 
 
 def subtree_sums(engine: Engine, W: Array) -> Array:
-    """``W_sub`` (..., nb, 6): each body's wrench plus those of every body below it in the tree."""
-    tb = engine.tables
-    Ws = np.array(W, dtype=float)
-    for t in range(tb.tree.shape[0] - 1, -1, -1):
-        Ws[..., tb.tree[t, T_PARENT], :] += Ws[..., tb.tree[t, T_CHILD], :]
-    return Ws
+    """``W_sub`` (nb, 6) or (K, nb, 6): each body's wrench plus those of every body below it in the tree."""
+    W = np.asarray(W, dtype=float)
+    return sk.subtree_sums(engine.tables, W) if W.ndim == 2 else sk.subtree_sums_k(engine.tables, W)
 
 
 def generalized_forces(engine: Engine, Tq: Array, W: Array) -> Array:
     """``Q`` (n_q,) of body wrenches ``W`` (nb, 6) about the origin: ``Q_t = T_t^T W_sub(t)``."""
-    tb = engine.tables
-    Ws = subtree_sums(engine, W)
-    Qg = np.zeros(engine.n_coordinates)
-    for t in range(tb.tree.shape[0]):
-        j = tb.tree[t, T_JOINT]
-        q0, nq = tb.joint[j, J_QCOL], tb.joint[j, J_NQ]
-        if nq > 0:
-            Qg[q0 : q0 + nq] = Tq[t, :, :nq].T @ Ws[tb.tree[t, T_CHILD]]
-    return Qg
+    return sk.generalized_forces(engine.tables, Tq, np.asarray(W, dtype=float), engine.n_coordinates)
 
 
 def element_state(
-    laws: Sequence[Law], r: Array, A: Array, Q: Array | None = None, P: Array | None = None, R: Array | None = None
+    laws: Sequence[Law] | tuple[Array, Array],
+    r: Array,
+    A: Array,
+    Q: Array | None = None,
+    P: Array | None = None,
+    R: Array | None = None,
 ) -> tuple[Array, Array, Array, Array]:
     """Forces, lengths, end points (ne, 2, 3) of the elements and their wrenches (nb, 6); a
     torsion spring (its torque, its angle, its joint's points) needs the coordinates ``Q`` and
     the joint frames ``P``, ``R``."""
-    f, lengths, ends = np.zeros(len(laws)), np.zeros(len(laws)), np.zeros((len(laws), 2, 3))
-    W = np.zeros((r.shape[0], 6))
-    for k, e in enumerate(laws):
-        if isinstance(e, TorsionLaw):
-            if Q is None or P is None or R is None:
-                raise ValueError("a torsion spring needs the coordinates and the joint frames")
-            q = float(Q[e.col])
-            f[k], lengths[k], ends[k] = e.T0 + e.k * (e.theta0 - q), q, P[e.joint]
-            M = f[k] * R[e.joint, 0, :, 2]
-            W[e.body_j, 3:] += M
-            W[e.body_i, 3:] -= M
-            continue
-        Pi, Pj = r[e.body_i] + A[e.body_i] @ e.s_i, r[e.body_j] + A[e.body_j] @ e.s_j
-        d = Pj - Pi
-        length = math.sqrt(float(d @ d))
-        f[k], lengths[k], ends[k] = e.f0 + e.k * (e.L0 - length), length, (Pi, Pj)
-        if f[k] != 0.0:
-            if length == 0.0:
-                raise ValueError("an element with a force has zero length: its direction is undefined")
-            F = f[k] * d / length  # on body j, pushing it away from i
-            W[e.body_j] += np.concatenate([F, cross3(Pj, F)])
-            W[e.body_i] -= np.concatenate([F, cross3(Pi, F)])
-    return f, lengths, ends, W
+    li, lf = _tables(laws)
+    if Q is None or P is None or R is None:
+        if li[:, 0].any():
+            raise ValueError("a torsion spring needs the coordinates and the joint frames")
+        Q, P, R = np.zeros(0), np.zeros((0, 2, 3)), np.zeros((0, 2, 3, 3))
+    return sk.element_forces(li, lf, r, A, Q, P, R, r.shape[0])
 
 
 def element_laws(
@@ -346,63 +293,28 @@ class PointForces:
 
     def wrenches(self, nb: int) -> Array:
         """(nb, 6) ``[F ; M + P x F]`` summed by body."""
-        W = np.zeros((nb, 6))
-        for k in range(self.body.shape[0]):
-            W[self.body[k]] += np.concatenate([self.F[k], self.M[k] + cross3(self.P[k], self.F[k])])
-        return W
+        return sk.point_wrenches(self.body, self.P, self.F, self.M, nb)
 
-
-def _cross(a: Array, b: Array) -> Array:
-    """Cross products on the last axis (broadcast; numpy's ``cross`` costs several times more
-    on these small stacks)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
-
-
-def _velocity(T: Array, P: Array) -> Array:
-    """(K, 3) velocity of the point now at ``P`` moving with twists ``T`` (K, 6)."""
-    return T[:, :3] + _cross(T[:, 3:], P)
+    def arrays(self) -> tuple[Array, ...]:
+        """``(body, P, F, M, follows, radius, centre, axis, sae)`` for the compiled loops (a
+        radius of 0: a material point)."""
+        n = self.body.shape[0]
+        if self.radius is None or self.centre is None or self.axis is None or self.sae is None:
+            z = np.zeros((n, 3))
+            return self.body, self.P, self.F, self.M, self.follows, np.zeros(n), z, z, np.zeros(n, bool)
+        return self.body, self.P, self.F, self.M, self.follows, self.radius, self.centre, self.axis, self.sae
 
 
 def load_rates(loads: PointForces, V: Array) -> Array:
     """(K, nb, 6) rates of the applied wrenches about the origin under body twists ``V``
     (K, nb, 6): a force at a material point P has ``dM_O = v_P x F + P x dF`` (``dF = omega x F``
-    in body axes); a wheel load's contact point moves as :func:`contact_rate` says."""
-    dW = np.zeros(V.shape)
-    for k in range(loads.body.shape[0]):
-        b, P, F, M = loads.body[k], loads.P[k], loads.F[k], loads.M[k]
-        w = V[:, b, 3:]
-        if loads.radius is not None and loads.radius[k] > 0.0:
-            vP = contact_rate(loads, k, V[:, b])
-        else:
-            vP = _velocity(V[:, b], P)
-        dF = _cross(w, F) if loads.follows[k] else np.zeros_like(w)
-        dM = _cross(w, M) if loads.follows[k] else np.zeros_like(w)
-        dW[:, b, :3] += dF
-        dW[:, b, 3:] += dM + _cross(vP, F) + _cross(P, dF)
-    return dW
-
-
-def contact_rate(loads: PointForces, k: int, Vb: Array) -> Array:
-    """(K, 3) velocity of wheel load ``k``'s contact point (the lowest point of the wheel circle
-    ``centre + radius n``, ``n`` along ``-z`` projected onto the wheel plane; in SAE axes the
-    lowest point of the z-mirrored circle) under the wheel body's twists ``Vb`` (K, 6)."""
-    assert loads.radius is not None and loads.centre is not None and loads.axis is not None
-    flip = np.array([1.0, 1.0, -1.0]) if loads.sae[k] else np.ones(3)
-    c, a = loads.centre[k], loads.axis[k]
-    vc, da = flip * _velocity(Vb, c), flip * _cross(Vb[:, 3:], a)
-    a = flip * a
-    g = np.array([0.0, 0.0, -1.0]) + a[2] * a
-    ng = float(np.linalg.norm(g))
-    n = g / ng
-    dg = da[:, 2:3] * a + a[2] * da
-    dn = (dg - (dg @ n)[:, None] * n) / ng
-    return flip * (vc + loads.radius[k] * dn)
+    in body axes); a wheel load's contact point moves as the lowest point of the wheel circle
+    (:func:`kinprop.engine.statics_kernels.contact_rate`)."""
+    return sk.load_rates(*loads.arrays(), np.ascontiguousarray(V, dtype=float))
 
 
 def element_rates(
-    laws: Sequence[Law],
+    laws: Sequence[Law] | tuple[Array, Array],
     held: Sequence[bool],
     r: Array,
     A: Array,
@@ -417,39 +329,16 @@ def element_rates(
     held at its preload), ``d(f u)`` with the direction's rate. A torsion spring needs the
     coordinates ``Q`` and their rates ``qdot`` (K, n_q), its joint frame i's angular velocity
     ``frame_w`` (K, nj, 3) and the frames ``R``: ``d(T z'') = dT z'' + T omega x z''``."""
-    K = V.shape[0]
-    dW, df, dL = np.zeros(V.shape), np.zeros((K, len(laws))), np.zeros((K, len(laws)))
-    for k, e in enumerate(laws):
-        if isinstance(e, TorsionLaw):
-            if qdot is None or frame_w is None or R is None or Q is None:
-                raise ValueError("a torsion spring's rates need the coordinates, their rates and the joint frames")
-            a = R[e.joint, 0, :, 2]
-            dL[:, k] = qdot[:, e.col]
-            df[:, k] = 0.0 if held[k] else -e.k * dL[:, k]
-            T = e.T0 + e.k * (e.theta0 - float(Q[e.col]))
-            dM = df[:, k : k + 1] * a + T * _cross(frame_w[:, e.joint], a)
-            dW[:, e.body_j, 3:] += dM
-            dW[:, e.body_i, 3:] -= dM
-            continue
-        Pi, Pj = r[e.body_i] + A[e.body_i] @ e.s_i, r[e.body_j] + A[e.body_j] @ e.s_j
-        d = Pj - Pi
-        length = float(np.linalg.norm(d))
-        if length == 0.0:
-            continue
-        u = d / length
-        vi, vj = _velocity(V[:, e.body_i], Pi), _velocity(V[:, e.body_j], Pj)
-        dd = vj - vi
-        dL[:, k] = dd @ u
-        du = (dd - dL[:, k : k + 1] * u) / length
-        f = e.f0 + e.k * (e.L0 - length)
-        df[:, k] = 0.0 if held[k] else -e.k * dL[:, k]
-        dF = df[:, k : k + 1] * u + f * du
-        Fv = f * u
-        dW[:, e.body_j, :3] += dF
-        dW[:, e.body_j, 3:] += _cross(vj, Fv) + _cross(Pj, dF)
-        dW[:, e.body_i, :3] -= dF
-        dW[:, e.body_i, 3:] -= _cross(vi, Fv) + _cross(Pi, dF)
-    return dW, df, dL
+    li, lf = _tables(laws)
+    V = np.ascontiguousarray(V, dtype=float)
+    if qdot is None or frame_w is None or R is None or Q is None:
+        if li[:, 0].any():
+            raise ValueError("a torsion spring's rates need the coordinates, their rates and the joint frames")
+        K = V.shape[0]
+        qdot, frame_w, R, Q = np.zeros((K, 0)), np.zeros((K, 0, 3)), np.zeros((0, 2, 3, 3)), np.zeros(0)
+    h = np.array(held, dtype=bool).reshape(-1) if len(held) else np.zeros(li.shape[0], bool)
+    return sk.element_rates(li, lf, h, r, A, V, np.ascontiguousarray(qdot, dtype=float),
+                            np.ascontiguousarray(frame_w, dtype=float), R, Q)  # fmt: skip
 
 
 def reduced_stiffness(
@@ -502,48 +391,84 @@ def reduced_stiffness(
     return tau, K, ""
 
 
-def _reactions(engine: Engine, Zs: list[tuple[Array, Array]], lam: Array, W_applied: Array) -> Array:
-    """Every joint's wrench (nj, 2, 6) on its bodies i and j, from the multipliers and the
-    applied wrenches (module docstring)."""
+@dataclass(frozen=True)
+class _Terms:
+    """What the statics of a state computed on the way that their rates reuse: the applied
+    wrenches with the elements', the cut joints' rows
+    (:func:`kinprop.engine.statics_kernels.cut_terms`), the reactions before any NaN, the
+    scaled system's SVD and rank and its scales."""
+
+    W: Array
+    cut: tuple[Array, ...]
+    wrench: Array
+    U: Array
+    s: Array
+    Vt: Array
+    rank: int
+    unscale: Array
+    cs: Array
+
+
+def _statics(
+    engine: Engine, fr: _Frames, applied: Array, driven: Sequence[int], laws: tuple[Array, Array]
+) -> tuple[StaticsState, _Terms | None]:
+    """:func:`statics_state` on the kernel's evaluation ``fr``, with the terms its rates reuse
+    (None when the state is not balanced)."""
+    st = fr.state
     tb = engine.tables
-    nj = tb.joint.shape[0]
-    out = np.zeros((nj, 2, 6))
-    W = np.array(W_applied, dtype=float)
-    for c, (Zi, Zj) in enumerate(Zs):
-        j, r0 = tb.cut[c, K_JOINT], tb.cut[c, K_ROW0]
-        lc = lam[r0 : r0 + Zi.shape[0]]
-        out[j, 0], out[j, 1] = Zi.T @ lc, Zj.T @ lc
-        W[tb.joint[j, J_BODY_I]] += out[j, 0]
-        W[tb.joint[j, J_BODY_J]] += out[j, 1]
-    Ws = subtree_sums(engine, W)
-    for t in range(tb.tree.shape[0]):
-        j = tb.tree[t, T_JOINT]
-        on_child = -Ws[tb.tree[t, T_CHILD]]
-        child_side = 0 if tb.tree[t, T_REVERSED] else 1
-        out[j, child_side], out[j, 1 - child_side] = on_child, -on_child
-    return out
-
-
-def _at_points(W: Array, P: Array) -> Array:
-    """Joint wrenches (nj, 2, 6) as force and moment about the joint's point on each body, global axes."""
-    return np.concatenate([W[..., :3], W[..., 3:] - _cross(P, W[..., :3])], axis=-1)
-
-
-def _local(G: Array, R: Array) -> Array:
-    """Joint wrenches at their points ``G`` (nj, 2, 6, :func:`_at_points`) in joint frame i's
-    axes (the same frame for both sides)."""
-    return np.einsum("jba,jstb->jsta", R[:, 0], G.reshape(*G.shape[:2], 2, 3)).reshape(G.shape)
-
-
-def equilibrium_system(engine: Engine, Phi_q: Array, driven: Sequence[int]) -> tuple[Array, Array, Array]:
-    """``(A_s, unscale, c_s)``: ``[Phi_q^T  E_D^T]`` with rows and columns scaled as the solver
-    scales them; ``A_s (y / unscale) = b / c_s`` for ``[Phi_q^T  E_D^T] y = b``."""
-    nq, nd = engine.n_coordinates, len(driven)
-    rs, cs = engine.row_scale, engine.col_scale[:nq]
-    E = np.zeros((nd, nq))
-    E[np.arange(nd), list(driven)] = 1.0
-    As = np.hstack([(Phi_q * rs[:, None] / cs[None, :]).T, E.T])  # unknowns [lambda / rs ; tau / cs_D]
-    return As, np.concatenate([rs, cs[list(driven)] if nd else np.zeros(0)]), cs
+    m, nd, nj = engine.n_rows, len(driven), tb.joint.shape[0]
+    nq = engine.n_coordinates
+    dr = np.asarray(driven, dtype=np.int64).reshape(nd)
+    (W, f, lengths, ends, unscale, U, s, Vt, rank, resid, bn, lam, tau, wrench, at_point, local, member,
+     ct) = sk.statics_core(tb, fr.r, fr.A, fr.P, fr.R, fr.Tq, st.Q, st.L, fr.Phi_q, engine.row_scale,
+                           engine.col_scale[:nq], dr, *laws, np.asarray(applied, dtype=float))  # fmt: skip
+    not_assembled = fr.residual > ASSEMBLED_TOL
+    if not_assembled or (resid > 1e-8 * max(bn, 1e-300) and resid > 0):
+        nan = np.full((nj, 2, 6), np.nan)
+        return StaticsState(
+            NOT_ASSEMBLED if not_assembled else UNBALANCED,
+            message(NOT_ASSEMBLED, residual=fr.residual) if not_assembled else message(UNBALANCED, mismatch=resid / bn),
+            np.full(m, np.nan), tuple(driven), np.full(nd, np.nan), nan, nan, nan, np.zeros((nj, 2, 6), bool), W,
+            f, lengths, ends, np.full(nj, np.nan), np.zeros((0, nj, 2, 6)), fr.r, fr.A, fr.P, fr.R, fr.residual,
+        ), None  # fmt: skip
+    null = Vt[rank:]
+    und = np.zeros((nj, 2, 6), bool)
+    stress = np.zeros((0, nj, 2, 6))
+    if null.shape[0]:  # self-stress: a component is undetermined when some null vector changes it
+        Zi, Zj, mrows, rod_row, rod_len = ct[5:]
+        rods = np.flatnonzero(rod_row >= 0)
+        zero = np.zeros_like(W)
+        stress = np.array([sk.reactions(tb, Zi, Zj, mrows, v * unscale, zero) for v in null]).reshape(-1, nj, 2, 6)
+        Lsc = engine.length_scale or 1.0
+        und_g = np.zeros((nj, 2, 6), bool)
+        tau_und, member_und = np.zeros(nd, bool), np.zeros(nj, bool)
+        for k, v in enumerate(null):
+            glob, loc = sk.at_points(stress[k], fr.P, fr.R)
+            loc[..., 3:] /= Lsc
+            glob[..., 3:] /= Lsc
+            t = v[m:] * unscale[m:] / Lsc if nd else np.zeros(0)  # efforts: torque-like scale
+            size = max(float(np.max(np.abs(loc))), float(np.max(np.abs(t))) if nd else 0.0)
+            if size == 0.0:
+                continue
+            und |= np.abs(loc) > UNDETERMINED_RTOL * size
+            und_g |= np.abs(glob) > UNDETERMINED_RTOL * size
+            member_und[rods] |= np.abs(2.0 * v[rod_row[rods]] * unscale[rod_row[rods]] * rod_len[rods]) > (
+                UNDETERMINED_RTOL * size
+            )
+            if nd:
+                tau_und |= np.abs(t) > UNDETERMINED_RTOL * size
+        wrench_out = wrench.copy()
+        local[und] = np.nan
+        at_point[und_g] = np.nan
+        wrench_out[und.any(axis=2)] = np.nan  # a side with an undetermined component: no global wrench
+        tau = np.where(tau_und, np.nan, tau)
+        member[member_und] = np.nan
+    else:
+        wrench_out = wrench
+    msg = message(OK, self_stress=null.shape[0], undetermined=int(und.sum()))
+    ss = StaticsState(OK, msg, lam, tuple(driven), tau, wrench_out, local, at_point, und, W, f, lengths, ends, member,
+                      stress, fr.r, fr.A, fr.P, fr.R, fr.residual)  # fmt: skip
+    return ss, _Terms(W, ct, wrench, U, s, Vt, rank, unscale, engine.col_scale[:nq])
 
 
 def statics_state(
@@ -551,79 +476,15 @@ def statics_state(
     state: State,
     applied: Array,
     driven: Sequence[int] = (),
-    laws: Sequence[Law] = (),
+    laws: Sequence[Law] | tuple[Array, Array] = (),
     frames: _Frames | None = None,
 ) -> StaticsState:
     """Multipliers, input efforts, joint reactions and element forces of the assembled
     ``state`` under body wrenches ``applied`` (nb, 6) about the origin, held by the efforts
     at the ``driven`` layout columns (module docstring); ``frames``: the kernel's evaluation
-    of ``state`` when the caller has it."""
+    of ``state`` when the caller has it; ``laws`` as laws or as their tables (:func:`law_table`)."""
     fr = frames if frames is not None else _Frames(engine, state)
-    st = fr.state
-    tb = engine.tables
-    m, nd = engine.n_rows, len(driven)
-    f, lengths, ends, W_el = element_state(laws, fr.r, fr.A, fr.state.Q, fr.P, fr.R)
-    W = np.asarray(applied, dtype=float) + W_el
-    Qg = generalized_forces(engine, fr.Tq, W)
-    As, unscale, cs = equilibrium_system(engine, fr.Phi_q, driven)
-    b = -Qg / cs
-    U, s, Vt = np.linalg.svd(As, full_matrices=True)
-    smax = float(s[0]) if s.size and s[0] > 0 else 1.0
-    rank = int(np.sum(s > RANK_RTOL * smax))
-    xs = Vt[:rank].T @ ((U[:, :rank].T @ b) / s[:rank])
-    null = Vt[rank:]
-    resid = float(np.linalg.norm(As @ xs - b))
-    Zs = [_cut_partials(engine, fr.P, fr.R, st.Q, st.L, c) for c in range(tb.cut.shape[0])]
-    nj = tb.joint.shape[0]
-    not_assembled = fr.residual > ASSEMBLED_TOL
-    if not_assembled or (resid > 1e-8 * max(float(np.linalg.norm(b)), 1e-300) and resid > 0):
-        nan = np.full((nj, 2, 6), np.nan)
-        return StaticsState(
-            NOT_ASSEMBLED if not_assembled else UNBALANCED,
-            message(NOT_ASSEMBLED, residual=fr.residual) if not_assembled else
-            message(UNBALANCED, mismatch=resid / float(np.linalg.norm(b))),
-            np.full(m, np.nan), tuple(driven), np.full(nd, np.nan), nan, nan, nan, np.zeros((nj, 2, 6), bool), W,
-            f, lengths, ends, np.full(nj, np.nan), np.zeros((0, nj, 2, 6)), fr.r, fr.A, fr.P, fr.R, fr.residual,
-        )  # fmt: skip
-    x = xs * unscale
-    lam, tau = x[:m], x[m:]
-    wrench = _reactions(engine, Zs, lam, W)
-    stress = np.array([_reactions(engine, Zs, v * unscale, np.zeros_like(W)) for v in null]).reshape(-1, nj, 2, 6)
-    # a component is undetermined when some self-stress state changes it
-    Lsc = engine.length_scale or 1.0
-    und, und_g = np.zeros((nj, 2, 6), bool), np.zeros((nj, 2, 6), bool)
-    tau_und = np.zeros(nd, bool)
-    rods = distance_rows(engine, fr.P, fr.R, st.Q)
-    member = np.full(nj, np.nan)
-    for j, row, length in rods:
-        member[j] = -2.0 * lam[row] * length
-    member_und = np.zeros(nj, bool)
-    for k, v in enumerate(null):
-        glob = _at_points(stress[k], fr.P)
-        loc = _local(glob, fr.R)
-        loc[..., 3:] /= Lsc
-        glob[..., 3:] /= Lsc
-        t = v[m:] * unscale[m:] / Lsc if nd else np.zeros(0)  # efforts: torque-like scale
-        size = max(float(np.max(np.abs(loc))), float(np.max(np.abs(t))) if nd else 0.0)
-        if size == 0.0:
-            continue
-        und |= np.abs(loc) > UNDETERMINED_RTOL * size
-        und_g |= np.abs(glob) > UNDETERMINED_RTOL * size
-        for j, row, length in rods:
-            member_und[j] |= abs(2.0 * v[row] * unscale[row] * length) > UNDETERMINED_RTOL * size
-        if nd:
-            tau_und |= np.abs(t) > UNDETERMINED_RTOL * size
-    wrench_out, at_point = wrench.copy(), _at_points(wrench, fr.P)
-    local = _local(at_point, fr.R)
-    local[und] = np.nan
-    at_point[und_g] = np.nan
-    wrench_out[und.any(axis=2)] = np.nan  # a side with an undetermined component: no global wrench
-    tau = np.where(tau_und, np.nan, tau)
-    member[member_und] = np.nan
-    msg = message(OK, self_stress=null.shape[0], undetermined=int(und.sum()))
-    return StaticsState(OK, msg, lam, tuple(driven), tau, wrench_out, local, at_point, und, W, f, lengths, ends, member,
-                        stress,
-                        fr.r, fr.A, fr.P, fr.R, fr.residual)  # fmt: skip
+    return _statics(engine, fr, applied, driven, _tables(laws))[0]
 
 
 __all__ = [
@@ -632,14 +493,12 @@ __all__ = [
     "PointForces",
     "StaticsState",
     "TorsionLaw",
-    "contact_rate",
-    "cut_arms",
     "distance_rows",
     "element_laws",
     "element_rates",
     "element_state",
-    "equilibrium_system",
     "generalized_forces",
+    "law_table",
     "load_rates",
     "reduced_stiffness",
     "statics_state",
