@@ -471,3 +471,22 @@ def test_serve_command_serves(examples: Path) -> None:
     finally:
         proc.terminate()
         proc.wait(timeout=30)
+
+
+def test_an_axle_is_driven_by_roll_and_steer_too(make_client, examples: Path) -> None:
+    """An axle with a rack also offers body roll (+-2 deg) and the first wheel's road-wheel
+    steer (+-20 deg) as drives of the page, and the API's curve over each is the CLI sweep's."""
+    name = "hmmwv_front_axle.yaml"
+    c = make_client(name, assemble_first=False)
+    drives = {d["spec"]: d for d in c.get("/api/state").json()["drives"]}
+    assert list(drives)[:3] == ["travel", "roll", "steer:upright_L"]
+    assert (drives["roll"]["unit"], drives["roll"]["curve"]) == ("deg", [-2.0, 2.0])
+    assert drives["steer:upright_L"]["curve"] == [-20.0, 20.0]
+    for spec in ("roll=-2:2:4", "steer:upright_L=-20:20:4"):
+        req = {"drive": [spec], "out": ["metric:upright_L.toe", "metric:upright_R.camber"]}
+        args = ["--drive", spec, "--out", "metric:upright_L.toe", "--out", "metric:upright_R.camber", "--json"]
+        r = c.post("/api/sweep", json=req)
+        assert r.status_code == 200, r.text
+        assert r.json() == cli_json("sweep", examples / name, *args)
+    single = {d["spec"] for d in make_client("double_wishbone_hardpoints.yaml").get("/api/state").json()["drives"]}
+    assert "roll" not in single  # one wheel: no body roll

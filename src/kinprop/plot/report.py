@@ -120,17 +120,33 @@ TRAVEL_CURVE_M = 0.05
 
 
 def travel_drive(model: Model) -> list[dict[str, Any]]:
-    """The wheel-travel drive (``travel``, :mod:`kinprop.analysis.drives`: equal length steps of
-    the wheel centres' height over their ``wheel_centre_ref``, both wheels of an axle in heave)
-    of a suspension whose wheels have that reference, as a drive entry of the page; else none."""
+    """The designer's drives of a suspension whose wheels have a ``wheel_centre_ref``, as drive
+    entries of the page (:mod:`kinprop.analysis.drives`): wheel travel (``travel``: equal
+    length steps of the wheel centres' height over their reference, both wheels of an axle in
+    heave), first; for an axle also body roll (``roll``, +-2 deg) and, when it declares more
+    inputs than wheels (a rack), the road-wheel steer angle of its first wheel (``steer:W``,
+    +-20 deg). None for other models."""
     wheels = wheel_bodies(model)
     if not wheels or not all(find_point(model, w, "wheel_centre_ref", on_wheel=False) for w in wheels):
         return []
     length = model.units.get("length", "m")
     half = TRAVEL_CURVE_M / METRES_PER.get(length, 1.0)
-    return [{"spec": "travel", "address": "travel", "joint": "", "type": "wheel travel", "angle": False,
-             "unit": length, "value": 0.0, "curve": [-half, half], "slider": [-half, half], "slider_ok": False,
-             "size": 1}]  # fmt: skip
+    out = [_drive_entry("travel", "wheel travel", length, half)]
+    angle, per = ("deg", 1.0) if degrees(model) else ("rad", RADIANS_PER["deg"])
+    if len(wheels) == 2:
+        out.append(_drive_entry("roll", "body roll", angle, ROLL_CURVE_DEG * per))
+        if len(model.mechanism.inputs) > len(wheels):
+            out.append(_drive_entry(f"steer:{wheels[0]}", "road-wheel steer", angle, STEER_CURVE_DEG * per))
+    return out
+
+
+#: the default half-ranges of the body-roll and road-wheel steer drives, degrees
+ROLL_CURVE_DEG, STEER_CURVE_DEG = 2.0, 20.0
+
+
+def _drive_entry(spec: str, kind: str, unit: str, half: float) -> dict[str, Any]:
+    return {"spec": spec, "address": spec, "joint": "", "type": kind, "angle": unit in ("deg", "rad"), "unit": unit,
+            "value": 0.0, "curve": [-half, half], "slider": [-half, half], "slider_ok": False, "size": 1}  # fmt: skip
 
 
 def default_curve_outputs(model: Model, drives: list[dict[str, Any]]) -> list[str]:
