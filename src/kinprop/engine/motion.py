@@ -167,7 +167,9 @@ class _Frames:
         kernels.evaluate(tb, st.Q, st.S, st.C, st.L, ws, Phi, vals, need, dummy, dummy)
         self.residual = float(np.linalg.norm(Phi * engine.row_scale))
         q, flat_q, _ = engine.dense_pattern
-        self.Phi_q = np.bincount(flat_q, weights=vals[q], minlength=engine.n_rows * nq).reshape(engine.n_rows, nq)
+        # float64 also when there are no entries (bincount of nothing counts in int64): one kernel signature
+        self.Phi_q = np.bincount(flat_q, weights=vals[q], minlength=engine.n_rows * nq).astype(float, copy=False)
+        self.Phi_q = self.Phi_q.reshape(engine.n_rows, nq)
         self._vals = vals if design else None
         slots = (
             kernels.W_BODY_R,
@@ -187,7 +189,11 @@ class _Frames:
             raise ValueError("the design columns were not evaluated (design=False)")
         eng = self._engine
         flat = eng.dense_pattern[2]
-        return np.bincount(flat, weights=self._vals, minlength=eng.n_rows * eng.n_columns).reshape(eng.n_rows, -1)
+        return (
+            np.bincount(flat, weights=self._vals, minlength=eng.n_rows * eng.n_columns)
+            .astype(float, copy=False)
+            .reshape(eng.n_rows, -1)
+        )
 
 
 def _driven_rows(engine: Engine, driven: Mapping[str, Any]) -> tuple[list[int], list[float]]:
