@@ -343,6 +343,16 @@ def free_addresses(engine: Engine, selectors: Sequence[str]) -> tuple[str, ...]:
     return tuple(dict.fromkeys(out))
 
 
+def _component_coefficients(engine: Engine, state: State, g: GlobalAddress) -> dict[str, float]:
+    """``{design column label: d(column)/d(component)}`` of a global component ``g`` at
+    ``state`` (:func:`hardpoint_map`'s column), the entries above round-off."""
+    fields, M, _ = hardpoint_map(engine, state, g.text)
+    rows = [lab for f in fields for lab in _labels(engine, f)]
+    col = M[:, g.component]
+    big = 1e-8 * max(1.0, float(np.abs(col).max()))
+    return {lab: float(x) for lab, x in zip(rows, col, strict=True) if abs(x) > big}
+
+
 def component_columns(engine: Engine, state: State, address: str) -> list[str]:
     """The design column labels (``TR.s_i[2]``, ``TR.length``, a pivot's ``UCA.C_i[k]``) that a
     change of one global component (``hardpoint:TR.i[z]``) writes at ``state``. A joint's point
@@ -351,10 +361,7 @@ def component_columns(engine: Engine, state: State, address: str) -> list[str]:
     g = parse_global(engine, address)
     if g.component is None:
         raise AddressError(f"{address!r}: expected a component, e.g. {address.strip()}[z]")
-    fields, M, _ = hardpoint_map(engine, state, g.text)
-    rows = [lab for f in fields for lab in _labels(engine, f)]
-    col = np.abs(M[:, g.component])
-    hit = [lab for lab, x in zip(rows, col, strict=True) if x > 1e-8 * max(1.0, float(col.max()))]
+    hit = list(_component_coefficients(engine, state, g))
     if g.pivot is None:
         for fld in g.fields()[: len(g.sides)]:
             mine = [lab for lab in hit if lab.startswith(fld + "[")]
@@ -385,11 +392,7 @@ def free_tie(engine: Engine, state: State, selectors: Sequence[str]) -> tuple[tu
         g = parse_global(engine, sel)
         if g.component is None or g.pivot is not None:
             continue
-        fields, M, _ = hardpoint_map(engine, state, g.text)
-        rows = [lab for f in fields for lab in _labels(engine, f)]
-        col = M[:, g.component]
-        big = 1e-8 * max(1.0, float(np.abs(col).max()))
-        entries = {lab: float(x) for lab, x in zip(rows, col, strict=True) if ".s_" in lab and abs(x) > big}
+        entries = {lab: x for lab, x in _component_coefficients(engine, state, g).items() if ".s_" in lab}
         if len({lab.split("[")[0] for lab in entries}) < 2:
             continue  # a point on one moving body: its columns are the unknowns themselves
         t = np.zeros(cols.size)
